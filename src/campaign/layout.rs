@@ -1,0 +1,458 @@
+//! Indoor layout (DESIGN §3): GeoJSON polygons in metres, read with the georust crates.
+//!
+//! Takes a GeoJSON `FeatureCollection` whose features carry `properties.role`:
+//! `"perimeter"` (exactly one polygon: the walls bounding the free space) or `"obstacle"`
+//! (pillars, cabinets, door frames: polygons inside or touching the perimeter); optional
+//! `properties.material` (a key of the simulator's material table) and `properties.name`.
+//! Gives walls (segments), corners, occlusion tests, perimeter arc-length coordinates
+//! (used by the clutter model and the perimeter statistics) and the reference occupancy
+//! raster.
+//!
+//! Reference raster (0.1 m cells by default, over the bounding box plus a margin): a cell is
+//! `Occupied` if any wall segment passes through it or it lies inside an obstacle, `Free` if
+//! its centre is inside the perimeter (and not occupied), and `Outside` otherwise (beyond the
+//! walls: never observable, reported separately by the metrics).
+
+use crate::error::{Error, Result};
+use geo::{
+    BoundingRect, Contains, Coord, Intersects, Line, LineString, Point, Polygon, Rect, Winding,
+};
+use geojson::GeoJson;
+use std::path::Path;
+
+/// Which polygon a wall belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WallKind {
+    /// The outer perimeter.
+    Perimeter,
+    /// Obstacle number `i`.
+    Obstacle(usize),
+}
+
+/// One straight wall segment.
+#[derive(Debug, Clone)]
+pub struct Wall {
+    /// The segment, m.
+    pub line: Line<f64>,
+    /// Material key.
+    pub material: String,
+    /// Owner.
+    pub kind: WallKind,
+}
+
+impl Wall {
+    /// Length, m.
+    pub fn length(&self) -> f64 {
+        let d = self.line.delta();
+        d.x.hypot(d.y)
+    }
+    /// Unit normal pointing into the free space.
+    pub fn normal(&self) -> Coord<f64> {
+        let d = self.line.delta();
+        let l = d.x.hypot(d.y);
+        // perimeter is counter-clockwise: free space on the left; obstacles are made
+        // counter-clockwise too, free space on their right (outside)
+        match self.kind {
+            WallKind::Perimeter => Coord { x: -d.y / l, y: d.x / l },
+            WallKind::Obstacle(_) => Coord { x: d.y / l, y: -d.x / l },
+        }
+    }
+}
+
+/// An obstacle polygon.
+#[derive(Debug, Clone)]
+pub struct Obstacle {
+    /// Name from the GeoJSON properties (or `obstacle<i>`).
+    pub name: String,
+    /// Material key.
+    pub material: String,
+    /// Polygon, counter-clockwise.
+    pub polygon: Polygon<f64>,
+}
+
+/// An indoor layout.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    /// Outer perimeter, counter-clockwise.
+    pub perimeter: Polygon<f64>,
+    /// Perimeter material key.
+    pub perimeter_material: String,
+    /// Obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// Every wall segment (perimeter first, in ring order, then obstacles).
+    pub walls: Vec<Wall>,
+}
+
+/// Class of a reference-map cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CellClass {
+    /// Free space inside the perimeter.
+    Free,
+    /// A wall or obstacle passes through the cell.
+    Occupied,
+    /// Beyond the perimeter.
+    Outside,
+}
+
+/// A regular grid over the plane: cell (row, col) spans
+/// [x0 + col·cell, x0 + (col+1)·cell) × [y0 + row·cell, y0 + (row+1)·cell); row 0 is the
+/// southern (lowest y) row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridSpec {
+    /// x of the grid's lower-left corner, m.
+    pub x0_m: f64,
+    /// y of the grid's lower-left corner, m.
+    pub y0_m: f64,
+    /// Cell side, m.
+    pub cell_m: f64,
+    /// Columns (x).
+    pub cols: usize,
+    /// Rows (y).
+    pub rows: usize,
+}
+
+impl GridSpec {
+    /// Grid over `rect` plus `margin_m` on every side.
+    pub fn covering(rect: Rect<f64>, cell_m: f64, margin_m: f64) -> GridSpec {
+        let x0 = rect.min().x - margin_m;
+        let y0 = rect.min().y - margin_m;
+        let cols = ((rect.width() + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
+        let rows = ((rect.height() + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
+        GridSpec {
+            x0_m: x0,
+            y0_m: y0,
+            cell_m,
+            cols,
+            rows,
+        }
+    }
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.rows * self.cols
+    }
+    /// True for an empty grid.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Centre of cell `(row, col)`.
+    pub fn center(&self, row: usize, col: usize) -> Coord<f64> {
+        Coord {
+            x: self.x0_m + (col as f64 + 0.5) * self.cell_m,
+            y: self.y0_m + (row as f64 + 0.5) * self.cell_m,
+        }
+    }
+    /// Cell containing a point, if inside the grid.
+    pub fn cell_of(&self, p: Coord<f64>) -> Option<(usize, usize)> {
+        let c = ((p.x - self.x0_m) / self.cell_m).floor();
+        let r = ((p.y - self.y0_m) / self.cell_m).floor();
+        if c < 0.0 || r < 0.0 || c as usize >= self.cols || r as usize >= self.rows {
+            None
+        } else {
+            Some((r as usize, c as usize))
+        }
+    }
+}
+
+/// The reference map rasterised from a layout.
+#[derive(Debug, Clone)]
+pub struct ReferenceMap {
+    /// Grid geometry.
+    pub spec: GridSpec,
+    /// Row-major classes (row 0 = lowest y).
+    pub cells: Vec<CellClass>,
+}
+
+impl ReferenceMap {
+    /// Count of cells of a class.
+    pub fn count(&self, class: CellClass) -> usize {
+        self.cells.iter().filter(|c| **c == class).count()
+    }
+}
+
+fn prop_str(f: &geojson::Feature, key: &str) -> Option<String> {
+    f.property(key).and_then(|v| v.as_str()).map(str::to_string)
+}
+
+impl Layout {
+    /// Read a layout GeoJSON file.
+    pub fn load(path: &Path) -> Result<Layout> {
+        let text = crate::io::read_text(path)?;
+        Self::from_geojson(&text, path)
+    }
+
+    /// Parse GeoJSON text (`path` names the source in errors).
+    pub fn from_geojson(text: &str, path: &Path) -> Result<Layout> {
+        let gj: GeoJson = text
+            .parse()
+            .map_err(|e| Error::input(path, format!("not valid GeoJSON: {e}")))?;
+        let fc = match gj {
+            GeoJson::FeatureCollection(fc) => fc,
+            _ => return Err(Error::input(path, "expected a GeoJSON FeatureCollection")),
+        };
+        let mut perimeter: Option<(Polygon<f64>, String)> = None;
+        let mut obstacles = Vec::new();
+        for (i, f) in fc.features.iter().enumerate() {
+            let role = prop_str(f, "role").ok_or_else(|| {
+                Error::input(path, format!("features[{i}].properties.role missing (perimeter|obstacle)"))
+            })?;
+            let geom = f.geometry.as_ref().ok_or_else(|| {
+                Error::input(path, format!("features[{i}].geometry missing"))
+            })?;
+            let mut poly: Polygon<f64> = Polygon::try_from(geom).map_err(|e| {
+                Error::input(path, format!("features[{i}].geometry must be a Polygon: {e}"))
+            })?;
+            if poly.exterior().0.len() < 4 {
+                return Err(Error::input(path, format!("features[{i}].geometry: polygon needs at least 3 vertices")));
+            }
+            if poly.exterior().0.iter().any(|c| !c.x.is_finite() || !c.y.is_finite()) {
+                return Err(Error::input(path, format!("features[{i}].geometry: non-finite coordinate")));
+            }
+            poly.exterior_mut(|r| r.make_ccw_winding());
+            let material = prop_str(f, "material").unwrap_or_else(|| "default".into());
+            match role.as_str() {
+                "perimeter" => {
+                    if perimeter.is_some() {
+                        return Err(Error::input(path, format!("features[{i}]: more than one perimeter")));
+                    }
+                    perimeter = Some((poly, material));
+                }
+                "obstacle" => obstacles.push(Obstacle {
+                    name: prop_str(f, "name").unwrap_or_else(|| format!("obstacle{}", obstacles.len())),
+                    material,
+                    polygon: poly,
+                }),
+                other => {
+                    return Err(Error::input(
+                        path,
+                        format!("features[{i}].properties.role: unknown role `{other}` (perimeter|obstacle)"),
+                    ))
+                }
+            }
+        }
+        let (perimeter, perimeter_material) =
+            perimeter.ok_or_else(|| Error::input(path, "no feature with role \"perimeter\""))?;
+        let mut walls = Vec::new();
+        for line in perimeter.exterior().lines() {
+            walls.push(Wall {
+                line,
+                material: perimeter_material.clone(),
+                kind: WallKind::Perimeter,
+            });
+        }
+        for (i, o) in obstacles.iter().enumerate() {
+            for line in o.polygon.exterior().lines() {
+                walls.push(Wall {
+                    line,
+                    material: o.material.clone(),
+                    kind: WallKind::Obstacle(i),
+                });
+            }
+        }
+        walls.retain(|w| w.length() > 1e-9);
+        Ok(Layout {
+            perimeter,
+            perimeter_material,
+            obstacles,
+            walls,
+        })
+    }
+
+    /// Bounding box of the perimeter and obstacles.
+    pub fn bbox(&self) -> Rect<f64> {
+        let mut r = self.perimeter.bounding_rect().expect("validated polygon");
+        for o in &self.obstacles {
+            if let Some(b) = o.polygon.bounding_rect() {
+                r = Rect::new(
+                    Coord { x: r.min().x.min(b.min().x), y: r.min().y.min(b.min().y) },
+                    Coord { x: r.max().x.max(b.max().x), y: r.max().y.max(b.max().y) },
+                );
+            }
+        }
+        r
+    }
+
+    /// True if `p` is in free space (inside the perimeter, outside every obstacle).
+    pub fn is_free(&self, p: Coord<f64>) -> bool {
+        let pt = Point::from(p);
+        self.perimeter.contains(&pt) && !self.obstacles.iter().any(|o| o.polygon.contains(&pt))
+    }
+
+    /// Vertices of the perimeter and of the obstacles (corners, door frames, object edges),
+    /// with the index of the owning obstacle (None for the perimeter).
+    pub fn corners(&self) -> Vec<(Coord<f64>, Option<usize>)> {
+        let mut v: Vec<(Coord<f64>, Option<usize>)> = Vec::new();
+        let ring = &self.perimeter.exterior().0;
+        for c in &ring[..ring.len() - 1] {
+            v.push((*c, None));
+        }
+        for (i, o) in self.obstacles.iter().enumerate() {
+            let ring = &o.polygon.exterior().0;
+            for c in &ring[..ring.len() - 1] {
+                v.push((*c, Some(i)));
+            }
+        }
+        v
+    }
+
+    /// True if the straight path from `from` to `to` is blocked by a wall before reaching
+    /// within `tol_m` of `to` (so points on a wall are visible from its free side).
+    pub fn occluded(&self, from: Coord<f64>, to: Coord<f64>, tol_m: f64) -> bool {
+        let ray = Line::new(from, to);
+        let d = to - from;
+        let len = d.x.hypot(d.y);
+        if len <= tol_m {
+            return false;
+        }
+        self.walls.iter().any(|w| {
+            match geo::line_intersection::line_intersection(ray, w.line) {
+                Some(geo::LineIntersection::SinglePoint { intersection, .. }) => {
+                    let e = intersection - from;
+                    e.x.hypot(e.y) < len - tol_m && e.x.hypot(e.y) > 1e-9
+                }
+                Some(geo::LineIntersection::Collinear { .. }) => false,
+                None => false,
+            }
+        })
+    }
+
+    /// Total perimeter length, m.
+    pub fn perimeter_length(&self) -> f64 {
+        self.walls
+            .iter()
+            .filter(|w| w.kind == WallKind::Perimeter)
+            .map(Wall::length)
+            .sum()
+    }
+
+    /// Point at arc length `s` (m, modulo the perimeter length) along the counter-clockwise
+    /// perimeter, with the inward unit normal of that edge.
+    pub fn perimeter_point(&self, s: f64) -> (Coord<f64>, Coord<f64>) {
+        let total = self.perimeter_length();
+        let mut s = s.rem_euclid(total);
+        let per: Vec<&Wall> = self.walls.iter().filter(|w| w.kind == WallKind::Perimeter).collect();
+        for w in &per {
+            let l = w.length();
+            if s <= l {
+                let t = s / l;
+                let p = w.line.start + (w.line.end - w.line.start) * t;
+                return (p, w.normal());
+            }
+            s -= l;
+        }
+        let w = per.last().expect("perimeter has walls");
+        (w.line.end, w.normal())
+    }
+
+    /// Project a point onto the perimeter: (arc length of the closest point, distance).
+    pub fn project_to_perimeter(&self, p: Coord<f64>) -> (f64, f64) {
+        let mut best = (0.0, f64::INFINITY);
+        let mut s0 = 0.0;
+        for w in self.walls.iter().filter(|w| w.kind == WallKind::Perimeter) {
+            let d = w.line.delta();
+            let l2 = d.x * d.x + d.y * d.y;
+            let t = (((p.x - w.line.start.x) * d.x + (p.y - w.line.start.y) * d.y) / l2).clamp(0.0, 1.0);
+            let q = w.line.start + d * t;
+            let dist = (p.x - q.x).hypot(p.y - q.y);
+            if dist < best.1 {
+                best = (s0 + t * l2.sqrt(), dist);
+            }
+            s0 += l2.sqrt();
+        }
+        best
+    }
+
+    /// Rasterise to the reference map over the bounding box plus `margin_m`.
+    pub fn rasterize(&self, cell_m: f64, margin_m: f64) -> ReferenceMap {
+        let spec = GridSpec::covering(self.bbox(), cell_m, margin_m);
+        let lines: Vec<Line<f64>> = self.walls.iter().map(|w| w.line).collect();
+        let mut cells = vec![CellClass::Outside; spec.len()];
+        for r in 0..spec.rows {
+            for c in 0..spec.cols {
+                let lo = Coord {
+                    x: spec.x0_m + c as f64 * cell_m,
+                    y: spec.y0_m + r as f64 * cell_m,
+                };
+                let rect = Rect::new(lo, Coord { x: lo.x + cell_m, y: lo.y + cell_m }).to_polygon();
+                let centre = spec.center(r, c);
+                let occupied = lines.iter().any(|l| rect.intersects(l))
+                    || self.obstacles.iter().any(|o| o.polygon.contains(&Point::from(centre)));
+                cells[r * spec.cols + c] = if occupied {
+                    CellClass::Occupied
+                } else if self.perimeter.contains(&Point::from(centre)) {
+                    CellClass::Free
+                } else {
+                    CellClass::Outside
+                };
+            }
+        }
+        ReferenceMap { spec, cells }
+    }
+
+    /// The perimeter as a line string (closed).
+    pub fn perimeter_ring(&self) -> &LineString<f64> {
+        self.perimeter.exterior()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SQUARE: &str = r#"{"type":"FeatureCollection","features":[
+      {"type":"Feature","properties":{"role":"perimeter","material":"concrete"},
+       "geometry":{"type":"Polygon","coordinates":[[[0,0],[0,2],[4,2],[4,0],[0,0]]]}},
+      {"type":"Feature","properties":{"role":"obstacle","name":"pillar"},
+       "geometry":{"type":"Polygon","coordinates":[[[1.9,0.9],[2.1,0.9],[2.1,1.1],[1.9,1.1],[1.9,0.9]]]}}]}"#;
+
+    #[test]
+    fn parses_and_orients() {
+        let l = Layout::from_geojson(SQUARE, Path::new("t.geojson")).unwrap();
+        assert_eq!(l.walls.len(), 8);
+        assert!((l.perimeter_length() - 12.0).abs() < 1e-12);
+        // inward normal of every perimeter wall points to the centre
+        for w in l.walls.iter().filter(|w| w.kind == WallKind::Perimeter) {
+            let mid = w.line.start + w.line.delta() * 0.5;
+            let n = w.normal();
+            assert!(l.is_free(Coord { x: mid.x + 0.3 * n.x, y: mid.y + 0.3 * n.y }));
+        }
+    }
+
+    #[test]
+    fn occlusion_by_pillar() {
+        let l = Layout::from_geojson(SQUARE, Path::new("t.geojson")).unwrap();
+        assert!(l.occluded(Coord { x: 0.5, y: 1.0 }, Coord { x: 4.0, y: 1.0 }, 1e-3));
+        assert!(!l.occluded(Coord { x: 0.5, y: 0.5 }, Coord { x: 4.0, y: 0.5 }, 1e-3));
+    }
+
+    #[test]
+    fn projection_round_trip() {
+        let l = Layout::from_geojson(SQUARE, Path::new("t.geojson")).unwrap();
+        for s in [0.3, 2.5, 5.0, 7.7, 11.0] {
+            let (p, n) = l.perimeter_point(s);
+            let q = Coord { x: p.x + 0.2 * n.x, y: p.y + 0.2 * n.y };
+            let (s2, d) = l.project_to_perimeter(q);
+            assert!((s2 - s).abs() < 1e-9 && (d - 0.2).abs() < 1e-9, "{s}: {s2} {d}");
+        }
+    }
+
+    #[test]
+    fn raster_classes() {
+        let l = Layout::from_geojson(SQUARE, Path::new("t.geojson")).unwrap();
+        let m = l.rasterize(0.1, 0.3);
+        assert_eq!(m.spec.cols, 46);
+        let at = |x: f64, y: f64| {
+            let (r, c) = m.spec.cell_of(Coord { x, y }).unwrap();
+            m.cells[r * m.spec.cols + c]
+        };
+        assert_eq!(at(1.0, 1.0), CellClass::Free);
+        assert_eq!(at(2.0, 1.0), CellClass::Occupied);
+        assert_eq!(at(0.05, 1.0), CellClass::Occupied);
+        assert_eq!(at(-0.2, 1.0), CellClass::Outside);
+    }
+
+    #[test]
+    fn bad_geojson_names_field() {
+        let e = Layout::from_geojson(r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":null}]}"#, Path::new("x.geojson")).unwrap_err();
+        assert!(e.to_string().contains("x.geojson") && e.to_string().contains("role"), "{e}");
+    }
+}

@@ -1,0 +1,552 @@
+//! Campaign manifest (`campaign.toml`, DESIGN §3): band, array, poses, directions, layout,
+//! noise, seed, pulses, processing options and the `[sweeps]` index.
+//!
+//! The analysis view [`Manifest`] deliberately has no field for the simulator-only sections
+//! `[scene]` and `[clutter]` (the ground truth): serde skips them, so no analysis command can
+//! read them. The simulator reads them separately ([`crate::campaign::simulate::SceneConfig`]).
+//!
+//! Every validation error names the manifest file and the dotted field.
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Speed of light in vacuum, m/s.
+pub const C0: f64 = 299_792_458.0;
+
+/// Current manifest/energy schema version.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Swept frequency band of the VNA.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Band {
+    /// First frequency, Hz.
+    pub start_hz: f64,
+    /// Last frequency, Hz.
+    pub stop_hz: f64,
+    /// Number of frequency points (inclusive of both ends).
+    pub points: usize,
+}
+
+impl Band {
+    /// Bandwidth B = stop - start, Hz.
+    pub fn bandwidth_hz(&self) -> f64 {
+        self.stop_hz - self.start_hz
+    }
+    /// Frequency step, Hz.
+    pub fn step_hz(&self) -> f64 {
+        self.bandwidth_hz() / (self.points - 1) as f64
+    }
+    /// Frequency of point `k`, Hz.
+    pub fn freq(&self, k: usize) -> f64 {
+        self.start_hz + k as f64 * self.step_hz()
+    }
+    /// Centre frequency, Hz.
+    pub fn center_hz(&self) -> f64 {
+        0.5 * (self.start_hz + self.stop_hz)
+    }
+    /// Validate; `prefix` names the table in errors.
+    pub fn check(&self) -> Result<()> {
+        if !(self.start_hz.is_finite() && self.start_hz > 0.0) {
+            return Err(Error::param("band.start_hz", "must be a positive frequency"));
+        }
+        if !(self.stop_hz.is_finite() && self.stop_hz > self.start_hz) {
+            return Err(Error::param("band.stop_hz", "must be above band.start_hz"));
+        }
+        if self.points < 8 {
+            return Err(Error::param("band.points", "need at least 8 frequency points"));
+        }
+        Ok(())
+    }
+}
+
+/// Beam steering mode.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Steering {
+    /// The array is rotated: the broadside pattern turned to the direction (the campaign's case).
+    #[default]
+    Mechanical,
+    /// Phase steering at the centre frequency; valid for |θs| ≤ 60°.
+    Electronic,
+}
+
+/// `[array]`: the planar array of each side of the quasi-monostatic pair.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ArrayConfig {
+    /// Number of elements, a perfect square (16, 100, 400 → 4x4, 10x10, 20x20).
+    pub elements: usize,
+    /// 1-bit transmitarray quantisation of the element phases.
+    #[serde(default)]
+    pub one_bit: bool,
+    /// Element field pattern exponent q in cos^q(θ).
+    #[serde(default = "default_q")]
+    pub element_q: f64,
+    /// Steering mode.
+    #[serde(default)]
+    pub steering: Steering,
+}
+
+fn default_q() -> f64 {
+    1.0
+}
+
+impl ArrayConfig {
+    /// Side length of the square array.
+    pub fn side(&self) -> usize {
+        (self.elements as f64).sqrt().round() as usize
+    }
+    /// Validate.
+    pub fn check(&self) -> Result<()> {
+        let s = self.side();
+        if self.elements == 0 || s * s != self.elements {
+            return Err(Error::param(
+                "array.elements",
+                format!("{} is not a perfect square (use 16, 100 or 400)", self.elements),
+            ));
+        }
+        if !(self.element_q.is_finite() && self.element_q >= 0.0) {
+            return Err(Error::param("array.element_q", "must be finite and >= 0"));
+        }
+        Ok(())
+    }
+    /// Short label, e.g. `20x20 one_bit mechanical q=1`.
+    pub fn label(&self) -> String {
+        let s = self.side();
+        format!(
+            "{s}x{s} {} {} q={}",
+            if self.one_bit { "one_bit" } else { "ideal" },
+            match self.steering {
+                Steering::Mechanical => "mechanical",
+                Steering::Electronic => "electronic",
+            },
+            self.element_q
+        )
+    }
+}
+
+/// `[directions]`: the steering directions relative to the device heading.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Directions {
+    /// First direction, degrees.
+    pub start_deg: f64,
+    /// Last direction, degrees.
+    pub stop_deg: f64,
+    /// Step, degrees.
+    pub step_deg: f64,
+}
+
+impl Directions {
+    /// Number of directions.
+    pub fn count(&self) -> usize {
+        ((self.stop_deg - self.start_deg) / self.step_deg).round() as usize + 1
+    }
+    /// Angle of direction `d` relative to the heading, degrees.
+    pub fn angle_deg(&self, d: usize) -> f64 {
+        self.start_deg + d as f64 * self.step_deg
+    }
+    /// All relative angles, degrees.
+    pub fn angles_deg(&self) -> Vec<f64> {
+        (0..self.count()).map(|d| self.angle_deg(d)).collect()
+    }
+    /// Validate.
+    pub fn check(&self) -> Result<()> {
+        if !(self.step_deg.is_finite() && self.step_deg > 0.0) {
+            return Err(Error::param("directions.step_deg", "must be positive"));
+        }
+        if !(self.start_deg.is_finite() && self.stop_deg.is_finite() && self.stop_deg >= self.start_deg)
+        {
+            return Err(Error::param("directions.stop_deg", "must be >= directions.start_deg"));
+        }
+        if self.start_deg < -180.0 || self.stop_deg > 180.0 {
+            return Err(Error::param("directions", "angles must lie in [-180, 180] degrees"));
+        }
+        Ok(())
+    }
+}
+
+/// `[noise]`: receiver noise floor and transmit power.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseConfig {
+    /// Complex white noise power per frequency point, dBm.
+    pub floor_dbm: f64,
+    /// VNA source power, dBm (S21 noise variance = floor / tx power).
+    #[serde(default)]
+    pub tx_power_dbm: f64,
+}
+
+impl NoiseConfig {
+    /// Noise variance E|n|² of S21 per frequency point (dimensionless).
+    pub fn s21_variance(&self) -> f64 {
+        10f64.powf((self.floor_dbm - self.tx_power_dbm) / 10.0)
+    }
+}
+
+/// A device pose in the global frame.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Pose {
+    /// x, m.
+    pub x_m: f64,
+    /// y, m.
+    pub y_m: f64,
+    /// Heading, degrees counter-clockwise from +x.
+    pub heading_deg: f64,
+}
+
+/// Window applied to the sweep before the IFFT.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum WindowKind {
+    /// Symmetric Hann window (default).
+    #[default]
+    Hann,
+    /// No window.
+    Rect,
+}
+
+/// How the direct Tx→Rx coupling is removed.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum CouplingRemoval {
+    /// Keep it.
+    None,
+    /// Time gating: zero the CIR before `gate_ns`.
+    #[default]
+    Gate,
+    /// Background subtraction: subtract the complex mean sweep over the directions of a
+    /// position (the coupling does not rotate with the beam; echoes do).
+    Mean,
+}
+
+/// `[processing]`: energy-stage options (all optional).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Processing {
+    /// Window.
+    pub window: WindowKind,
+    /// IFFT samples per bin (odd); Nfft = (points - 1) * oversample.
+    pub oversample: usize,
+    /// Coupling removal.
+    pub coupling: CouplingRemoval,
+    /// Gate length for `coupling = "gate"`, ns.
+    pub gate_ns: f64,
+    /// Largest delay kept, ns (bins 0..=max_delay/T_b).
+    pub max_delay_ns: f64,
+    /// Bins at or beyond this delay are taken as signal-free for the N0 estimate, ns.
+    pub noise_from_ns: f64,
+}
+
+impl Default for Processing {
+    fn default() -> Self {
+        Processing {
+            window: WindowKind::Hann,
+            oversample: 5,
+            coupling: CouplingRemoval::Gate,
+            gate_ns: 1.0,
+            max_delay_ns: 100.0,
+            noise_from_ns: 80.0,
+        }
+    }
+}
+
+impl Processing {
+    /// Validate.
+    pub fn check(&self) -> Result<()> {
+        if self.oversample == 0 || self.oversample % 2 == 0 {
+            return Err(Error::param("processing.oversample", "must be an odd number >= 1"));
+        }
+        if !(self.gate_ns.is_finite() && self.gate_ns >= 0.0) {
+            return Err(Error::param("processing.gate_ns", "must be >= 0"));
+        }
+        if !(self.max_delay_ns.is_finite() && self.max_delay_ns > 0.0) {
+            return Err(Error::param("processing.max_delay_ns", "must be > 0"));
+        }
+        if !(self.noise_from_ns.is_finite() && self.noise_from_ns >= 0.0) {
+            return Err(Error::param("processing.noise_from_ns", "must be >= 0"));
+        }
+        Ok(())
+    }
+}
+
+/// Sweep file format.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SweepFormat {
+    /// One Touchstone v1 `.s2p` per (position, direction, pulse).
+    #[default]
+    Touchstone,
+    /// One Parquet long table (position, direction, pulse, frequency_hz, re, im).
+    Parquet,
+}
+
+/// One explicitly listed sweep file.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// Position index.
+    pub position: usize,
+    /// Direction index.
+    pub direction: usize,
+    /// Pulse (repeat) index.
+    #[serde(default)]
+    pub pulse: usize,
+    /// Path relative to the manifest folder.
+    pub path: PathBuf,
+}
+
+/// `[sweeps]`: where the sweeps are (written by `simulate`, required by `energy`).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SweepsConfig {
+    /// File format.
+    #[serde(default)]
+    pub format: SweepFormat,
+    /// Touchstone name template with `{position:03}`, `{direction:02}`, `{pulse:02}`
+    /// (the width after the colon is optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pattern: Option<String>,
+    /// Touchstone files listed one by one (instead of `pattern`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub files: Vec<SweepFile>,
+    /// The Parquet table (format = "parquet").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+}
+
+/// The analysis view of `campaign.toml`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    /// Schema version (1).
+    pub schema_version: u32,
+    /// Campaign name.
+    pub name: String,
+    /// Layout GeoJSON, relative to the manifest folder.
+    pub layout: PathBuf,
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Repeated sweeps (measured) or independent noise draws (simulated) per direction.
+    #[serde(default = "default_pulses")]
+    pub pulses: usize,
+    /// `[band]`.
+    pub band: Band,
+    /// `[array]`.
+    pub array: ArrayConfig,
+    /// `[directions]`.
+    pub directions: Directions,
+    /// `[noise]`.
+    pub noise: NoiseConfig,
+    /// `[processing]`.
+    #[serde(default)]
+    pub processing: Processing,
+    /// `[[poses]]`.
+    pub poses: Vec<Pose>,
+    /// `[sweeps]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweeps: Option<SweepsConfig>,
+}
+
+fn default_pulses() -> usize {
+    1
+}
+
+/// A loaded, validated campaign: the manifest and where it lives.
+#[derive(Debug, Clone)]
+pub struct Campaign {
+    /// The manifest.
+    pub manifest: Manifest,
+    /// Path of `campaign.toml`.
+    pub path: PathBuf,
+}
+
+/// Turn a (possibly multi-line) TOML error into one line.
+pub(crate) fn one_line(msg: &str) -> String {
+    msg.split('\n')
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('|') && *l != "^")
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+impl Manifest {
+    /// Validate every field.
+    pub fn check(&self) -> Result<()> {
+        if self.schema_version != SCHEMA_VERSION {
+            return Err(Error::param(
+                "schema_version",
+                format!("unsupported {} (expected {SCHEMA_VERSION})", self.schema_version),
+            ));
+        }
+        self.band.check()?;
+        self.array.check()?;
+        self.directions.check()?;
+        self.processing.check()?;
+        if !self.noise.floor_dbm.is_finite() || !self.noise.tx_power_dbm.is_finite() {
+            return Err(Error::param("noise.floor_dbm", "must be finite"));
+        }
+        if self.pulses == 0 {
+            return Err(Error::param("pulses", "must be >= 1"));
+        }
+        if self.poses.is_empty() {
+            return Err(Error::param("poses", "at least one [[poses]] entry is required"));
+        }
+        for (i, p) in self.poses.iter().enumerate() {
+            if !(p.x_m.is_finite() && p.y_m.is_finite() && p.heading_deg.is_finite()) {
+                return Err(Error::param(format!("poses[{i}]"), "x_m, y_m, heading_deg must be finite"));
+            }
+        }
+        if self.layout.as_os_str().is_empty() {
+            return Err(Error::param("layout", "missing layout path"));
+        }
+        if let Some(s) = &self.sweeps {
+            match s.format {
+                SweepFormat::Touchstone => {
+                    if s.pattern.is_none() && s.files.is_empty() {
+                        return Err(Error::param("sweeps.pattern", "touchstone sweeps need `pattern` or `files`"));
+                    }
+                }
+                SweepFormat::Parquet => {
+                    if s.path.is_none() {
+                        return Err(Error::param("sweeps.path", "parquet sweeps need `path`"));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of positions.
+    pub fn positions(&self) -> usize {
+        self.poses.len()
+    }
+}
+
+impl Campaign {
+    /// Read and validate `campaign.toml`; errors name the file and the field.
+    pub fn load(path: &Path) -> Result<Campaign> {
+        let text = crate::io::read_text(path)?;
+        Self::from_str(&text, path)
+    }
+
+    /// Parse manifest text that notionally lives at `path`.
+    pub fn from_str(text: &str, path: &Path) -> Result<Campaign> {
+        let manifest: Manifest =
+            toml::from_str(text).map_err(|e| Error::input(path, one_line(&e.to_string())))?;
+        manifest.check().map_err(|e| Error::input(path, e.to_string()))?;
+        let c = Campaign {
+            manifest,
+            path: path.to_path_buf(),
+        };
+        let layout = c.layout_path();
+        if !layout.is_file() {
+            return Err(Error::input(
+                path,
+                format!("field `layout`: file {} not found", layout.display()),
+            ));
+        }
+        Ok(c)
+    }
+
+    /// Folder of the manifest (paths inside are relative to it).
+    pub fn dir(&self) -> PathBuf {
+        self.path
+            .parent()
+            .map(Path::to_path_buf)
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or_else(|| PathBuf::from("."))
+    }
+
+    /// Resolved layout path.
+    pub fn layout_path(&self) -> PathBuf {
+        self.dir().join(&self.manifest.layout)
+    }
+
+    /// Override `[array] elements` (`--elements N`).
+    pub fn set_elements(&mut self, n: usize) -> Result<()> {
+        let mut a = self.manifest.array;
+        a.elements = n;
+        a.check().map_err(|_| {
+            Error::param("--elements", format!("{n} is not a perfect square (use 16, 100 or 400)"))
+        })?;
+        self.manifest.array = a;
+        Ok(())
+    }
+}
+
+/// Expand a sweep name template for one (position, direction, pulse).
+pub fn expand_pattern(pattern: &str, position: usize, direction: usize, pulse: usize) -> String {
+    let mut out = String::with_capacity(pattern.len() + 8);
+    let mut rest = pattern;
+    while let Some(open) = rest.find('{') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let Some(close) = after.find('}') else {
+            out.push_str(&rest[open..]);
+            return out;
+        };
+        let spec = &after[..close];
+        let (name, width) = match spec.split_once(':') {
+            Some((n, w)) => (n, w.trim_start_matches('0').parse::<usize>().unwrap_or(0)),
+            None => (spec, 0),
+        };
+        let value = match name {
+            "position" => Some(position),
+            "direction" => Some(direction),
+            "pulse" => Some(pulse),
+            _ => None,
+        };
+        match value {
+            Some(v) => out.push_str(&format!("{v:0width$}")),
+            None => {
+                out.push('{');
+                out.push_str(spec);
+                out.push('}');
+            }
+        }
+        rest = &after[close + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pattern_expands_with_widths() {
+        assert_eq!(
+            expand_pattern("sweeps/p{position:03}_d{direction:02}_k{pulse}.s2p", 3, 7, 1),
+            "sweeps/p003_d07_k1.s2p"
+        );
+    }
+
+    #[test]
+    fn directions_count_and_angles() {
+        let d = Directions {
+            start_deg: -90.0,
+            stop_deg: 90.0,
+            step_deg: 5.0,
+        };
+        assert_eq!(d.count(), 37);
+        assert_eq!(d.angle_deg(36), 90.0);
+    }
+
+    #[test]
+    fn array_side_and_check() {
+        let a = ArrayConfig {
+            elements: 100,
+            one_bit: false,
+            element_q: 1.0,
+            steering: Steering::Mechanical,
+        };
+        assert_eq!(a.side(), 10);
+        assert!(a.check().is_ok());
+        let bad = ArrayConfig { elements: 50, ..a };
+        assert!(bad.check().unwrap_err().to_string().contains("array.elements"));
+    }
+}

@@ -1,0 +1,265 @@
+//! Sweep storage: one Touchstone `.s2p` per (position, direction, pulse), or one Parquet long
+//! table `position, direction, pulse, frequency_hz, re, im` (rows sorted by position,
+//! direction, pulse, frequency; one row group per position as `simulate` writes it).
+//!
+//! Reading is per position ([`SweepReader::read_position`]) so the energy stage streams: at
+//! most one position's sweeps are in memory. Every file is checked against the manifest's
+//! band (same number of points, frequencies within 1e-6 of a step): a wrong band, a missing
+//! file, NaN or a truncated row is an error naming the file (and line or row).
+
+use crate::campaign::manifest::{expand_pattern, Band, Campaign, SweepFormat};
+use crate::campaign::touchstone::{parse_s2p, write_s2p, TsFormat};
+use crate::error::{Error, Result};
+use crate::table;
+use num_complex::Complex64;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// All sweeps of one position: `s21[(direction·pulses + pulse)·points + k]`.
+#[derive(Debug, Clone)]
+pub struct PositionSweeps {
+    /// Position index.
+    pub position: usize,
+    /// Directions.
+    pub directions: usize,
+    /// Pulses per direction.
+    pub pulses: usize,
+    /// Frequency points.
+    pub points: usize,
+    /// S21 values.
+    pub s21: Vec<Complex64>,
+}
+
+impl PositionSweeps {
+    /// The sweep of one (direction, pulse).
+    pub fn sweep(&self, direction: usize, pulse: usize) -> &[Complex64] {
+        let i = (direction * self.pulses + pulse) * self.points;
+        &self.s21[i..i + self.points]
+    }
+}
+
+enum Source {
+    Touchstone(Vec<PathBuf>),
+    Parquet(PathBuf),
+}
+
+/// Reads a campaign's sweeps position by position.
+pub struct SweepReader {
+    band: Band,
+    positions: usize,
+    directions: usize,
+    pulses: usize,
+    source: Source,
+}
+
+/// Check a frequency grid against the band.
+pub fn check_grid(path: &Path, freq_hz: &[f64], band: &Band) -> Result<()> {
+    let tol = 1e-6 * band.step_hz();
+    let ok = freq_hz.len() == band.points
+        && freq_hz
+            .iter()
+            .enumerate()
+            .all(|(k, f)| (f - band.freq(k)).abs() <= tol.max(1.0));
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::input(
+            path,
+            format!(
+                "frequency grid ({} points, {:.6}..{:.6} GHz) does not match [band] ({} points, {:.6}..{:.6} GHz)",
+                freq_hz.len(),
+                freq_hz.first().copied().unwrap_or(f64::NAN) / 1e9,
+                freq_hz.last().copied().unwrap_or(f64::NAN) / 1e9,
+                band.points,
+                band.start_hz / 1e9,
+                band.stop_hz / 1e9
+            ),
+        ))
+    }
+}
+
+impl SweepReader {
+    /// Open the sweeps listed by the manifest's `[sweeps]`; every Touchstone file must exist.
+    pub fn open(c: &Campaign) -> Result<SweepReader> {
+        let m = &c.manifest;
+        let cfg = m.sweeps.as_ref().ok_or_else(|| {
+            Error::input(&c.path, "no [sweeps] section (run `pradar simulate` or list the files)")
+        })?;
+        let (np, nd, nk) = (m.positions(), m.directions.count(), m.pulses);
+        let dir = c.dir();
+        let source = match cfg.format {
+            SweepFormat::Touchstone => {
+                let mut paths = vec![PathBuf::new(); np * nd * nk];
+                if let Some(pat) = &cfg.pattern {
+                    for p in 0..np {
+                        for d in 0..nd {
+                            for k in 0..nk {
+                                paths[(p * nd + d) * nk + k] = dir.join(expand_pattern(pat, p, d, k));
+                            }
+                        }
+                    }
+                } else {
+                    for (i, f) in cfg.files.iter().enumerate() {
+                        if f.position >= np || f.direction >= nd || f.pulse >= nk {
+                            return Err(Error::input(
+                                &c.path,
+                                format!("sweeps.files[{i}]: index (position {}, direction {}, pulse {}) outside the campaign ({np} positions, {nd} directions, {nk} pulses)", f.position, f.direction, f.pulse),
+                            ));
+                        }
+                        paths[(f.position * nd + f.direction) * nk + f.pulse] = dir.join(&f.path);
+                    }
+                    if let Some(i) = paths.iter().position(|p| p.as_os_str().is_empty()) {
+                        let (p, d, k) = (i / (nd * nk), (i / nk) % nd, i % nk);
+                        return Err(Error::input(
+                            &c.path,
+                            format!("sweeps.files: no file for position {p}, direction {d}, pulse {k}"),
+                        ));
+                    }
+                }
+                if let Some(missing) = paths.iter().find(|p| !p.is_file()) {
+                    return Err(Error::input(
+                        missing,
+                        format!("sweep file listed in {} not found", c.path.display()),
+                    ));
+                }
+                Source::Touchstone(paths)
+            }
+            SweepFormat::Parquet => {
+                let p = dir.join(cfg.path.as_ref().expect("checked"));
+                if !p.is_file() {
+                    return Err(Error::input(&p, format!("sweep table listed in {} not found", c.path.display())));
+                }
+                let rows = table::parquet_rows(&p)?;
+                let want = np * nd * nk * m.band.points;
+                if rows != want {
+                    return Err(Error::input(
+                        &p,
+                        format!("{rows} rows, expected {want} ({np} positions x {nd} directions x {nk} pulses x {} points)", m.band.points),
+                    ));
+                }
+                Source::Parquet(p)
+            }
+        };
+        Ok(SweepReader {
+            band: m.band,
+            positions: np,
+            directions: nd,
+            pulses: nk,
+            source,
+        })
+    }
+
+    /// Number of positions.
+    pub fn positions(&self) -> usize {
+        self.positions
+    }
+
+    /// Read every sweep of position `p` (Touchstone files in parallel).
+    pub fn read_position(&self, p: usize) -> Result<PositionSweeps> {
+        let (nd, nk, nf) = (self.directions, self.pulses, self.band.points);
+        let mut s21 = vec![Complex64::new(0.0, 0.0); nd * nk * nf];
+        match &self.source {
+            Source::Touchstone(paths) => {
+                let base = p * nd * nk;
+                s21.par_chunks_mut(nf)
+                    .enumerate()
+                    .try_for_each(|(i, out)| -> Result<()> {
+                        let path = &paths[base + i];
+                        let text = crate::io::read_text(path)?;
+                        let ts = parse_s2p(&text, path)?;
+                        check_grid(path, &ts.freq_hz, &self.band)?;
+                        for (o, s) in out.iter_mut().zip(&ts.s) {
+                            *o = s[1];
+                        }
+                        Ok(())
+                    })?;
+            }
+            Source::Parquet(path) => {
+                let n = nd * nk * nf;
+                let df = table::read_parquet(path, Some((p * n, n)))?;
+                let pos = table::i64_column(path, &df, "position")?;
+                let dirs = table::i64_column(path, &df, "direction")?;
+                let pulse = match df.column("pulse") {
+                    Ok(_) => table::i64_column(path, &df, "pulse")?,
+                    Err(_) => vec![0; n],
+                };
+                let f = table::f64_column(path, &df, "frequency_hz")?;
+                let re = table::f64_column(path, &df, "re")?;
+                let im = table::f64_column(path, &df, "im")?;
+                for i in 0..n {
+                    let (d, k, j) = (i / (nk * nf), (i / nf) % nk, i % nf);
+                    if pos[i] != p as i64 || dirs[i] != d as i64 || pulse[i] != k as i64 {
+                        return Err(Error::input(
+                            path,
+                            format!("row {}: expected position {p}, direction {d}, pulse {k} (rows must be sorted by position, direction, pulse, frequency)", p * n + i),
+                        ));
+                    }
+                    if (f[i] - self.band.freq(j)).abs() > (1e-6 * self.band.step_hz()).max(1.0) {
+                        return Err(Error::input(
+                            path,
+                            format!("row {}: frequency {} Hz does not match [band] point {j} ({} Hz)", p * n + i, f[i], self.band.freq(j)),
+                        ));
+                    }
+                    s21[i] = Complex64::new(re[i], im[i]);
+                }
+            }
+        }
+        Ok(PositionSweeps {
+            position: p,
+            directions: nd,
+            pulses: nk,
+            points: nf,
+            s21,
+        })
+    }
+}
+
+/// Write one position's sweeps as Touchstone files (RI, Hz, 12 digits), S12 = S21
+/// (reciprocal), S11 = S22 = 0 (not simulated).
+pub fn write_touchstone_position(
+    dir: &Path,
+    pattern: &str,
+    band: &Band,
+    sweeps: &PositionSweeps,
+    comment: &str,
+) -> Result<()> {
+    let freq: Vec<f64> = (0..band.points).map(|k| band.freq(k)).collect();
+    let z = Complex64::new(0.0, 0.0);
+    (0..sweeps.directions * sweeps.pulses)
+        .into_par_iter()
+        .try_for_each(|i| {
+            let (d, k) = (i / sweeps.pulses, i % sweeps.pulses);
+            let path = dir.join(expand_pattern(pattern, sweeps.position, d, k));
+            let s: Vec<[Complex64; 4]> = sweeps.sweep(d, k).iter().map(|&v| [z, v, v, z]).collect();
+            crate::io::write_atomic(&path, |w| {
+                write_s2p(w, &freq, &s, TsFormat::Ri, 12, comment).map_err(|e| Error::io(&path, e))
+            })
+        })
+}
+
+/// Columns of one position's sweeps for the Parquet sweep table.
+pub fn parquet_batch(path: &Path, band: &Band, sweeps: &PositionSweeps) -> Result<polars::prelude::DataFrame> {
+    let n = sweeps.s21.len();
+    let nf = sweeps.points;
+    let mut pos = Vec::with_capacity(n);
+    let mut dir = Vec::with_capacity(n);
+    let mut pulse = Vec::with_capacity(n);
+    let mut f = Vec::with_capacity(n);
+    for i in 0..n {
+        pos.push(sweeps.position as i32);
+        dir.push((i / (sweeps.pulses * nf)) as i32);
+        pulse.push(((i / nf) % sweeps.pulses) as i32);
+        f.push(band.freq(i % nf));
+    }
+    table::frame(
+        path,
+        vec![
+            table::col("position", pos),
+            table::col("direction", dir),
+            table::col("pulse", pulse),
+            table::col("frequency_hz", f),
+            table::col("re", sweeps.s21.iter().map(|c| c.re).collect::<Vec<f64>>()),
+            table::col("im", sweeps.s21.iter().map(|c| c.im).collect::<Vec<f64>>()),
+        ],
+    )
+}

@@ -1,0 +1,16 @@
+//! pradar — millimetre-wave personal radar campaigns: simulate or ingest backscatter sweeps,
+//! compute energy matrices, characterise the channel and map.
+//!
+//! Data flows one way: [`campaign`] (manifest, formats, simulator) → [`energy`] →
+//! (mpc → cluster → fit → model → mapping) → [`report`].
+#![deny(missing_docs)]
+
+pub mod campaign;
+pub mod energy;
+pub mod error;
+pub mod io;
+pub mod pipeline;
+pub mod report;
+pub mod table;
+
+pub use error::{Error, Result};

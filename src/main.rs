@@ -1,0 +1,147 @@
+//! `pradar` command line: parses arguments and calls the library.
+
+use anyhow::Result;
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use pradar::campaign::manifest::{Campaign, SweepFormat};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "pradar", version, about = "mm-wave personal radar campaigns: simulate, energy matrices, channel statistics, maps")]
+struct Cli {
+    /// No progress bars (for scripts).
+    #[arg(long, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    Touchstone,
+    Parquet,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Simulate a campaign: sweeps (Touchstone or Parquet), manifest with [sweeps], truth/.
+    Simulate {
+        /// Input manifest with [scene] (and optionally [clutter]).
+        #[arg(long)]
+        campaign: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Override [array] elements (16, 100, 400).
+        #[arg(long)]
+        elements: Option<usize>,
+        /// Sweep file format.
+        #[arg(long, value_enum, default_value = "touchstone")]
+        format: Format,
+    },
+    /// Energy matrices from a campaign's sweeps.
+    Energy {
+        /// Manifest with [sweeps].
+        #[arg(long)]
+        campaign: PathBuf,
+        /// Output energy Parquet.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
+    Reproduce {
+        /// Report folder.
+        #[arg(long, default_value = "reports/corridor")]
+        out: PathBuf,
+        /// Use this manifest instead of the built-in corridor.
+        #[arg(long)]
+        campaign: Option<PathBuf>,
+        /// Override [array] elements.
+        #[arg(long)]
+        elements: Option<usize>,
+    },
+}
+
+fn bar(quiet: bool, label: &str, total: usize) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(total as u64);
+    pb.set_style(
+        ProgressStyle::with_template("{prefix:>12} [{bar:30}] {pos}/{len} {elapsed}")
+            .expect("template")
+            .progress_chars("=> "),
+    );
+    pb.set_prefix(label.to_string());
+    pb
+}
+
+fn run(cli: Cli) -> Result<()> {
+    let quiet = cli.quiet;
+    match cli.cmd {
+        Cmd::Simulate { campaign, out, elements, format } => {
+            let mut c = Campaign::load(&campaign)?;
+            if let Some(n) = elements {
+                c.set_elements(n)?;
+            }
+            let pb = bar(quiet, "simulate", c.manifest.positions());
+            let fmt = match format {
+                Format::Touchstone => SweepFormat::Touchstone,
+                Format::Parquet => SweepFormat::Parquet,
+            };
+            let r = pradar::campaign::simulate::simulate(&c, &out, fmt, &|d, _| pb.set_position(d as u64))?;
+            pb.finish_and_clear();
+            if !quiet {
+                println!(
+                    "simulated {} sweeps ({} scatterers, {} clutter clusters) -> {}",
+                    r.sweeps,
+                    r.scatterers,
+                    r.clusters,
+                    r.manifest.display()
+                );
+            }
+        }
+        Cmd::Energy { campaign, out } => {
+            let c = Campaign::load(&campaign)?;
+            let pb = bar(quiet, "energy", c.manifest.positions());
+            let r = pradar::energy::run(&c, &out, &|d, _| pb.set_position(d as u64))?;
+            pb.finish_and_clear();
+            if !quiet {
+                println!(
+                    "{} sweeps -> {} rows in {} (N0 {:.3e}, noise bin mean {:.3e})",
+                    r.sweeps,
+                    r.rows,
+                    out.display(),
+                    r.n0,
+                    r.noise_bin_mean
+                );
+            }
+        }
+        Cmd::Reproduce { out, campaign, elements } => {
+            let opts = pradar::pipeline::ReproduceOptions { out, campaign, elements };
+            let progress = |label: &str, total: usize| -> Box<dyn Fn(usize, usize)> {
+                let pb = bar(quiet, label, total);
+                Box::new(move |d, t| {
+                    pb.set_position(d as u64);
+                    if d == t {
+                        pb.finish_and_clear();
+                    }
+                })
+            };
+            let index = pradar::pipeline::reproduce(&opts, &progress)?;
+            if !quiet {
+                println!("report: {}", index.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        let msg = format!("{e:#}").replace('\n', " ");
+        eprintln!("error: {msg}");
+        std::process::exit(1);
+    }
+}

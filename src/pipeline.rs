@@ -1,0 +1,108 @@
+//! The main job (`pradar reproduce`): simulate the built-in corridor into a work folder,
+//! compute its energy matrices and write the report with per-position heat maps, the
+//! campaign summary and stage timings. Later stages add their sections here.
+
+use crate::campaign::manifest::{Campaign, SweepFormat};
+use crate::campaign::simulate::simulate;
+use crate::energy::{self, EnergyMatrix};
+use crate::error::{Error, Result};
+use crate::report::{self, kv_table, Section};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The built-in corridor manifest.
+pub const CORRIDOR_MANIFEST: &str = include_str!("../data/corridor/campaign.toml");
+/// The built-in corridor layout.
+pub const CORRIDOR_LAYOUT: &str = include_str!("../data/corridor/layout.geojson");
+
+/// Options of `reproduce`.
+#[derive(Debug, Clone)]
+pub struct ReproduceOptions {
+    /// Report folder (`reports/corridor`).
+    pub out: PathBuf,
+    /// Manifest to use instead of the built-in corridor.
+    pub campaign: Option<PathBuf>,
+    /// `--elements` override.
+    pub elements: Option<usize>,
+}
+
+/// Progress callback factory: (stage label, total steps) → per-step callback.
+pub type Progress<'a> = &'a dyn Fn(&str, usize) -> Box<dyn Fn(usize, usize) + 'a>;
+
+/// Write the built-in corridor campaign (manifest + layout) into `dir`.
+pub fn write_builtin_corridor(dir: &Path) -> Result<PathBuf> {
+    let m = dir.join("campaign.toml");
+    crate::io::write_bytes(&m, CORRIDOR_MANIFEST.as_bytes())?;
+    crate::io::write_bytes(&dir.join("layout.geojson"), CORRIDOR_LAYOUT.as_bytes())?;
+    Ok(m)
+}
+
+/// Run the main job; returns the index path.
+pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf> {
+    let out = &opts.out;
+    let work = out.join("work");
+    std::fs::create_dir_all(&work).map_err(|e| Error::io(&work, e))?;
+    let mut timings: Vec<(String, f64)> = Vec::new();
+    let src = match &opts.campaign {
+        Some(p) => p.clone(),
+        None => write_builtin_corridor(&work.join("input"))?,
+    };
+    let mut c = Campaign::load(&src)?;
+    if let Some(n) = opts.elements {
+        c.set_elements(n)?;
+    }
+    let np = c.manifest.positions();
+    let t = Instant::now();
+    let sim_dir = work.join("simulated");
+    let cb = progress("simulate", np);
+    let sim = simulate(&c, &sim_dir, SweepFormat::Touchstone, &*cb)?;
+    timings.push(("simulate".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let sc = Campaign::load(&sim.manifest)?;
+    let energy_path = work.join("energy.parquet");
+    let cb = progress("energy", np);
+    let er = energy::run(&sc, &energy_path, &*cb)?;
+    timings.push(("energy".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let em = EnergyMatrix::read(&energy_path)?;
+    let cb = progress("heat maps", np);
+    for p in 0..em.positions {
+        report::energy_heatmap(&em, p, &out.join(format!("energy_p{p:02}.png")), -60.0)?;
+        cb(p + 1, em.positions);
+    }
+    timings.push(("report plots".into(), t.elapsed().as_secs_f64()));
+    let m = &sc.manifest;
+    let summary = vec![
+        ("campaign".to_string(), m.name.clone()),
+        ("band".into(), format!("{:.3}–{:.3} GHz, {} points", m.band.start_hz / 1e9, m.band.stop_hz / 1e9, m.band.points)),
+        ("array".into(), format!("{} elements ({})", m.array.elements, m.array.label())),
+        ("positions".into(), np.to_string()),
+        ("directions".into(), format!("{} ({}° to {}° step {}°)", m.directions.count(), m.directions.start_deg, m.directions.stop_deg, m.directions.step_deg)),
+        ("pulses".into(), m.pulses.to_string()),
+        ("sweeps".into(), sim.sweeps.to_string()),
+        ("scatterers (truth)".into(), sim.scatterers.to_string()),
+        ("clutter clusters (truth)".into(), sim.clusters.to_string()),
+        ("bin width".into(), format!("{:.4} ns", em.meta.bin_width_ns)),
+        ("bins kept".into(), em.bins.to_string()),
+        ("window ENBW / TW".into(), format!("{:.3} / {:.3}", em.meta.enbw, em.meta.tw)),
+        ("coupling removal".into(), em.meta.coupling.clone()),
+        ("N0 (estimated)".into(), format!("{:.3e} ({:.1} dB)", er.n0, 10.0 * er.n0.log10())),
+        ("noise floor (configured)".into(), format!("{} dBm per point at {} dBm", m.noise.floor_dbm, m.noise.tx_power_dbm)),
+        ("energy table".into(), "work/energy.parquet".into()),
+    ];
+    let mut heat = String::new();
+    for p in 0..em.positions {
+        heat.push_str(&format!("<a href=\"energy_p{p:02}.png\"><img src=\"energy_p{p:02}.png\" alt=\"position {p}\"></a>\n"));
+    }
+    let total: f64 = timings.iter().map(|t| t.1).sum();
+    let mut trows: Vec<(String, String)> = timings.iter().map(|(k, v)| (k.clone(), format!("{v:.2} s"))).collect();
+    trows.push(("total".into(), format!("{total:.2} s")));
+    let sections = vec![
+        Section { title: "Campaign".into(), html: kv_table(&summary) },
+        Section { title: "Energy matrices (range vs direction, dB re position peak)".into(), html: heat },
+        Section { title: "Stage timings".into(), html: kv_table(&trows) },
+    ];
+    let index = out.join("index.html");
+    report::write_index(&index, &format!("pradar report: {}", m.name), &sections)?;
+    Ok(index)
+}

@@ -1,0 +1,191 @@
+//! Parquet/CSV table helpers over polars' eager API: atomic writes with file-level key-value
+//! metadata, streaming (batched, one row group per batch) writers, column extraction with
+//! errors that name the file and column.
+
+use crate::error::{Error, Result};
+use crate::io::{ensure_parent, temp_path};
+use polars::prelude::*;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+/// Build a column from a vector.
+pub fn col<T>(name: &str, v: Vec<T>) -> Column
+where
+    Series: NamedFrom<Vec<T>, [T]>,
+{
+    Column::new(name.into(), v)
+}
+
+/// Build a frame from equal-length columns.
+pub fn frame(path: &Path, cols: Vec<Column>) -> Result<DataFrame> {
+    let h = cols.first().map(|c| c.len()).unwrap_or(0);
+    DataFrame::new(h, cols).map_err(|e| Error::table(path, e))
+}
+
+/// A streaming Parquet writer: batches become row groups; the file appears (renamed from a
+/// temp file) only on [`ParquetStream::finish`].
+pub struct ParquetStream {
+    path: PathBuf,
+    tmp: PathBuf,
+    writer: Option<polars::io::parquet::write::BatchedWriter<File>>,
+    meta: Vec<(String, String)>,
+    done: bool,
+}
+
+impl ParquetStream {
+    /// Start writing `path`; metadata is attached at finish.
+    pub fn create(path: &Path) -> Result<Self> {
+        ensure_parent(path)?;
+        Ok(ParquetStream {
+            path: path.to_path_buf(),
+            tmp: temp_path(path),
+            writer: None,
+            meta: Vec::new(),
+            done: false,
+        })
+    }
+
+    /// Set the file-level key-value metadata (before the first batch).
+    pub fn set_metadata(&mut self, kv: Vec<(String, String)>) {
+        self.meta = kv;
+    }
+
+    /// Append one batch (one row group).
+    pub fn write(&mut self, df: &DataFrame) -> Result<()> {
+        if self.writer.is_none() {
+            let file = File::create(&self.tmp).map_err(|e| Error::io(&self.tmp, e))?;
+            let kv = if self.meta.is_empty() {
+                None
+            } else {
+                Some(KeyValueMetadata::from_static(self.meta.clone()))
+            };
+            let w = ParquetWriter::new(file)
+                .with_key_value_metadata(kv)
+                .with_compression(ParquetCompression::Snappy)
+                .batched(df.schema())
+                .map_err(|e| Error::table(&self.path, e))?;
+            self.writer = Some(w);
+        }
+        self.writer
+            .as_mut()
+            .expect("writer")
+            .write_batch(df)
+            .map_err(|e| Error::table(&self.path, e))
+    }
+
+    /// Finish the file and rename it into place. `empty_schema` is used when no batch was
+    /// written (the file then has the schema and zero rows).
+    pub fn finish(mut self, empty: Option<&DataFrame>) -> Result<()> {
+        if self.writer.is_none() {
+            if let Some(df) = empty {
+                self.write(df)?;
+            } else {
+                return Err(Error::input(&self.path, "no rows to write"));
+            }
+        }
+        let w = self.writer.take().expect("writer");
+        w.finish().map_err(|e| Error::table(&self.path, e))?;
+        drop(w);
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
+        self.done = true;
+        Ok(())
+    }
+}
+
+impl Drop for ParquetStream {
+    fn drop(&mut self) {
+        if !self.done {
+            self.writer.take();
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Write a whole frame atomically with metadata.
+pub fn write_parquet(path: &Path, df: &DataFrame, meta: Vec<(String, String)>) -> Result<()> {
+    let mut s = ParquetStream::create(path)?;
+    s.set_metadata(meta);
+    s.write(df)?;
+    s.finish(None)
+}
+
+/// Write a frame as CSV atomically.
+pub fn write_csv(path: &Path, df: &mut DataFrame) -> Result<()> {
+    crate::io::write_atomic(path, |w| {
+        CsvWriter::new(w)
+            .include_header(true)
+            .finish(df)
+            .map_err(|e| Error::table(path, e))
+    })
+}
+
+fn open(path: &Path) -> Result<File> {
+    File::open(path).map_err(|e| Error::io(path, e))
+}
+
+/// Read a Parquet file (optionally a row slice `(offset, len)`).
+pub fn read_parquet(path: &Path, slice: Option<(usize, usize)>) -> Result<DataFrame> {
+    ParquetReader::new(open(path)?)
+        .with_slice(slice)
+        .finish()
+        .map_err(|e| Error::table(path, e))
+}
+
+/// Number of rows of a Parquet file.
+pub fn parquet_rows(path: &Path) -> Result<usize> {
+    ParquetReader::new(open(path)?)
+        .num_rows()
+        .map_err(|e| Error::table(path, e))
+}
+
+/// File-level key-value metadata of a Parquet file.
+pub fn parquet_metadata(path: &Path) -> Result<Vec<(String, String)>> {
+    let mut r = ParquetReader::new(open(path)?);
+    let md = r.get_metadata().map_err(|e| Error::table(path, e))?;
+    Ok(md
+        .key_value_metadata
+        .as_ref()
+        .map(|kv| {
+            kv.iter()
+                .map(|k| (k.key.clone(), k.value.clone().unwrap_or_default()))
+                .collect()
+        })
+        .unwrap_or_default())
+}
+
+/// A required f64 column without nulls or non-finite values.
+pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
+    let c = df
+        .column(name)
+        .map_err(|_| Error::input(path, format!("missing column `{name}`")))?;
+    let c = c
+        .cast(&DataType::Float64)
+        .map_err(|_| Error::input(path, format!("column `{name}` is not numeric")))?;
+    let ca = c.f64().map_err(|e| Error::table(path, e))?;
+    let mut out = Vec::with_capacity(ca.len());
+    for (i, v) in ca.iter().enumerate() {
+        match v {
+            Some(x) if x.is_finite() => out.push(x),
+            Some(x) => {
+                return Err(Error::input(path, format!("column `{name}` row {i}: non-finite value {x}")))
+            }
+            None => return Err(Error::input(path, format!("column `{name}` row {i}: null"))),
+        }
+    }
+    Ok(out)
+}
+
+/// A required integer column (cast to i64) without nulls.
+pub fn i64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<i64>> {
+    let c = df
+        .column(name)
+        .map_err(|_| Error::input(path, format!("missing column `{name}`")))?;
+    let c = c
+        .cast(&DataType::Int64)
+        .map_err(|_| Error::input(path, format!("column `{name}` is not an integer")))?;
+    let ca = c.i64().map_err(|e| Error::table(path, e))?;
+    ca.iter()
+        .enumerate()
+        .map(|(i, v)| v.ok_or_else(|| Error::input(path, format!("column `{name}` row {i}: null"))))
+        .collect()
+}
