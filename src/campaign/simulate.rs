@@ -26,7 +26,7 @@
 //!   paths appear beyond the wall), σ_ray = σ_c · e^{−τ/γ};
 //! * optional `[[scene.targets]]` point targets; `walls = false` drops the layout's walls,
 //!   corners and clutter (point-target scenes);
-//! * Tx→Rx coupling: a −`coupling_db` term at `coupling_delay_ns` with a 0.8 GHz ripple;
+//! * Tx→Rx coupling: a −`coupling_db` term at `coupling_delay_ns` with a 2 GHz ripple (replicas at ±0.5 ns);
 //! * complex white noise of variance floor/tx power per point, independent per pulse.
 //!
 //! Occlusion: a path is dropped when the segment from the pose to the scatterer crosses a
@@ -585,7 +585,7 @@ pub fn simulate(
     let coupling: Vec<Complex64> = (0..nf)
         .map(|k| {
             let f = m.band.freq(k);
-            let ripple = 1.0 + 0.1 * (2.0 * PI * (f - m.band.start_hz) / 0.8e9).cos();
+            let ripple = 1.0 + 0.1 * (2.0 * PI * (f - m.band.start_hz) / 2.0e9).cos();
             Complex64::from_polar(coupling_amp * ripple, -2.0 * PI * (f * tau_c).fract())
         })
         .collect();

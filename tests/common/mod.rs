@@ -1,0 +1,52 @@
+//! Shared helpers for the end-to-end tests: build campaigns from the fixtures in `data/`.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+/// Repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Load a fixture manifest as a TOML table.
+pub fn fixture(name: &str) -> toml::Table {
+    let text = std::fs::read_to_string(root().join("data").join(name)).unwrap();
+    toml::from_str(&text).unwrap()
+}
+
+/// Set a dotted key (`band.points`) in a TOML table.
+pub fn set(t: &mut toml::Table, key: &str, v: impl Into<toml::Value>) {
+    let mut parts: Vec<&str> = key.split('.').collect();
+    let last = parts.pop().unwrap();
+    let mut cur = t;
+    for p in parts {
+        cur = cur
+            .entry(p.to_string())
+            .or_insert_with(|| toml::Value::Table(Default::default()))
+            .as_table_mut()
+            .unwrap();
+    }
+    cur.insert(last.to_string(), v.into());
+}
+
+/// Write a manifest (and the layout it names, copied from `data/tests` or `data/corridor`)
+/// into `dir`; returns the manifest path.
+pub fn write_campaign(dir: &Path, t: &toml::Table) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let layout = t["layout"].as_str().unwrap().to_string();
+    for src in ["data/tests", "data/corridor"] {
+        let p = root().join(src).join(&layout);
+        if p.is_file() {
+            std::fs::copy(&p, dir.join(&layout)).unwrap();
+            break;
+        }
+    }
+    let path = dir.join("campaign.toml");
+    std::fs::write(&path, toml::to_string(t).unwrap()).unwrap();
+    path
+}
+
+/// The built-in corridor manifest as a table.
+pub fn corridor() -> toml::Table {
+    fixture("corridor/campaign.toml")
+}

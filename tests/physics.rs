@@ -1,0 +1,254 @@
+//! Physics checks of the simulator + energy chain against closed forms (issue: foundation).
+
+mod common;
+
+use common::*;
+use num_complex::Complex64;
+use pradar::campaign::layout::Layout;
+use pradar::campaign::manifest::{Campaign, SweepFormat, C0};
+use pradar::campaign::pattern::ArrayPattern;
+use pradar::campaign::simulate::simulate;
+use pradar::energy::{self, EnergyMatrix, EnergyProcessor};
+use std::f64::consts::PI;
+
+fn run_chain(dir: &std::path::Path, t: &toml::Table) -> (Campaign, EnergyMatrix) {
+    let m = write_campaign(&dir.join("in"), t);
+    let c = Campaign::load(&m).unwrap();
+    let sim = simulate(&c, &dir.join("sim"), SweepFormat::Touchstone, &|_, _| {}).unwrap();
+    let sc = Campaign::load(&sim.manifest).unwrap();
+    let e = dir.join("energy.parquet");
+    energy::run(&sc, &e, &|_, _| {}).unwrap();
+    (sc, EnergyMatrix::read(&e).unwrap())
+}
+
+fn argmax(em: &EnergyMatrix, p: usize) -> (usize, usize, f64) {
+    let mut best = (0, 0, f64::MIN);
+    for d in 0..em.directions() {
+        for (b, &e) in em.profile(p, d).iter().enumerate() {
+            if e > best.2 {
+                best = (d, b, e);
+            }
+        }
+    }
+    best
+}
+
+#[test]
+fn point_target_peak_bin_direction_and_radar_equation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (range, angle_deg, rrcs) = (3.0f64, 20.0f64, 0.3f64);
+    for n in [16usize, 100, 400] {
+        for one_bit in [false, true] {
+            let mut t = fixture("tests/point_target.toml");
+            set(&mut t, "array.elements", n as i64);
+            set(&mut t, "array.one_bit", one_bit);
+            let (c, em) = run_chain(&tmp.path().join(format!("n{n}_{one_bit}")), &t);
+            let (d, b, e) = argmax(&em, 0);
+            let tau = 2.0 * range / C0;
+            let want_bin = (tau * 1e9 / em.meta.bin_width_ns).round() as usize;
+            assert!(b.abs_diff(want_bin) <= 1, "N={n}: peak bin {b}, expected {want_bin}");
+            assert!((em.angles_rel_deg[d] - angle_deg).abs() <= 5.0, "N={n}: peak direction {}", em.angles_rel_deg[d]);
+            // radar equation: |S21|² = G² λ² σ / ((4π)³ d⁴), seen through the window kernel
+            let m = &c.manifest;
+            let p = ArrayPattern::new(m.array, m.band.center_hz()).unwrap();
+            // the two-way gain varies over the band (strongly for the 1-bit transmitarray, whose
+            // phases are quantised at fc, and whose feed path adds a delay): use the
+            // window-weighted band average of |F|²·λ
+            let win = pradar::energy::window(m.processing.window, 81);
+            let fg: f64 = (0..81)
+                .map(|i| {
+                    let f = m.band.start_hz + m.band.bandwidth_hz() * i as f64 / 80.0;
+                    let fld = p.field(angle_deg.to_radians(), em.angles_rel_deg[d].to_radians(), f);
+                    fld.norm_sqr() * (C0 / f) * win[i]
+                })
+                .sum::<f64>()
+                / win.iter().sum::<f64>();
+            let amp2 = fg * fg * rrcs * rrcs / ((4.0 * PI).powi(3) * range.powi(4));
+            // antenna group delay (the transmitarray's feed path): slope of arg F² over the band
+            let (mut prev, mut unwrap, mut sxy, mut sxx, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0, 0.0, 0.0, 0.0);
+            for i in 0..81 {
+                let f = m.band.start_hz + m.band.bandwidth_hz() * i as f64 / 80.0;
+                let fld = p.field(angle_deg.to_radians(), em.angles_rel_deg[d].to_radians(), f);
+                let ph = (fld * fld).arg();
+                if i > 0 {
+                    let mut dp = ph - prev;
+                    dp -= 2.0 * PI * (dp / (2.0 * PI)).round();
+                    unwrap += dp;
+                }
+                prev = ph;
+                let x = 2.0 * PI * f;
+                sx += x;
+                sy += unwrap;
+                sxy += x * unwrap;
+                sxx += x * x;
+            }
+            let tau_g = -(81.0 * sxy - sx * sy) / (81.0 * sxx - sx * sx);
+            let proc = EnergyProcessor::new(m.band, m.processing).unwrap();
+            let expect = proc.point_echo_energy(amp2, tau + tau_g)[b];
+            let err_db = 10.0 * (e / expect).log10();
+            eprintln!("N={n} one_bit={one_bit}: peak bin {b} dir {} deg, energy {e:.3e} vs radar eq {expect:.3e} ({err_db:+.2} dB), antenna group delay {:.1} ps", em.angles_rel_deg[d], tau_g * 1e12);
+            assert!(err_db.abs() <= 1.0, "N={n} one_bit={one_bit}: {err_db:+.2} dB from the radar equation");
+        }
+    }
+}
+
+fn noise_stats(pulses: usize) -> (f64, f64, f64, f64) {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = fixture("tests/point_target.toml");
+    t["scene"].as_table_mut().unwrap().remove("targets");
+    set(&mut t, "scene.coupling_db", -400.0);
+    set(&mut t, "processing.coupling", "none");
+    set(&mut t, "pulses", pulses as i64);
+    set(&mut t, "noise.floor_dbm", -90.0);
+    let mut poses = toml::value::Array::new();
+    for i in 0..4 {
+        let mut p = toml::Table::new();
+        p.insert("x_m".into(), (i as f64).into());
+        p.insert("y_m".into(), 0.0.into());
+        p.insert("heading_deg".into(), 0.0.into());
+        poses.push(p.into());
+    }
+    t.insert("poses".into(), poses.into());
+    let (c, em) = run_chain(tmp.path(), &t);
+    let m = &c.manifest;
+    let proc = EnergyProcessor::new(m.band, m.processing).unwrap();
+    let sigma2 = m.noise.s21_variance();
+    let n0h = proc.noise_per_sample(sigma2); // = N0·TW
+    let tw = proc.tw();
+    let n0 = n0h / tw;
+    let want_mean = n0 * tw;
+    let want_var = n0 * n0 * tw / pulses as f64;
+    // per-bin statistics over all (position, direction) profiles, averaged over bins
+    let nprof = em.positions * em.directions();
+    let (mut mean_acc, mut var_acc) = (0.0, 0.0);
+    for b in 0..em.bins {
+        let v: Vec<f64> = (0..em.positions)
+            .flat_map(|p| (0..em.directions()).map(move |d| (p, d)))
+            .map(|(p, d)| em.profile(p, d)[b])
+            .collect();
+        let mu = v.iter().sum::<f64>() / nprof as f64;
+        let var = v.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (nprof - 1) as f64;
+        mean_acc += mu;
+        var_acc += var;
+    }
+    let mean = mean_acc / em.bins as f64;
+    let var = var_acc / em.bins as f64;
+    eprintln!("Np={pulses}: mean {mean:.4e} (formula {want_mean:.4e}), var {var:.4e} (formula {want_var:.4e}), TW {tw:.3}, n0 meta {:.4e} vs {n0:.4e}", em.meta.n0);
+    (mean / want_mean, var / want_var, em.meta.n0 / n0, tw)
+}
+
+#[test]
+fn noise_only_energy_matches_detector_formulas() {
+    for np in [1usize, 16] {
+        let (rm, rv, rn0, _) = noise_stats(np);
+        assert!((rm - 1.0).abs() < 0.10, "Np={np}: mean ratio {rm}");
+        assert!((rv - 1.0).abs() < 0.10, "Np={np}: variance ratio {rv}");
+        assert!((rn0 - 1.0).abs() < 0.10, "Np={np}: estimated N0 ratio {rn0}");
+    }
+}
+
+#[test]
+fn coupling_present_before_removal_and_gone_after() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut results = Vec::new();
+    for method in ["none", "gate", "mean"] {
+        let mut t = fixture("tests/point_target.toml");
+        set(&mut t, "processing.coupling", method);
+        let (c, em) = run_chain(&tmp.path().join(method), &t);
+        let tb = em.meta.bin_width_ns;
+        let cb = (0.25 / tb).round() as usize;
+        // coupling bin energy in a direction away from the target, against the noise mean
+        let d = 0;
+        let e = em.profile(0, d)[cb];
+        let noise = em.meta.noise_mean();
+        let expect = 10f64.powf(-30.0 / 10.0);
+        results.push((method, e, noise, expect));
+        let _ = c;
+    }
+    for (method, e, noise, expect) in &results {
+        eprintln!("coupling {method}: bin energy {e:.3e}, noise mean {noise:.3e}, coupling level {expect:.3e}");
+    }
+    let (_, e_none, _, expect) = results[0];
+    assert!(e_none > 0.3 * expect && e_none < 3.0 * expect, "coupling peak missing: {e_none:.3e} vs {expect:.3e}");
+    for (method, e, noise, _) in &results[1..] {
+        assert!(*e < 10.0 * noise, "coupling not removed by {method}: {e:.3e} vs noise {noise:.3e}");
+    }
+}
+
+/// Distance from `at` along `theta` to the first wall, m.
+fn ray_to_wall(layout: &Layout, at: geo::Coord<f64>, theta: f64) -> f64 {
+    let far = geo::Coord { x: at.x + 50.0 * theta.cos(), y: at.y + 50.0 * theta.sin() };
+    let ray = geo::Line::new(at, far);
+    layout
+        .walls
+        .iter()
+        .filter_map(|w| match geo::line_intersection::line_intersection(ray, w.line) {
+            Some(geo::LineIntersection::SinglePoint { intersection, .. }) => {
+                let d = intersection - at;
+                Some(d.x.hypot(d.y))
+            }
+            _ => None,
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn corridor_strongest_echoes_at_wall_distances_and_truth_lists_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = corridor();
+    let (c, em) = run_chain(tmp.path(), &t);
+    let layout = Layout::load(&c.layout_path()).unwrap();
+    let rays = pradar::table::read_parquet(&tmp.path().join("sim/truth/rays.parquet"), None).unwrap();
+    let rp = pradar::table::i64_column(std::path::Path::new("rays"), &rays, "position").unwrap();
+    let rdelay = pradar::table::f64_column(std::path::Path::new("rays"), &rays, "delay_ns").unwrap();
+    let rang = pradar::table::f64_column(std::path::Path::new("rays"), &rays, "angle_rel_deg").unwrap();
+    let tb = em.meta.bin_width_ns;
+    let mut checked = 0;
+    for (p, pose) in c.manifest.poses.iter().enumerate() {
+        for d in [0usize, em.directions() - 1] {
+            // the side walls, seen broadside at -90 and +90 degrees
+            let theta = (pose.heading_deg + em.angles_rel_deg[d]).to_radians();
+            let dist = ray_to_wall(&layout, geo::Coord { x: pose.x_m, y: pose.y_m }, theta);
+            let want = (2.0 * dist / C0 * 1e9 / tb).round() as usize;
+            let prof = em.profile(p, d);
+            let b = (0..em.bins).max_by(|&i, &j| prof[i].total_cmp(&prof[j])).unwrap();
+            eprintln!("position {p} direction {:+.0}: wall at {dist:.3} m (bin {want}), strongest bin {b}", em.angles_rel_deg[d]);
+            assert!(b.abs_diff(want) <= 2, "position {p}, direction {d}: strongest bin {b}, wall bin {want}");
+            // truth lists a path at that delay and direction
+            let found = (0..rp.len()).any(|i| {
+                rp[i] == p as i64
+                    && ((rdelay[i] / tb).round() as i64 - b as i64).abs() <= 2
+                    && (rang[i] - em.angles_rel_deg[d]).abs() <= 5.0
+            });
+            assert!(found, "position {p}, direction {d}: no truth path near bin {b}");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 24);
+}
+
+#[test]
+fn skrf_fixtures_read_identically() {
+    let dir = root().join("data/touchstone");
+    let expected: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("skrf_expected.json")).unwrap()).unwrap();
+    let arr = |k: &str| -> Vec<f64> { expected[k].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect() };
+    let f = arr("frequency_hz");
+    let names = ["s11", "s21", "s12", "s22"];
+    for file in ["skrf_ri.s2p", "skrf_ma.s2p", "skrf_db.s2p"] {
+        let ts = pradar::campaign::touchstone::read_s2p(&dir.join(file)).unwrap();
+        assert_eq!(ts.freq_hz.len(), f.len(), "{file}");
+        for (a, b) in ts.freq_hz.iter().zip(&f) {
+            assert!((a - b).abs() <= 1e-6, "{file}: frequency {a} vs {b}");
+        }
+        for (j, n) in names.iter().enumerate() {
+            let re = arr(&format!("{n}_re"));
+            let im = arr(&format!("{n}_im"));
+            for k in 0..f.len() {
+                let want = Complex64::new(re[k], im[k]);
+                let got = ts.s[k][j];
+                let tol = if file == "skrf_ri.s2p" { 1e-15 } else { 1e-12 * want.norm().max(1e-3) };
+                assert!((got - want).norm() <= tol, "{file} {n}[{k}]: {got} vs {want}");
+            }
+        }
+    }
+}
