@@ -182,7 +182,7 @@ def run(campaign: Path, out: Path) -> int:
     idx = (np.arange(nbins)[:, None] * L + np.arange(-half, half + 1)[None, :]) % nfft
     n_gate = 0
     if proc["coupling"] == "gate":
-        # zero samples with t_n = n*dt < gate_ns (n = 0.., not wrapped)
+        # zero samples with signed delay in [-gate_ns, gate_ns) (start and wrapped end)
         n_gate = min(nfft, int(np.count_nonzero(np.arange(nfft) * dt < float(proc["gate_ns"]) * 1e-9)))
 
     sw = m["sweeps"]
@@ -232,7 +232,9 @@ def run(campaign: Path, out: Path) -> int:
                     x[: points - nfft] += ws[nfft:]
                 h = np.fft.ifft(x) * (nfft / wsum)
                 if n_gate:
+                    # signed delays in [-gate, gate): the start and the wrapped end
                     h[:n_gate] = 0.0
+                    h[nfft - n_gate:] = 0.0
                 pw = h.real ** 2 + h.imag ** 2
                 energy[p, d] += pw[idx].mean(axis=1)
     energy /= n_pulse

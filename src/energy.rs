@@ -26,7 +26,9 @@
 //! the bins at delays ≥ `noise_from_ns` (signal-free by assumption) over the whole campaign.
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 
-use crate::campaign::manifest::{Band, Campaign, CouplingRemoval, Processing, WindowKind, SCHEMA_VERSION};
+use crate::campaign::manifest::{
+    Band, Campaign, CouplingRemoval, Processing, WindowKind, SCHEMA_VERSION,
+};
 use crate::campaign::sweeps::{PositionSweeps, SweepReader};
 use crate::error::{Error, Result};
 use crate::table;
@@ -91,7 +93,9 @@ impl EnergyProcessor {
             let z: Complex64 = win
                 .iter()
                 .enumerate()
-                .map(|(k, w)| Complex64::from_polar(w * w, 2.0 * PI * k as f64 * d as f64 / nfft as f64))
+                .map(|(k, w)| {
+                    Complex64::from_polar(w * w, 2.0 * PI * k as f64 * d as f64 / nfft as f64)
+                })
                 .sum();
             z.norm() / w2
         };
@@ -217,7 +221,9 @@ impl EnergyProcessor {
                         .win
                         .iter()
                         .enumerate()
-                        .map(|(k, w)| Complex64::from_polar(*w, 2.0 * PI * k as f64 * df * (t - tau_s)))
+                        .map(|(k, w)| {
+                            Complex64::from_polar(*w, 2.0 * PI * k as f64 * df * (t - tau_s))
+                        })
                         .sum();
                     e += (k / self.wsum).norm_sqr();
                 }
@@ -232,18 +238,19 @@ impl EnergyProcessor {
         let nf = sw.points;
         let nd = sw.directions;
         let nk = sw.pulses;
-        let mean: Option<Vec<Complex64>> = (self.proc.coupling == CouplingRemoval::Mean).then(|| {
-            let mut m = vec![Complex64::new(0.0, 0.0); nk * nf];
-            for d in 0..nd {
-                for k in 0..nk {
-                    for (acc, v) in m[k * nf..(k + 1) * nf].iter_mut().zip(sw.sweep(d, k)) {
-                        *acc += v;
+        let mean: Option<Vec<Complex64>> =
+            (self.proc.coupling == CouplingRemoval::Mean).then(|| {
+                let mut m = vec![Complex64::new(0.0, 0.0); nk * nf];
+                for d in 0..nd {
+                    for k in 0..nk {
+                        for (acc, v) in m[k * nf..(k + 1) * nf].iter_mut().zip(sw.sweep(d, k)) {
+                            *acc += v;
+                        }
                     }
                 }
-            }
-            m.iter_mut().for_each(|v| *v /= nd as f64);
-            m
-        });
+                m.iter_mut().for_each(|v| *v /= nd as f64);
+                m
+            });
         let nb = self.nbins_full;
         let mut out = vec![0.0; nd * nb];
         out.par_chunks_mut(nb).enumerate().for_each_init(
@@ -253,7 +260,8 @@ impl EnergyProcessor {
                     let s = sw.sweep(d, k);
                     let s: &[Complex64] = match &mean {
                         Some(m) => {
-                            for ((t, v), mv) in tmp.iter_mut().zip(s).zip(&m[k * nf..(k + 1) * nf]) {
+                            for ((t, v), mv) in tmp.iter_mut().zip(s).zip(&m[k * nf..(k + 1) * nf])
+                            {
                                 *t = v - mv;
                             }
                             tmp
@@ -342,7 +350,12 @@ impl EnergyMatrix {
             kv.iter()
                 .find(|(key, _)| key == k)
                 .map(|(_, v)| v.clone())
-                .ok_or_else(|| Error::input(path, format!("metadata key `{k}` missing (not an energy table?)")))
+                .ok_or_else(|| {
+                    Error::input(
+                        path,
+                        format!("metadata key `{k}` missing (not an energy table?)"),
+                    )
+                })
         };
         let num = |k: &str| -> Result<f64> {
             get(k)?
@@ -361,7 +374,13 @@ impl EnergyMatrix {
             all: kv.clone(),
         };
         if meta.schema_version != SCHEMA_VERSION {
-            return Err(Error::input(path, format!("metadata schema_version {} unsupported", meta.schema_version)));
+            return Err(Error::input(
+                path,
+                format!(
+                    "metadata schema_version {} unsupported",
+                    meta.schema_version
+                ),
+            ));
         }
         let df = table::read_parquet(path, None)?;
         if df.height() == 0 {
@@ -382,7 +401,10 @@ impl EnergyMatrix {
         if np * nd * nb != df.height() {
             return Err(Error::input(
                 path,
-                format!("{} rows but {np} positions x {nd} directions x {nb} bins", df.height()),
+                format!(
+                    "{} rows but {np} positions x {nd} directions x {nb} bins",
+                    df.height()
+                ),
             ));
         }
         let mut data = vec![f64::NAN; np * nd * nb];
@@ -392,7 +414,10 @@ impl EnergyMatrix {
             let (p, d, b) = (pos[i] as usize, dir[i] as usize, bin[i] as usize);
             let idx = (p * nd + d) * nb + b;
             if !data[idx].is_nan() {
-                return Err(Error::input(path, format!("row {i}: duplicate (position {p}, direction {d}, bin {b})")));
+                return Err(Error::input(
+                    path,
+                    format!("row {i}: duplicate (position {p}, direction {d}, bin {b})"),
+                ));
             }
             if energy[i] < 0.0 {
                 return Err(Error::input(path, format!("row {i}: negative energy")));
@@ -413,6 +438,11 @@ impl EnergyMatrix {
 }
 
 /// Wrap an angle to (−180, 180] degrees.
+///
+/// ```
+/// assert_eq!(pradar::energy::wrap_deg(270.0), -90.0);
+/// assert_eq!(pradar::energy::wrap_deg(-180.0), 180.0);
+/// ```
 pub fn wrap_deg(a: f64) -> f64 {
     let r = a.rem_euclid(360.0);
     if r > 180.0 {
@@ -437,10 +467,15 @@ pub struct EnergyReport {
 
 /// Compute the energy matrices of a campaign and write the energy Parquet table.
 /// `progress` is called after each position with (done, total).
-pub fn run(campaign: &Campaign, out: &Path, progress: &dyn Fn(usize, usize)) -> Result<EnergyReport> {
+pub fn run(
+    campaign: &Campaign,
+    out: &Path,
+    progress: &dyn Fn(usize, usize),
+) -> Result<EnergyReport> {
     let m = &campaign.manifest;
     let reader = SweepReader::open(campaign)?;
-    let proc = EnergyProcessor::new(m.band, m.processing).map_err(|e| Error::input(&campaign.path, e.to_string()))?;
+    let proc = EnergyProcessor::new(m.band, m.processing)
+        .map_err(|e| Error::input(&campaign.path, e.to_string()))?;
     let np = m.positions();
     let nd = m.directions.count();
     let nb = proc.nbins();
@@ -450,21 +485,29 @@ pub fn run(campaign: &Campaign, out: &Path, progress: &dyn Fn(usize, usize)) -> 
     if noise_from >= nbf {
         return Err(Error::input(
             &campaign.path,
-            format!("processing.noise_from_ns = {} ns leaves no signal-free bins (span {:.1} ns)", m.processing.noise_from_ns, nbf as f64 * tb),
+            format!(
+                "processing.noise_from_ns = {} ns leaves no signal-free bins (span {:.1} ns)",
+                m.processing.noise_from_ns,
+                nbf as f64 * tb
+            ),
         ));
     }
     let mut energies = Vec::with_capacity(np * nd * nb);
     let (mut noise_sum, mut noise_n) = (0.0, 0usize);
-    for p in 0..np {
-        let sw = reader.read_position(p)?;
-        let e = proc.position_energy(&sw);
-        for d in 0..nd {
-            let prof = &e[d * nbf..(d + 1) * nbf];
-            energies.extend_from_slice(&prof[..nb]);
-            noise_sum += prof[noise_from..].iter().sum::<f64>();
-            noise_n += nbf - noise_from;
+    let chunk = reader.chunk_positions();
+    let mut p0 = 0;
+    while p0 < np {
+        for sw in reader.read_positions(p0, chunk)? {
+            let e = proc.position_energy(&sw);
+            for d in 0..nd {
+                let prof = &e[d * nbf..(d + 1) * nbf];
+                energies.extend_from_slice(&prof[..nb]);
+                noise_sum += prof[noise_from..].iter().sum::<f64>();
+                noise_n += nbf - noise_from;
+            }
+            progress(sw.position + 1, np);
         }
-        progress(p + 1, np);
+        p0 += chunk;
     }
     let noise_bin_mean = noise_sum / noise_n as f64;
     let n0 = noise_bin_mean / proc.tw();
@@ -477,35 +520,52 @@ pub fn run(campaign: &Campaign, out: &Path, progress: &dyn Fn(usize, usize)) -> 
         ("tw".into(), format!("{:.17e}", proc.tw())),
         ("array".into(), m.array.label()),
         ("elements".into(), m.array.elements.to_string()),
-        ("window".into(), format!("{:?}", m.processing.window).to_lowercase()),
-        ("coupling".into(), format!("{:?}", m.processing.coupling).to_lowercase()),
+        (
+            "window".into(),
+            format!("{:?}", m.processing.window).to_lowercase(),
+        ),
+        (
+            "coupling".into(),
+            format!("{:?}", m.processing.coupling).to_lowercase(),
+        ),
         ("gate_ns".into(), m.processing.gate_ns.to_string()),
         ("oversample".into(), m.processing.oversample.to_string()),
-        ("noise_from_ns".into(), m.processing.noise_from_ns.to_string()),
+        (
+            "noise_from_ns".into(),
+            m.processing.noise_from_ns.to_string(),
+        ),
         ("noise_bin_mean".into(), format!("{noise_bin_mean:.17e}")),
         ("campaign".into(), m.name.clone()),
-        ("band".into(), format!("{} {} {}", m.band.start_hz, m.band.stop_hz, m.band.points)),
+        (
+            "band".into(),
+            format!("{} {} {}", m.band.start_hz, m.band.stop_hz, m.band.points),
+        ),
     ];
     let mut stream = table::ParquetStream::create(out)?;
     stream.set_metadata(meta);
     let angles = m.directions.angles_deg();
-    for p in 0..np {
-        let n = nd * nb;
+    // about 2^20 rows per row group
+    let group = ((1usize << 20) / (nd * nb).max(1)).max(1);
+    for g0 in (0..np).step_by(group) {
+        let ps = g0..(g0 + group).min(np);
+        let n = ps.len() * nd * nb;
         let mut pos = Vec::with_capacity(n);
         let mut dir = Vec::with_capacity(n);
         let mut arel = Vec::with_capacity(n);
         let mut aglob = Vec::with_capacity(n);
         let mut bin = Vec::with_capacity(n);
         let mut delay = Vec::with_capacity(n);
-        for d in 0..nd {
-            let g = wrap_deg(m.poses[p].heading_deg + angles[d]);
-            for b in 0..nb {
-                pos.push(p as i32);
-                dir.push(d as i32);
-                arel.push(angles[d]);
-                aglob.push(g);
-                bin.push(b as i32);
-                delay.push(b as f64 * tb);
+        for p in ps.clone() {
+            for (d, a) in angles.iter().enumerate() {
+                let g = wrap_deg(m.poses[p].heading_deg + a);
+                for b in 0..nb {
+                    pos.push(p as i32);
+                    dir.push(d as i32);
+                    arel.push(*a);
+                    aglob.push(g);
+                    bin.push(b as i32);
+                    delay.push(b as f64 * tb);
+                }
             }
         }
         let df = table::frame(
@@ -517,7 +577,10 @@ pub fn run(campaign: &Campaign, out: &Path, progress: &dyn Fn(usize, usize)) -> 
                 table::col("angle_global_deg", aglob),
                 table::col("bin", bin),
                 table::col("delay_ns", delay),
-                table::col("energy", energies[p * n..(p + 1) * n].to_vec()),
+                table::col(
+                    "energy",
+                    energies[ps.start * nd * nb..ps.end * nd * nb].to_vec(),
+                ),
             ],
         )?;
         stream.write(&df)?;
@@ -559,11 +622,18 @@ mod tests {
             .collect();
         let mut out = vec![0.0; p.nbins_full()];
         p.profile_into(&s, &mut p.scratch(), 1.0, &mut out);
-        let peak = (0..p.nbins()).max_by(|&i, &j| out[i].total_cmp(&out[j])).unwrap();
+        let peak = (0..p.nbins())
+            .max_by(|&i, &j| out[i].total_cmp(&out[j]))
+            .unwrap();
         assert_eq!(peak, (20.0 / p.bin_width_ns()).round() as usize);
         let expect = p.point_echo_energy(a * a, tau);
         for bi in peak - 3..=peak + 3 {
-            assert!((out[bi] - expect[bi]).abs() < 1e-6 * expect[peak], "bin {bi}: {} vs {}", out[bi], expect[bi]);
+            assert!(
+                (out[bi] - expect[bi]).abs() < 1e-6 * expect[peak],
+                "bin {bi}: {} vs {}",
+                out[bi],
+                expect[bi]
+            );
         }
     }
 

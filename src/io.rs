@@ -38,7 +38,9 @@ where
         let mut w = BufWriter::with_capacity(1 << 16, file);
         fill(&mut w)?;
         w.flush().map_err(|e| Error::io(path, e))?;
-        let file = w.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
+        let file = w
+            .into_inner()
+            .map_err(|e| Error::io(path, e.into_error()))?;
         file.sync_all().map_err(|e| Error::io(path, e))?;
         fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
     })();

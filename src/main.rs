@@ -7,7 +7,11 @@ use pradar::campaign::manifest::{Campaign, SweepFormat};
 use std::path::PathBuf;
 
 #[derive(Parser)]
-#[command(name = "pradar", version, about = "mm-wave personal radar campaigns: simulate, energy matrices, channel statistics, maps")]
+#[command(
+    name = "pradar",
+    version,
+    about = "mm-wave personal radar campaigns: simulate, energy matrices, channel statistics, maps"
+)]
 struct Cli {
     /// No progress bars (for scripts).
     #[arg(long, global = true)]
@@ -79,7 +83,12 @@ fn bar(quiet: bool, label: &str, total: usize) -> ProgressBar {
 fn run(cli: Cli) -> Result<()> {
     let quiet = cli.quiet;
     match cli.cmd {
-        Cmd::Simulate { campaign, out, elements, format } => {
+        Cmd::Simulate {
+            campaign,
+            out,
+            elements,
+            format,
+        } => {
             let mut c = Campaign::load(&campaign)?;
             if let Some(n) = elements {
                 c.set_elements(n)?;
@@ -89,7 +98,9 @@ fn run(cli: Cli) -> Result<()> {
                 Format::Touchstone => SweepFormat::Touchstone,
                 Format::Parquet => SweepFormat::Parquet,
             };
-            let r = pradar::campaign::simulate::simulate(&c, &out, fmt, &|d, _| pb.set_position(d as u64))?;
+            let r = pradar::campaign::simulate::simulate(&c, &out, fmt, &|d, _| {
+                pb.set_position(d as u64)
+            })?;
             pb.finish_and_clear();
             if !quiet {
                 println!(
@@ -117,8 +128,16 @@ fn run(cli: Cli) -> Result<()> {
                 );
             }
         }
-        Cmd::Reproduce { out, campaign, elements } => {
-            let opts = pradar::pipeline::ReproduceOptions { out, campaign, elements };
+        Cmd::Reproduce {
+            out,
+            campaign,
+            elements,
+        } => {
+            let opts = pradar::pipeline::ReproduceOptions {
+                out,
+                campaign,
+                elements,
+            };
             let progress = |label: &str, total: usize| -> Box<dyn Fn(usize, usize)> {
                 let pb = bar(quiet, label, total);
                 Box::new(move |d, t| {

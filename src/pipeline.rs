@@ -74,20 +74,55 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let m = &sc.manifest;
     let summary = vec![
         ("campaign".to_string(), m.name.clone()),
-        ("band".into(), format!("{:.3}–{:.3} GHz, {} points", m.band.start_hz / 1e9, m.band.stop_hz / 1e9, m.band.points)),
-        ("array".into(), format!("{} elements ({})", m.array.elements, m.array.label())),
+        (
+            "band".into(),
+            format!(
+                "{:.3}–{:.3} GHz, {} points",
+                m.band.start_hz / 1e9,
+                m.band.stop_hz / 1e9,
+                m.band.points
+            ),
+        ),
+        (
+            "array".into(),
+            format!("{} elements ({})", m.array.elements, m.array.label()),
+        ),
         ("positions".into(), np.to_string()),
-        ("directions".into(), format!("{} ({}° to {}° step {}°)", m.directions.count(), m.directions.start_deg, m.directions.stop_deg, m.directions.step_deg)),
+        (
+            "directions".into(),
+            format!(
+                "{} ({}° to {}° step {}°)",
+                m.directions.count(),
+                m.directions.start_deg,
+                m.directions.stop_deg,
+                m.directions.step_deg
+            ),
+        ),
         ("pulses".into(), m.pulses.to_string()),
         ("sweeps".into(), sim.sweeps.to_string()),
         ("scatterers (truth)".into(), sim.scatterers.to_string()),
         ("clutter clusters (truth)".into(), sim.clusters.to_string()),
-        ("bin width".into(), format!("{:.4} ns", em.meta.bin_width_ns)),
+        (
+            "bin width".into(),
+            format!("{:.4} ns", em.meta.bin_width_ns),
+        ),
         ("bins kept".into(), em.bins.to_string()),
-        ("window ENBW / TW".into(), format!("{:.3} / {:.3}", em.meta.enbw, em.meta.tw)),
+        (
+            "window ENBW / TW".into(),
+            format!("{:.3} / {:.3}", em.meta.enbw, em.meta.tw),
+        ),
         ("coupling removal".into(), em.meta.coupling.clone()),
-        ("N0 (estimated)".into(), format!("{:.3e} ({:.1} dB)", er.n0, 10.0 * er.n0.log10())),
-        ("noise floor (configured)".into(), format!("{} dBm per point at {} dBm", m.noise.floor_dbm, m.noise.tx_power_dbm)),
+        (
+            "N0 (estimated)".into(),
+            format!("{:.3e} ({:.1} dB)", er.n0, 10.0 * er.n0.log10()),
+        ),
+        (
+            "noise floor (configured)".into(),
+            format!(
+                "{} dBm per point at {} dBm",
+                m.noise.floor_dbm, m.noise.tx_power_dbm
+            ),
+        ),
         ("energy table".into(), "work/energy.parquet".into()),
     ];
     let mut heat = String::new();
@@ -95,12 +130,24 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
         heat.push_str(&format!("<a href=\"energy_p{p:02}.png\"><img src=\"energy_p{p:02}.png\" alt=\"position {p}\"></a>\n"));
     }
     let total: f64 = timings.iter().map(|t| t.1).sum();
-    let mut trows: Vec<(String, String)> = timings.iter().map(|(k, v)| (k.clone(), format!("{v:.2} s"))).collect();
+    let mut trows: Vec<(String, String)> = timings
+        .iter()
+        .map(|(k, v)| (k.clone(), format!("{v:.2} s")))
+        .collect();
     trows.push(("total".into(), format!("{total:.2} s")));
     let sections = vec![
-        Section { title: "Campaign".into(), html: kv_table(&summary) },
-        Section { title: "Energy matrices (range vs direction, dB re position peak)".into(), html: heat },
-        Section { title: "Stage timings".into(), html: kv_table(&trows) },
+        Section {
+            title: "Campaign".into(),
+            html: kv_table(&summary),
+        },
+        Section {
+            title: "Energy matrices (range vs direction, dB re position peak)".into(),
+            html: heat,
+        },
+        Section {
+            title: "Stage timings".into(),
+            html: kv_table(&trows),
+        },
     ];
     let index = out.join("index.html");
     report::write_index(&index, &format!("pradar report: {}", m.name), &sections)?;

@@ -38,14 +38,24 @@ pub fn energy_heatmap(em: &EnergyMatrix, p: usize, path: &Path, floor_db: f64) -
     let peak = (0..nd)
         .flat_map(|d| em.profile(p, d).iter().copied())
         .fold(f64::MIN_POSITIVE, f64::max);
-    let step = if nd > 1 { em.angles_rel_deg[1] - em.angles_rel_deg[0] } else { 5.0 };
-    let (a0, a1) = (em.angles_rel_deg[0] - step / 2.0, em.angles_rel_deg[nd - 1] + step / 2.0);
+    let step = if nd > 1 {
+        em.angles_rel_deg[1] - em.angles_rel_deg[0]
+    } else {
+        5.0
+    };
+    let (a0, a1) = (
+        em.angles_rel_deg[0] - step / 2.0,
+        em.angles_rel_deg[nd - 1] + step / 2.0,
+    );
     let rmax = em.delay_ns(nb - 1) * 0.299_792_458 / 2.0;
     {
         let root = BitMapBackend::new(&tmp, (640, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let mut chart = ChartBuilder::on(&root)
-            .caption(format!("position {p}: energy (dB re peak)"), ("sans-serif", 18))
+            .caption(
+                format!("position {p}: energy (dB re peak)"),
+                ("sans-serif", 18),
+            )
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(50)
@@ -70,7 +80,13 @@ pub fn energy_heatmap(em: &EnergyMatrix, p: usize, path: &Path, floor_db: f64) -
                     let v = (db(prof[b]) - floor_db) / (-floor_db);
                     let c = ViridisRGB::get_color(v);
                     let r = b as f64 * dr;
-                    Rectangle::new([(a - step / 2.0, r - dr / 2.0), (a + step / 2.0, r + dr / 2.0)], c.filled())
+                    Rectangle::new(
+                        [
+                            (a - step / 2.0, r - dr / 2.0),
+                            (a + step / 2.0, r + dr / 2.0),
+                        ],
+                        c.filled(),
+                    )
                 })
             }))
             .map_err(|e| plot_err(path, e))?;
@@ -81,7 +97,10 @@ pub fn energy_heatmap(em: &EnergyMatrix, p: usize, path: &Path, floor_db: f64) -
 
 /// Escape text for HTML.
 pub fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// A section of the index page.
@@ -97,7 +116,11 @@ pub struct Section {
 pub fn kv_table(rows: &[(String, String)]) -> String {
     let mut s = String::from("<table>\n");
     for (k, v) in rows {
-        s.push_str(&format!("<tr><th>{}</th><td>{}</td></tr>\n", html_escape(k), html_escape(v)));
+        s.push_str(&format!(
+            "<tr><th>{}</th><td>{}</td></tr>\n",
+            html_escape(k),
+            html_escape(v)
+        ));
     }
     s.push_str("</table>\n");
     s

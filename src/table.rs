@@ -167,7 +167,10 @@ pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
         match v {
             Some(x) if x.is_finite() => out.push(x),
             Some(x) => {
-                return Err(Error::input(path, format!("column `{name}` row {i}: non-finite value {x}")))
+                return Err(Error::input(
+                    path,
+                    format!("column `{name}` row {i}: non-finite value {x}"),
+                ))
             }
             None => return Err(Error::input(path, format!("column `{name}` row {i}: null"))),
         }

@@ -46,8 +46,15 @@ fn point_target_peak_bin_direction_and_radar_equation() {
             let (d, b, e) = argmax(&em, 0);
             let tau = 2.0 * range / C0;
             let want_bin = (tau * 1e9 / em.meta.bin_width_ns).round() as usize;
-            assert!(b.abs_diff(want_bin) <= 1, "N={n}: peak bin {b}, expected {want_bin}");
-            assert!((em.angles_rel_deg[d] - angle_deg).abs() <= 5.0, "N={n}: peak direction {}", em.angles_rel_deg[d]);
+            assert!(
+                b.abs_diff(want_bin) <= 1,
+                "N={n}: peak bin {b}, expected {want_bin}"
+            );
+            assert!(
+                (em.angles_rel_deg[d] - angle_deg).abs() <= 5.0,
+                "N={n}: peak direction {}",
+                em.angles_rel_deg[d]
+            );
             // radar equation: |S21|² = G² λ² σ / ((4π)³ d⁴), seen through the window kernel
             let m = &c.manifest;
             let p = ArrayPattern::new(m.array, m.band.center_hz()).unwrap();
@@ -65,7 +72,8 @@ fn point_target_peak_bin_direction_and_radar_equation() {
                 / win.iter().sum::<f64>();
             let amp2 = fg * fg * rrcs * rrcs / ((4.0 * PI).powi(3) * range.powi(4));
             // antenna group delay (the transmitarray's feed path): slope of arg F² over the band
-            let (mut prev, mut unwrap, mut sxy, mut sxx, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0, 0.0, 0.0, 0.0);
+            let (mut prev, mut unwrap, mut sxy, mut sxx, mut sx, mut sy) =
+                (0.0f64, 0.0f64, 0.0, 0.0, 0.0, 0.0);
             for i in 0..81 {
                 let f = m.band.start_hz + m.band.bandwidth_hz() * i as f64 / 80.0;
                 let fld = p.field(angle_deg.to_radians(), em.angles_rel_deg[d].to_radians(), f);
@@ -87,7 +95,10 @@ fn point_target_peak_bin_direction_and_radar_equation() {
             let expect = proc.point_echo_energy(amp2, tau + tau_g)[b];
             let err_db = 10.0 * (e / expect).log10();
             eprintln!("N={n} one_bit={one_bit}: peak bin {b} dir {} deg, energy {e:.3e} vs radar eq {expect:.3e} ({err_db:+.2} dB), antenna group delay {:.1} ps", em.angles_rel_deg[d], tau_g * 1e12);
-            assert!(err_db.abs() <= 1.0, "N={n} one_bit={one_bit}: {err_db:+.2} dB from the radar equation");
+            assert!(
+                err_db.abs() <= 1.0,
+                "N={n} one_bit={one_bit}: {err_db:+.2} dB from the radar equation"
+            );
         }
     }
 }
@@ -143,7 +154,10 @@ fn noise_only_energy_matches_detector_formulas() {
         let (rm, rv, rn0, _) = noise_stats(np);
         assert!((rm - 1.0).abs() < 0.10, "Np={np}: mean ratio {rm}");
         assert!((rv - 1.0).abs() < 0.10, "Np={np}: variance ratio {rv}");
-        assert!((rn0 - 1.0).abs() < 0.10, "Np={np}: estimated N0 ratio {rn0}");
+        assert!(
+            (rn0 - 1.0).abs() < 0.10,
+            "Np={np}: estimated N0 ratio {rn0}"
+        );
     }
 }
 
@@ -169,26 +183,37 @@ fn coupling_present_before_removal_and_gone_after() {
         eprintln!("coupling {method}: bin energy {e:.3e}, noise mean {noise:.3e}, coupling level {expect:.3e}");
     }
     let (_, e_none, _, expect) = results[0];
-    assert!(e_none > 0.3 * expect && e_none < 3.0 * expect, "coupling peak missing: {e_none:.3e} vs {expect:.3e}");
+    assert!(
+        e_none > 0.3 * expect && e_none < 3.0 * expect,
+        "coupling peak missing: {e_none:.3e} vs {expect:.3e}"
+    );
     for (method, e, noise, _) in &results[1..] {
-        assert!(*e < 10.0 * noise, "coupling not removed by {method}: {e:.3e} vs noise {noise:.3e}");
+        assert!(
+            *e < 10.0 * noise,
+            "coupling not removed by {method}: {e:.3e} vs noise {noise:.3e}"
+        );
     }
 }
 
 /// Distance from `at` along `theta` to the first wall, m.
 fn ray_to_wall(layout: &Layout, at: geo::Coord<f64>, theta: f64) -> f64 {
-    let far = geo::Coord { x: at.x + 50.0 * theta.cos(), y: at.y + 50.0 * theta.sin() };
+    let far = geo::Coord {
+        x: at.x + 50.0 * theta.cos(),
+        y: at.y + 50.0 * theta.sin(),
+    };
     let ray = geo::Line::new(at, far);
     layout
         .walls
         .iter()
-        .filter_map(|w| match geo::line_intersection::line_intersection(ray, w.line) {
-            Some(geo::LineIntersection::SinglePoint { intersection, .. }) => {
-                let d = intersection - at;
-                Some(d.x.hypot(d.y))
-            }
-            _ => None,
-        })
+        .filter_map(
+            |w| match geo::line_intersection::line_intersection(ray, w.line) {
+                Some(geo::LineIntersection::SinglePoint { intersection, .. }) => {
+                    let d = intersection - at;
+                    Some(d.x.hypot(d.y))
+                }
+                _ => None,
+            },
+        )
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -198,29 +223,47 @@ fn corridor_strongest_echoes_at_wall_distances_and_truth_lists_them() {
     let t = corridor();
     let (c, em) = run_chain(tmp.path(), &t);
     let layout = Layout::load(&c.layout_path()).unwrap();
-    let rays = pradar::table::read_parquet(&tmp.path().join("sim/truth/rays.parquet"), None).unwrap();
+    let rays =
+        pradar::table::read_parquet(&tmp.path().join("sim/truth/rays.parquet"), None).unwrap();
     let rp = pradar::table::i64_column(std::path::Path::new("rays"), &rays, "position").unwrap();
-    let rdelay = pradar::table::f64_column(std::path::Path::new("rays"), &rays, "delay_ns").unwrap();
-    let rang = pradar::table::f64_column(std::path::Path::new("rays"), &rays, "angle_rel_deg").unwrap();
+    let rdelay =
+        pradar::table::f64_column(std::path::Path::new("rays"), &rays, "delay_ns").unwrap();
+    let rang =
+        pradar::table::f64_column(std::path::Path::new("rays"), &rays, "angle_rel_deg").unwrap();
     let tb = em.meta.bin_width_ns;
     let mut checked = 0;
     for (p, pose) in c.manifest.poses.iter().enumerate() {
         for d in [0usize, em.directions() - 1] {
             // the side walls, seen broadside at -90 and +90 degrees
             let theta = (pose.heading_deg + em.angles_rel_deg[d]).to_radians();
-            let dist = ray_to_wall(&layout, geo::Coord { x: pose.x_m, y: pose.y_m }, theta);
+            let dist = ray_to_wall(
+                &layout,
+                geo::Coord {
+                    x: pose.x_m,
+                    y: pose.y_m,
+                },
+                theta,
+            );
             let want = (2.0 * dist / C0 * 1e9 / tb).round() as usize;
             let prof = em.profile(p, d);
-            let b = (0..em.bins).max_by(|&i, &j| prof[i].total_cmp(&prof[j])).unwrap();
+            let b = (0..em.bins)
+                .max_by(|&i, &j| prof[i].total_cmp(&prof[j]))
+                .unwrap();
             eprintln!("position {p} direction {:+.0}: wall at {dist:.3} m (bin {want}), strongest bin {b}", em.angles_rel_deg[d]);
-            assert!(b.abs_diff(want) <= 2, "position {p}, direction {d}: strongest bin {b}, wall bin {want}");
+            assert!(
+                b.abs_diff(want) <= 2,
+                "position {p}, direction {d}: strongest bin {b}, wall bin {want}"
+            );
             // truth lists a path at that delay and direction
             let found = (0..rp.len()).any(|i| {
                 rp[i] == p as i64
                     && ((rdelay[i] / tb).round() as i64 - b as i64).abs() <= 2
                     && (rang[i] - em.angles_rel_deg[d]).abs() <= 5.0
             });
-            assert!(found, "position {p}, direction {d}: no truth path near bin {b}");
+            assert!(
+                found,
+                "position {p}, direction {d}: no truth path near bin {b}"
+            );
             checked += 1;
         }
     }
@@ -230,8 +273,17 @@ fn corridor_strongest_echoes_at_wall_distances_and_truth_lists_them() {
 #[test]
 fn skrf_fixtures_read_identically() {
     let dir = root().join("data/touchstone");
-    let expected: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("skrf_expected.json")).unwrap()).unwrap();
-    let arr = |k: &str| -> Vec<f64> { expected[k].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect() };
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("skrf_expected.json")).unwrap())
+            .unwrap();
+    let arr = |k: &str| -> Vec<f64> {
+        expected[k]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
     let f = arr("frequency_hz");
     let names = ["s11", "s21", "s12", "s22"];
     for file in ["skrf_ri.s2p", "skrf_ma.s2p", "skrf_db.s2p"] {
@@ -246,8 +298,15 @@ fn skrf_fixtures_read_identically() {
             for k in 0..f.len() {
                 let want = Complex64::new(re[k], im[k]);
                 let got = ts.s[k][j];
-                let tol = if file == "skrf_ri.s2p" { 1e-15 } else { 1e-12 * want.norm().max(1e-3) };
-                assert!((got - want).norm() <= tol, "{file} {n}[{k}]: {got} vs {want}");
+                let tol = if file == "skrf_ri.s2p" {
+                    1e-15
+                } else {
+                    1e-12 * want.norm().max(1e-3)
+                };
+                assert!(
+                    (got - want).norm() <= tol,
+                    "{file} {n}[{k}]: {got} vs {want}"
+                );
             }
         }
     }

@@ -9,7 +9,8 @@
 //! raster.
 //!
 //! Reference raster (0.1 m cells by default, over the bounding box plus a margin): a cell is
-//! `Occupied` if any wall segment passes through it or it lies inside an obstacle, `Free` if
+//! `Occupied` if any wall segment passes through it (half-open cells: a wall on a grid line
+//! belongs to the cell above or to the right) or its centre lies inside an obstacle, `Free` if
 //! its centre is inside the perimeter (and not occupied), and `Outside` otherwise (beyond the
 //! walls: never observable, reported separately by the metrics).
 
@@ -53,8 +54,14 @@ impl Wall {
         // perimeter is counter-clockwise: free space on the left; obstacles are made
         // counter-clockwise too, free space on their right (outside)
         match self.kind {
-            WallKind::Perimeter => Coord { x: -d.y / l, y: d.x / l },
-            WallKind::Obstacle(_) => Coord { x: d.y / l, y: -d.x / l },
+            WallKind::Perimeter => Coord {
+                x: -d.y / l,
+                y: d.x / l,
+            },
+            WallKind::Obstacle(_) => Coord {
+                x: d.y / l,
+                y: -d.x / l,
+            },
         }
     }
 }
@@ -193,19 +200,37 @@ impl Layout {
         let mut obstacles = Vec::new();
         for (i, f) in fc.features.iter().enumerate() {
             let role = prop_str(f, "role").ok_or_else(|| {
-                Error::input(path, format!("features[{i}].properties.role missing (perimeter|obstacle)"))
+                Error::input(
+                    path,
+                    format!("features[{i}].properties.role missing (perimeter|obstacle)"),
+                )
             })?;
-            let geom = f.geometry.as_ref().ok_or_else(|| {
-                Error::input(path, format!("features[{i}].geometry missing"))
-            })?;
+            let geom = f
+                .geometry
+                .as_ref()
+                .ok_or_else(|| Error::input(path, format!("features[{i}].geometry missing")))?;
             let mut poly: Polygon<f64> = Polygon::try_from(geom).map_err(|e| {
-                Error::input(path, format!("features[{i}].geometry must be a Polygon: {e}"))
+                Error::input(
+                    path,
+                    format!("features[{i}].geometry must be a Polygon: {e}"),
+                )
             })?;
             if poly.exterior().0.len() < 4 {
-                return Err(Error::input(path, format!("features[{i}].geometry: polygon needs at least 3 vertices")));
+                return Err(Error::input(
+                    path,
+                    format!("features[{i}].geometry: polygon needs at least 3 vertices"),
+                ));
             }
-            if poly.exterior().0.iter().any(|c| !c.x.is_finite() || !c.y.is_finite()) {
-                return Err(Error::input(path, format!("features[{i}].geometry: non-finite coordinate")));
+            if poly
+                .exterior()
+                .0
+                .iter()
+                .any(|c| !c.x.is_finite() || !c.y.is_finite())
+            {
+                return Err(Error::input(
+                    path,
+                    format!("features[{i}].geometry: non-finite coordinate"),
+                ));
             }
             poly.exterior_mut(|r| r.make_ccw_winding());
             let material = prop_str(f, "material").unwrap_or_else(|| "default".into());
@@ -263,8 +288,14 @@ impl Layout {
         for o in &self.obstacles {
             if let Some(b) = o.polygon.bounding_rect() {
                 r = Rect::new(
-                    Coord { x: r.min().x.min(b.min().x), y: r.min().y.min(b.min().y) },
-                    Coord { x: r.max().x.max(b.max().x), y: r.max().y.max(b.max().y) },
+                    Coord {
+                        x: r.min().x.min(b.min().x),
+                        y: r.min().y.min(b.min().y),
+                    },
+                    Coord {
+                        x: r.max().x.max(b.max().x),
+                        y: r.max().y.max(b.max().y),
+                    },
                 );
             }
         }
@@ -303,16 +334,16 @@ impl Layout {
         if len <= tol_m {
             return false;
         }
-        self.walls.iter().any(|w| {
-            match geo::line_intersection::line_intersection(ray, w.line) {
+        self.walls.iter().any(
+            |w| match geo::line_intersection::line_intersection(ray, w.line) {
                 Some(geo::LineIntersection::SinglePoint { intersection, .. }) => {
                     let e = intersection - from;
                     e.x.hypot(e.y) < len - tol_m && e.x.hypot(e.y) > 1e-9
                 }
                 Some(geo::LineIntersection::Collinear { .. }) => false,
                 None => false,
-            }
-        })
+            },
+        )
     }
 
     /// Total perimeter length, m.
@@ -329,7 +360,11 @@ impl Layout {
     pub fn perimeter_point(&self, s: f64) -> (Coord<f64>, Coord<f64>) {
         let total = self.perimeter_length();
         let mut s = s.rem_euclid(total);
-        let per: Vec<&Wall> = self.walls.iter().filter(|w| w.kind == WallKind::Perimeter).collect();
+        let per: Vec<&Wall> = self
+            .walls
+            .iter()
+            .filter(|w| w.kind == WallKind::Perimeter)
+            .collect();
         for w in &per {
             let l = w.length();
             if s <= l {
@@ -350,7 +385,8 @@ impl Layout {
         for w in self.walls.iter().filter(|w| w.kind == WallKind::Perimeter) {
             let d = w.line.delta();
             let l2 = d.x * d.x + d.y * d.y;
-            let t = (((p.x - w.line.start.x) * d.x + (p.y - w.line.start.y) * d.y) / l2).clamp(0.0, 1.0);
+            let t = (((p.x - w.line.start.x) * d.x + (p.y - w.line.start.y) * d.y) / l2)
+                .clamp(0.0, 1.0);
             let q = w.line.start + d * t;
             let dist = (p.x - q.x).hypot(p.y - q.y);
             if dist < best.1 {
@@ -372,10 +408,25 @@ impl Layout {
                     x: spec.x0_m + c as f64 * cell_m,
                     y: spec.y0_m + r as f64 * cell_m,
                 };
-                let rect = Rect::new(lo, Coord { x: lo.x + cell_m, y: lo.y + cell_m }).to_polygon();
+                // half-open cells: a wall exactly on a grid line belongs to the cell above/right
+                let eps = 1e-9 * cell_m.max(1.0);
+                let rect = Rect::new(
+                    Coord {
+                        x: lo.x - eps,
+                        y: lo.y - eps,
+                    },
+                    Coord {
+                        x: lo.x + cell_m - eps,
+                        y: lo.y + cell_m - eps,
+                    },
+                )
+                .to_polygon();
                 let centre = spec.center(r, c);
                 let occupied = lines.iter().any(|l| rect.intersects(l))
-                    || self.obstacles.iter().any(|o| o.polygon.contains(&Point::from(centre)));
+                    || self
+                        .obstacles
+                        .iter()
+                        .any(|o| o.polygon.contains(&Point::from(centre)));
                 cells[r * spec.cols + c] = if occupied {
                     CellClass::Occupied
                 } else if self.perimeter.contains(&Point::from(centre)) {
@@ -413,7 +464,10 @@ mod tests {
         for w in l.walls.iter().filter(|w| w.kind == WallKind::Perimeter) {
             let mid = w.line.start + w.line.delta() * 0.5;
             let n = w.normal();
-            assert!(l.is_free(Coord { x: mid.x + 0.3 * n.x, y: mid.y + 0.3 * n.y }));
+            assert!(l.is_free(Coord {
+                x: mid.x + 0.3 * n.x,
+                y: mid.y + 0.3 * n.y
+            }));
         }
     }
 
@@ -429,9 +483,15 @@ mod tests {
         let l = Layout::from_geojson(SQUARE, Path::new("t.geojson")).unwrap();
         for s in [0.3, 2.5, 5.0, 7.7, 11.0] {
             let (p, n) = l.perimeter_point(s);
-            let q = Coord { x: p.x + 0.2 * n.x, y: p.y + 0.2 * n.y };
+            let q = Coord {
+                x: p.x + 0.2 * n.x,
+                y: p.y + 0.2 * n.y,
+            };
             let (s2, d) = l.project_to_perimeter(q);
-            assert!((s2 - s).abs() < 1e-9 && (d - 0.2).abs() < 1e-9, "{s}: {s2} {d}");
+            assert!(
+                (s2 - s).abs() < 1e-9 && (d - 0.2).abs() < 1e-9,
+                "{s}: {s2} {d}"
+            );
         }
     }
 
@@ -453,6 +513,9 @@ mod tests {
     #[test]
     fn bad_geojson_names_field() {
         let e = Layout::from_geojson(r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":null}]}"#, Path::new("x.geojson")).unwrap_err();
-        assert!(e.to_string().contains("x.geojson") && e.to_string().contains("role"), "{e}");
+        assert!(
+            e.to_string().contains("x.geojson") && e.to_string().contains("role"),
+            "{e}"
+        );
     }
 }

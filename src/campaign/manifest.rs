@@ -49,13 +49,19 @@ impl Band {
     /// Validate; `prefix` names the table in errors.
     pub fn check(&self) -> Result<()> {
         if !(self.start_hz.is_finite() && self.start_hz > 0.0) {
-            return Err(Error::param("band.start_hz", "must be a positive frequency"));
+            return Err(Error::param(
+                "band.start_hz",
+                "must be a positive frequency",
+            ));
         }
         if !(self.stop_hz.is_finite() && self.stop_hz > self.start_hz) {
             return Err(Error::param("band.stop_hz", "must be above band.start_hz"));
         }
         if self.points < 8 {
-            return Err(Error::param("band.points", "need at least 8 frequency points"));
+            return Err(Error::param(
+                "band.points",
+                "need at least 8 frequency points",
+            ));
         }
         Ok(())
     }
@@ -81,7 +87,7 @@ pub struct ArrayConfig {
     /// 1-bit transmitarray quantisation of the element phases.
     #[serde(default)]
     pub one_bit: bool,
-    /// Element field pattern exponent q in cos^q(θ).
+    /// Element power pattern exponent q in cos^q(θ).
     #[serde(default = "default_q")]
     pub element_q: f64,
     /// Steering mode.
@@ -104,7 +110,10 @@ impl ArrayConfig {
         if self.elements == 0 || s * s != self.elements {
             return Err(Error::param(
                 "array.elements",
-                format!("{} is not a perfect square (use 16, 100 or 400)", self.elements),
+                format!(
+                    "{} is not a perfect square (use 16, 100 or 400)",
+                    self.elements
+                ),
             ));
         }
         if !(self.element_q.is_finite() && self.element_q >= 0.0) {
@@ -157,12 +166,20 @@ impl Directions {
         if !(self.step_deg.is_finite() && self.step_deg > 0.0) {
             return Err(Error::param("directions.step_deg", "must be positive"));
         }
-        if !(self.start_deg.is_finite() && self.stop_deg.is_finite() && self.stop_deg >= self.start_deg)
+        if !(self.start_deg.is_finite()
+            && self.stop_deg.is_finite()
+            && self.stop_deg >= self.start_deg)
         {
-            return Err(Error::param("directions.stop_deg", "must be >= directions.start_deg"));
+            return Err(Error::param(
+                "directions.stop_deg",
+                "must be >= directions.start_deg",
+            ));
         }
         if self.start_deg < -180.0 || self.stop_deg > 180.0 {
-            return Err(Error::param("directions", "angles must lie in [-180, 180] degrees"));
+            return Err(Error::param(
+                "directions",
+                "angles must lie in [-180, 180] degrees",
+            ));
         }
         Ok(())
     }
@@ -229,7 +246,7 @@ pub enum CouplingRemoval {
 pub struct Processing {
     /// Window.
     pub window: WindowKind,
-    /// IFFT samples per bin (odd); Nfft = (points - 1) * oversample.
+    /// IFFT samples per bin (odd, >= 3); Nfft = (points - 1) * oversample.
     pub oversample: usize,
     /// Coupling removal.
     pub coupling: CouplingRemoval,
@@ -257,8 +274,11 @@ impl Default for Processing {
 impl Processing {
     /// Validate.
     pub fn check(&self) -> Result<()> {
-        if self.oversample == 0 || self.oversample % 2 == 0 {
-            return Err(Error::param("processing.oversample", "must be an odd number >= 1"));
+        if self.oversample < 3 || self.oversample.is_multiple_of(2) {
+            return Err(Error::param(
+                "processing.oversample",
+                "must be an odd number >= 3",
+            ));
         }
         if !(self.gate_ns.is_finite() && self.gate_ns >= 0.0) {
             return Err(Error::param("processing.gate_ns", "must be >= 0"));
@@ -378,7 +398,10 @@ impl Manifest {
         if self.schema_version != SCHEMA_VERSION {
             return Err(Error::param(
                 "schema_version",
-                format!("unsupported {} (expected {SCHEMA_VERSION})", self.schema_version),
+                format!(
+                    "unsupported {} (expected {SCHEMA_VERSION})",
+                    self.schema_version
+                ),
             ));
         }
         self.band.check()?;
@@ -392,11 +415,17 @@ impl Manifest {
             return Err(Error::param("pulses", "must be >= 1"));
         }
         if self.poses.is_empty() {
-            return Err(Error::param("poses", "at least one [[poses]] entry is required"));
+            return Err(Error::param(
+                "poses",
+                "at least one [[poses]] entry is required",
+            ));
         }
         for (i, p) in self.poses.iter().enumerate() {
             if !(p.x_m.is_finite() && p.y_m.is_finite() && p.heading_deg.is_finite()) {
-                return Err(Error::param(format!("poses[{i}]"), "x_m, y_m, heading_deg must be finite"));
+                return Err(Error::param(
+                    format!("poses[{i}]"),
+                    "x_m, y_m, heading_deg must be finite",
+                ));
             }
         }
         if self.layout.as_os_str().is_empty() {
@@ -406,7 +435,10 @@ impl Manifest {
             match s.format {
                 SweepFormat::Touchstone => {
                     if s.pattern.is_none() && s.files.is_empty() {
-                        return Err(Error::param("sweeps.pattern", "touchstone sweeps need `pattern` or `files`"));
+                        return Err(Error::param(
+                            "sweeps.pattern",
+                            "touchstone sweeps need `pattern` or `files`",
+                        ));
                     }
                 }
                 SweepFormat::Parquet => {
@@ -436,7 +468,9 @@ impl Campaign {
     pub fn from_str(text: &str, path: &Path) -> Result<Campaign> {
         let manifest: Manifest =
             toml::from_str(text).map_err(|e| Error::input(path, one_line(&e.to_string())))?;
-        manifest.check().map_err(|e| Error::input(path, e.to_string()))?;
+        manifest
+            .check()
+            .map_err(|e| Error::input(path, e.to_string()))?;
         let c = Campaign {
             manifest,
             path: path.to_path_buf(),
@@ -470,7 +504,10 @@ impl Campaign {
         let mut a = self.manifest.array;
         a.elements = n;
         a.check().map_err(|_| {
-            Error::param("--elements", format!("{n} is not a perfect square (use 16, 100 or 400)"))
+            Error::param(
+                "--elements",
+                format!("{n} is not a perfect square (use 16, 100 or 400)"),
+            )
         })?;
         self.manifest.array = a;
         Ok(())
@@ -478,6 +515,12 @@ impl Campaign {
 }
 
 /// Expand a sweep name template for one (position, direction, pulse).
+///
+/// ```
+/// use pradar::campaign::manifest::expand_pattern;
+/// let name = expand_pattern("sweeps/p{position:03}_d{direction:02}_k{pulse:02}.s2p", 4, 36, 0);
+/// assert_eq!(name, "sweeps/p004_d36_k00.s2p");
+/// ```
 pub fn expand_pattern(pattern: &str, position: usize, direction: usize, pulse: usize) -> String {
     let mut out = String::with_capacity(pattern.len() + 8);
     let mut rest = pattern;
@@ -520,7 +563,12 @@ mod tests {
     #[test]
     fn pattern_expands_with_widths() {
         assert_eq!(
-            expand_pattern("sweeps/p{position:03}_d{direction:02}_k{pulse}.s2p", 3, 7, 1),
+            expand_pattern(
+                "sweeps/p{position:03}_d{direction:02}_k{pulse}.s2p",
+                3,
+                7,
+                1
+            ),
             "sweeps/p003_d07_k1.s2p"
         );
     }
@@ -547,6 +595,10 @@ mod tests {
         assert_eq!(a.side(), 10);
         assert!(a.check().is_ok());
         let bad = ArrayConfig { elements: 50, ..a };
-        assert!(bad.check().unwrap_err().to_string().contains("array.elements"));
+        assert!(bad
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("array.elements"));
     }
 }

@@ -118,7 +118,11 @@ impl ModelConfig {
             intra_cluster_rate: Quantity::new(0.43, "1/ns", "exponential"),
             intra_cluster_aoa: Quantity::new(16.9, "deg", "laplacian"),
             perimeter_offset: Quantity::new(0.3, "m", "exponential"),
-            perimeter_spacing: Quantity::new(5.02e-9 * crate::campaign::manifest::C0, "m", "exponential"),
+            perimeter_spacing: Quantity::new(
+                5.02e-9 * crate::campaign::manifest::C0,
+                "m",
+                "exponential",
+            ),
             cluster_decay: Quantity::new(12.0, "ns", "exponential"),
             ray_decay: Quantity::new(3.0, "ns", "exponential"),
             rays_per_cluster: Quantity::new(6.0, "count", "poisson"),
@@ -129,7 +133,10 @@ impl ModelConfig {
     /// Validate values and units; errors name the field.
     pub fn check(&self) -> Result<()> {
         if self.schema_version != 1 {
-            return Err(Error::param("schema_version", format!("unsupported {}", self.schema_version)));
+            return Err(Error::param(
+                "schema_version",
+                format!("unsupported {}", self.schema_version),
+            ));
         }
         let q = [
             ("inter_cluster_rate", &self.inter_cluster_rate, "1/ns"),
@@ -144,10 +151,16 @@ impl ModelConfig {
         ];
         for (name, v, unit) in q {
             if !(v.value.is_finite() && v.value > 0.0) {
-                return Err(Error::param(format!("{name}.value"), "must be finite and > 0"));
+                return Err(Error::param(
+                    format!("{name}.value"),
+                    "must be finite and > 0",
+                ));
             }
             if v.unit != unit {
-                return Err(Error::param(format!("{name}.unit"), format!("`{}` (expected `{unit}`)", v.unit)));
+                return Err(Error::param(
+                    format!("{name}.unit"),
+                    format!("`{}` (expected `{unit}`)", v.unit),
+                ));
             }
         }
         if self.rays_per_cluster.value < 1.0 {
@@ -158,9 +171,9 @@ impl ModelConfig {
 
     /// Parse a model from a TOML value (e.g. a manifest's `[clutter]`).
     pub fn from_value(v: toml::Value, file: &Path, prefix: &str) -> Result<Self> {
-        let m: ModelConfig = v
-            .try_into()
-            .map_err(|e: toml::de::Error| Error::input(file, format!("[{prefix}]: {}", one_line(&e.to_string()))))?;
+        let m: ModelConfig = v.try_into().map_err(|e: toml::de::Error| {
+            Error::input(file, format!("[{prefix}]: {}", one_line(&e.to_string())))
+        })?;
         m.check()
             .map_err(|e| Error::input(file, format!("[{prefix}] {e}")))?;
         Ok(m)
@@ -169,7 +182,8 @@ impl ModelConfig {
     /// Read a model file.
     pub fn load(path: &Path) -> Result<Self> {
         let text = crate::io::read_text(path)?;
-        let m: ModelConfig = toml::from_str(&text).map_err(|e| Error::input(path, one_line(&e.to_string())))?;
+        let m: ModelConfig =
+            toml::from_str(&text).map_err(|e| Error::input(path, one_line(&e.to_string())))?;
         m.check().map_err(|e| Error::input(path, e.to_string()))?;
         Ok(m)
     }
@@ -193,7 +207,11 @@ mod tests {
         assert_eq!(m, back);
         let mut bad = m.clone();
         bad.ray_decay.unit = "s".into();
-        assert!(bad.check().unwrap_err().to_string().contains("ray_decay.unit"));
+        assert!(bad
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("ray_decay.unit"));
         assert!((m.perimeter_spacing.value - 1.505).abs() < 1e-3);
     }
 }

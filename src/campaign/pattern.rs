@@ -1,5 +1,6 @@
 //! Array patterns (DESIGN §2): planar Nx × Ny array at λc/2 spacing (λc at the band centre),
-//! element field pattern cos^q(θ), evaluated per frequency as the 2-D sum over elements.
+//! element power pattern cos^q(θ) (field cos^{q/2}; q = 1 is the projected-aperture law),
+//! evaluated per frequency as the 2-D sum over elements.
 //!
 //! Takes an [`ArrayConfig`]; gives the complex far field `F(θ, f)` with |F|² the directive
 //! gain, for mechanical or electronic steering and for the 1-bit transmitarray.
@@ -13,7 +14,7 @@
 //!   illuminates element (m, n) with phase exp(−j k r_mn), r_mn = √(F² + y_m² + z_n²); the
 //!   element must add ψ = kc·r_mn − kc·y_m·sinθs, which is quantised to 0 or π
 //!   (0 when cos ψ ≥ 0) after summing; uniform amplitude (feed taper ignored);
-//! * F(θ, ε, f) = √G0 · AF · cos^q(off-normal angle) / (Nx·Ny), G0 = π·Nx·Ny·(f/fc)² = 4πA/λ²
+//! * F(θ, ε, f) = √G0 · AF · cos^{q/2}(off-normal angle) / (Nx·Ny), G0 = π·Nx·Ny·(f/fc)² = 4πA/λ²
 //!   (aperture directivity), zero behind the array. So the ideal broadside gain is G0 and
 //!   1-bit quantisation loss (≈ −3.9 dB) shows up in the gain.
 //! * mechanical steering: the pattern towards θ (relative to the device heading) with the
@@ -98,7 +99,7 @@ impl ArrayPattern {
         if cos_off <= 0.0 {
             0.0
         } else {
-            cos_off.powf(self.cfg.element_q)
+            cos_off.powf(0.5 * self.cfg.element_q)
         }
     }
 
@@ -297,6 +298,22 @@ pub fn beam_metrics(g: impl Fn(f64) -> f64, theta0: f64) -> (f64, f64) {
     (hpbw, db(best / peak))
 }
 
+/// Far side-lobe level: the largest gain more than `away_deg` from `theta0`, dB re the gain
+/// at `theta0` (quantisation lobes of a 1-bit array live there).
+pub fn far_sidelobe_db(g: impl Fn(f64) -> f64, theta0: f64, away_deg: f64) -> f64 {
+    let peak = g(theta0);
+    let mut best = 0.0f64;
+    let mut t = -90.0;
+    while t <= 90.0 {
+        let th = f64::to_radians(t);
+        if (th - theta0).abs() > away_deg.to_radians() {
+            best = best.max(g(th));
+        }
+        t += 0.01;
+    }
+    db(best / peak)
+}
+
 /// Peak side-lobe level (dB below the main-beam peak) of a pattern cut: the largest local
 /// maximum outside the main lobe (bounded by the first nulls on either side).
 pub fn peak_sidelobe_db(g: impl Fn(f64) -> f64, theta0: f64) -> f64 {
@@ -308,11 +325,18 @@ pub fn peak_sidelobe_db(g: impl Fn(f64) -> f64, theta0: f64) -> f64 {
             (th, g(th))
         })
         .collect();
-    let i0 = samples
+    let mut i0 = samples
         .iter()
         .position(|(th, _)| *th >= theta0)
         .unwrap_or(n / 2);
-    let peak = samples[i0].1.max(g(theta0));
+    // climb to the main-beam maximum
+    while i0 > 0 && samples[i0 - 1].1 > samples[i0].1 {
+        i0 -= 1;
+    }
+    while i0 < n && samples[i0 + 1].1 > samples[i0].1 {
+        i0 += 1;
+    }
+    let peak = samples[i0].1;
     let mut lo = i0;
     while lo > 0 && samples[lo - 1].1 <= samples[lo].1 {
         lo -= 1;
@@ -377,7 +401,7 @@ mod tests {
                 }
             };
             let af = ula(k * d * th.sin() * el.cos(), 10.0) * ula(k * d * el.sin(), 10.0);
-            let expect = (PI * 100.0).sqrt() * af / 100.0 * (th.cos() * el.cos());
+            let expect = (PI * 100.0).sqrt() * af / 100.0 * (th.cos() * el.cos()).sqrt();
             assert!(
                 (got.norm() - expect.abs()).abs() < 1e-9 * (PI * 100.0).sqrt(),
                 "{theta_deg}/{elev_deg}: {} vs {}",
@@ -413,14 +437,34 @@ mod tests {
         let psl_q = peak_sidelobe_db(|t| onebit.gain(t, 0.0, FC), 0.0);
         let loss = db(onebit.gain(0.0, 0.0, FC) / ideal.gain(0.0, 0.0, FC));
         eprintln!("PSL ideal {psl_i:.2} dB, 1-bit {psl_q:.2} dB, 1-bit loss {loss:.2} dB");
-        assert!(psl_q > psl_i + 2.0, "1-bit PSL {psl_q} vs ideal {psl_i}");
-        assert!((-5.5..-2.5).contains(&loss), "1-bit gain loss {loss} dB");
+        // the campaign's case (mechanical, broadside beam): the feed's spherical phase
+        // decorrelates the quantisation error, so the first side lobe rises only slightly
+        assert!(
+            (0.3..1.0).contains(&(psl_q - psl_i)),
+            "1-bit PSL {psl_q} vs ideal {psl_i}"
+        );
+        // quantisation loss ≈ 20·log10(2/π) = −3.9 dB
+        assert!((-4.2..-3.3).contains(&loss), "1-bit gain loss {loss} dB");
         // electronic 1-bit steering at 30°: quantisation lobe raises PSL further
         let e1 = ArrayPattern::new(cfg(400, true, Steering::Electronic), FC).unwrap();
         let ts = 30f64.to_radians();
         let psl_e = peak_sidelobe_db(|t| e1.gain(t, ts, FC), ts);
-        eprintln!("PSL 1-bit electronic 30deg {psl_e:.2} dB");
-        assert!(psl_e > psl_i + 2.0);
+        let ei = ArrayPattern::new(cfg(400, false, Steering::Electronic), FC).unwrap();
+        let psl_ei = peak_sidelobe_db(|t| ei.gain(t, ts, FC), ts);
+        eprintln!("PSL electronic 30deg: ideal {psl_ei:.2} dB, 1-bit {psl_e:.2} dB");
+        let far = |p: &ArrayPattern, ts: f64| far_sidelobe_db(|t| p.gain(t, ts, FC), ts, 15.0);
+        let (fi, fq) = (far(&ideal, 0.0), far(&onebit, 0.0));
+        let (fei, feq) = (far(&ei, ts), far(&e1, ts));
+        eprintln!("far side lobes (>15 deg): broadside ideal {fi:.2} 1-bit {fq:.2}; electronic 30deg ideal {fei:.2} 1-bit {feq:.2}");
+        assert!(
+            fq - fi >= 0.5,
+            "broadside far side lobes: 1-bit {fq} vs ideal {fi}"
+        );
+        // steered 1-bit beam: quantisation lobes raise the far side lobes by ~4 dB
+        assert!(
+            feq - fei >= 3.0,
+            "steered far side lobes: 1-bit {feq} vs ideal {fei}"
+        );
     }
 
     #[test]

@@ -130,7 +130,10 @@ impl SceneConfig {
     /// Validate; errors name the field.
     pub fn check(&self) -> Result<()> {
         if self.walls && self.scatterers_per_cell < 10.0 {
-            return Err(Error::param("scene.scatterers_per_cell", "must be >= 10 (DESIGN §2)"));
+            return Err(Error::param(
+                "scene.scatterers_per_cell",
+                "must be >= 10 (DESIGN §2)",
+            ));
         }
         for (n, v) in [
             ("scene.wall_rcs_per_m", self.wall_rcs_per_m),
@@ -150,7 +153,10 @@ impl SceneConfig {
         }
         for (i, t) in self.targets.iter().enumerate() {
             if !(t.x_m.is_finite() && t.y_m.is_finite() && t.rrcs_m.is_finite() && t.rrcs_m > 0.0) {
-                return Err(Error::param(format!("scene.targets[{i}]"), "x_m, y_m finite and rrcs_m > 0"));
+                return Err(Error::param(
+                    format!("scene.targets[{i}]"),
+                    "x_m, y_m finite and rrcs_m > 0",
+                ));
             }
         }
         Ok(())
@@ -158,12 +164,30 @@ impl SceneConfig {
 
     fn material(&self, name: &str) -> Material {
         self.materials.get(name).copied().unwrap_or(match name {
-            "concrete" => Material { eps_r: 5.3, loss_tangent: 0.06 },
-            "plasterboard" => Material { eps_r: 2.8, loss_tangent: 0.05 },
-            "glass" => Material { eps_r: 6.3, loss_tangent: 0.03 },
-            "wood" => Material { eps_r: 2.0, loss_tangent: 0.07 },
-            "metal" => Material { eps_r: 1e8, loss_tangent: 0.0 },
-            _ => Material { eps_r: 4.0, loss_tangent: 0.05 },
+            "concrete" => Material {
+                eps_r: 5.3,
+                loss_tangent: 0.06,
+            },
+            "plasterboard" => Material {
+                eps_r: 2.8,
+                loss_tangent: 0.05,
+            },
+            "glass" => Material {
+                eps_r: 6.3,
+                loss_tangent: 0.03,
+            },
+            "wood" => Material {
+                eps_r: 2.0,
+                loss_tangent: 0.07,
+            },
+            "metal" => Material {
+                eps_r: 1e8,
+                loss_tangent: 0.0,
+            },
+            _ => Material {
+                eps_r: 4.0,
+                loss_tangent: 0.05,
+            },
         })
     }
 }
@@ -259,7 +283,10 @@ pub struct Scene {
 fn draw(rng: &mut ChaCha8Rng, family: &str, mean: f64) -> f64 {
     match family {
         "constant" => mean,
-        "gaussian" => Normal::new(mean, 0.3 * mean).expect("finite").sample(rng).max(0.05 * mean),
+        "gaussian" => Normal::new(mean, 0.3 * mean)
+            .expect("finite")
+            .sample(rng)
+            .max(0.05 * mean),
         _ => Exp::new(1.0 / mean).expect("positive").sample(rng),
     }
 }
@@ -272,7 +299,13 @@ fn cgauss(rng: &mut ChaCha8Rng) -> Complex64 {
 
 impl Scene {
     /// Build the pose-independent scatterers from the layout, `[scene]` and `[clutter]`.
-    pub fn build(layout: Layout, cfg: SceneConfig, clutter: Option<&ModelConfig>, bandwidth_hz: f64, seed: u64) -> Scene {
+    pub fn build(
+        layout: Layout,
+        cfg: SceneConfig,
+        clutter: Option<&ModelConfig>,
+        bandwidth_hz: f64,
+        seed: u64,
+    ) -> Scene {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut sc = Vec::new();
         let mut clusters = Vec::new();
@@ -298,9 +331,15 @@ impl Scene {
                 }
             }
             // corners and edges
-            let rings: Vec<(Vec<Coord<f64>>, bool)> = std::iter::once((layout.perimeter.exterior().0.clone(), true))
-                .chain(layout.obstacles.iter().map(|o| (o.polygon.exterior().0.clone(), false)))
-                .collect();
+            let rings: Vec<(Vec<Coord<f64>>, bool)> =
+                std::iter::once((layout.perimeter.exterior().0.clone(), true))
+                    .chain(
+                        layout
+                            .obstacles
+                            .iter()
+                            .map(|o| (o.polygon.exterior().0.clone(), false)),
+                    )
+                    .collect();
             for (ring, is_perimeter) in rings {
                 let n = ring.len() - 1;
                 for i in 0..n {
@@ -333,23 +372,44 @@ impl Scene {
                 let d_ref = 2.0;
                 while s < total {
                     let (p, nrm) = layout.perimeter_point(s);
-                    let off = draw(&mut rng, &m.perimeter_offset.family, m.perimeter_offset.value).min(1.5);
-                    let centre = Coord { x: p.x + nrm.x * off, y: p.y + nrm.y * off };
-                    let tangent = Coord { x: nrm.y, y: -nrm.x };
+                    let off = draw(
+                        &mut rng,
+                        &m.perimeter_offset.family,
+                        m.perimeter_offset.value,
+                    )
+                    .min(1.5);
+                    let centre = Coord {
+                        x: p.x + nrm.x * off,
+                        y: p.y + nrm.y * off,
+                    };
+                    let tangent = Coord {
+                        x: nrm.y,
+                        y: -nrm.x,
+                    };
                     let mean_extra = (m.rays_per_cluster.value - 1.0).max(0.0);
                     let nrays = 1 + rand_distr::Poisson::new(mean_extra.max(1e-9))
                         .map(|d| d.sample(&mut rng) as usize)
                         .unwrap_or(0);
-                    let sigma_c = m.cluster_rrcs.value * (Normal::new(0.0, 0.69).expect("ok").sample(&mut rng) as f64).exp();
+                    let sigma_c = m.cluster_rrcs.value
+                        * Normal::<f64>::new(0.0, 0.69)
+                            .expect("ok")
+                            .sample(&mut rng)
+                            .exp();
                     if layout.is_free(centre) {
                         let cid = clusters.len();
                         let mut tau = 0.0;
                         for r in 0..nrays {
                             if r > 0 {
-                                tau += Exp::new(m.intra_cluster_rate.value).expect("positive").sample(&mut rng);
+                                tau += Exp::new(m.intra_cluster_rate.value)
+                                    .expect("positive")
+                                    .sample(&mut rng);
                             }
                             let u: f64 = rng.gen::<f64>() - 0.5;
-                            let lap = if r == 0 { 0.0 } else { -b * u.signum() * (1.0 - 2.0 * u.abs()).ln() };
+                            let lap = if r == 0 {
+                                0.0
+                            } else {
+                                -b * u.signum() * (1.0 - 2.0 * u.abs()).ln()
+                            };
                             let depth = C0 * tau * 1e-9 / 2.0;
                             let lateral = d_ref * lap.tan();
                             let pos = Coord {
@@ -367,9 +427,19 @@ impl Scene {
                                 normal: None,
                             });
                         }
-                        clusters.push(TruthCluster { centre, arc_m: s, offset_m: off, rays: nrays });
+                        clusters.push(TruthCluster {
+                            centre,
+                            arc_m: s,
+                            offset_m: off,
+                            rays: nrays,
+                        });
                     }
-                    s += draw(&mut rng, &m.perimeter_spacing.family, m.perimeter_spacing.value).max(0.05);
+                    s += draw(
+                        &mut rng,
+                        &m.perimeter_spacing.family,
+                        m.perimeter_spacing.value,
+                    )
+                    .max(0.05);
                 }
             }
         }
@@ -384,7 +454,12 @@ impl Scene {
                 normal: None,
             });
         }
-        Scene { scatterers: sc, clusters, layout, cfg }
+        Scene {
+            scatterers: sc,
+            clusters,
+            layout,
+            cfg,
+        }
     }
 
     /// Every path visible from `pose` (x, y).
@@ -438,7 +513,8 @@ impl Scene {
                 let n = w.normal();
                 let v = at - foot;
                 let d = v.x.hypot(v.y);
-                if d < 0.05 || v.x * n.x + v.y * n.y <= 0.0 || self.layout.occluded(at, foot, 1e-3) {
+                if d < 0.05 || v.x * n.x + v.y * n.y <= 0.0 || self.layout.occluded(at, foot, 1e-3)
+                {
                     continue;
                 }
                 let gamma = self.cfg.material(&w.material).gamma();
@@ -477,7 +553,11 @@ pub fn synth_sweep(
     let seg: Vec<(usize, usize)> = (0..nk - 1)
         .map(|i| {
             let a = ((table.knot_hz(i) - band.start_hz) / df).ceil() as usize;
-            let b = if i == nk - 2 { nf } else { ((table.knot_hz(i + 1) - band.start_hz) / df).ceil() as usize };
+            let b = if i == nk - 2 {
+                nf
+            } else {
+                ((table.knot_hz(i + 1) - band.start_hz) / df).ceil() as usize
+            };
             (a.min(nf), b.min(nf))
         })
         .collect();
@@ -535,7 +615,8 @@ pub struct SimReport {
 
 fn noise_seed(seed: u64, p: usize, d: usize, k: usize) -> u64 {
     // splitmix64 over the indices: independent streams per sweep
-    let mut z = seed ^ ((p as u64) << 40 ^ (d as u64) << 20 ^ k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut z =
+        seed ^ ((p as u64) << 40 ^ (d as u64) << 20 ^ k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -544,15 +625,18 @@ fn noise_seed(seed: u64, p: usize, d: usize, k: usize) -> u64 {
 /// Read `[scene]` and `[clutter]` from the manifest text (simulator only).
 pub fn scene_sections(c: &Campaign) -> Result<(SceneConfig, Option<ModelConfig>)> {
     let text = crate::io::read_text(&c.path)?;
-    let t: toml::Table = toml::from_str(&text).map_err(|e| Error::input(&c.path, one_line(&e.to_string())))?;
+    let t: toml::Table =
+        toml::from_str(&text).map_err(|e| Error::input(&c.path, one_line(&e.to_string())))?;
     let scene_v = t
         .get("scene")
         .cloned()
         .ok_or_else(|| Error::input(&c.path, "simulate needs a [scene] section"))?;
-    let scene: SceneConfig = scene_v
-        .try_into()
-        .map_err(|e: toml::de::Error| Error::input(&c.path, format!("[scene]: {}", one_line(&e.to_string()))))?;
-    scene.check().map_err(|e| Error::input(&c.path, e.to_string()))?;
+    let scene: SceneConfig = scene_v.try_into().map_err(|e: toml::de::Error| {
+        Error::input(&c.path, format!("[scene]: {}", one_line(&e.to_string())))
+    })?;
+    scene
+        .check()
+        .map_err(|e| Error::input(&c.path, e.to_string()))?;
     let clutter = match t.get("clutter") {
         Some(v) => Some(ModelConfig::from_value(v.clone(), &c.path, "clutter")?),
         None => None,
@@ -571,7 +655,13 @@ pub fn simulate(
     let (scene_cfg, clutter) = scene_sections(c)?;
     let layout = Layout::load(&c.layout_path())?;
     let knots = scene_cfg.pattern_knots;
-    let scene = Scene::build(layout, scene_cfg.clone(), clutter.as_ref(), m.band.bandwidth_hz(), m.seed);
+    let scene = Scene::build(
+        layout,
+        scene_cfg.clone(),
+        clutter.as_ref(),
+        m.band.bandwidth_hz(),
+        m.seed,
+    );
     let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
     let angles = m.directions.angles_deg();
     let tables = pattern.tables(&angles, &m.band, knots);
@@ -604,23 +694,43 @@ pub fn simulate(
     let lc = C0 / m.band.center_hz();
     for p in 0..np {
         let pose = m.poses[p];
-        let at = Coord { x: pose.x_m, y: pose.y_m };
+        let at = Coord {
+            x: pose.x_m,
+            y: pose.y_m,
+        };
         let heading = pose.heading_deg.to_radians();
         let paths = scene.paths(at);
         let mut s21 = vec![Complex64::new(0.0, 0.0); nd * nk * nf];
-        s21.par_chunks_mut(nk * nf).enumerate().for_each(|(d, chunk)| {
-            let mut clean = coupling.clone();
-            synth_sweep(&paths, &tables[d], heading, angles[d].to_radians(), m.array.steering, &m.band, cull, &mut clean);
-            for k in 0..nk {
-                let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(m.seed, p, d, k));
-                for (o, cv) in chunk[k * nf..(k + 1) * nf].iter_mut().zip(&clean) {
-                    let a: f64 = StandardNormal.sample(&mut rng);
-                    let b: f64 = StandardNormal.sample(&mut rng);
-                    *o = cv + Complex64::new(a, b) * sigma;
+        s21.par_chunks_mut(nk * nf)
+            .enumerate()
+            .for_each(|(d, chunk)| {
+                let mut clean = coupling.clone();
+                synth_sweep(
+                    &paths,
+                    &tables[d],
+                    heading,
+                    angles[d].to_radians(),
+                    m.array.steering,
+                    &m.band,
+                    cull,
+                    &mut clean,
+                );
+                for k in 0..nk {
+                    let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(m.seed, p, d, k));
+                    for (o, cv) in chunk[k * nf..(k + 1) * nf].iter_mut().zip(&clean) {
+                        let a: f64 = StandardNormal.sample(&mut rng);
+                        let b: f64 = StandardNormal.sample(&mut rng);
+                        *o = cv + Complex64::new(a, b) * sigma;
+                    }
                 }
-            }
-        });
-        let sw = PositionSweeps { position: p, directions: nd, pulses: nk, points: nf, s21 };
+            });
+        let sw = PositionSweeps {
+            position: p,
+            directions: nd,
+            pulses: nk,
+            points: nf,
+            s21,
+        };
         match pq.as_mut() {
             Some(w) => w.write(&parquet_batch(&sweeps_pq, &m.band, &sw)?)?,
             None => write_touchstone_position(
@@ -632,42 +742,67 @@ pub fn simulate(
             )?,
         }
         // truth rays of this position
-        let n = paths.len();
-        let mut cols: (Vec<i32>, Vec<i64>, Vec<String>, Vec<i64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) =
-            Default::default();
-        for path in &paths {
-            let rng_m = path.tau_s * C0 / 2.0;
-            cols.0.push(p as i32);
-            cols.1.push(if path.scatterer == usize::MAX { -1 } else { path.scatterer as i64 });
-            cols.2.push(path.kind.name().to_string());
-            cols.3.push(
-                if path.scatterer == usize::MAX { -1 } else { scene.scatterers[path.scatterer].cluster.map(|c| c as i64).unwrap_or(-1) },
-            );
-            cols.4.push(path.pos.x);
-            cols.5.push(path.pos.y);
-            cols.6.push(path.tau_s * 1e9);
-            cols.7.push(path.theta.to_degrees());
-            cols.8.push(crate::energy::wrap_deg(path.theta.to_degrees() - pose.heading_deg));
-            // boresight received power |S21|² = G0²·λ²·|A|²
-            cols.9.push(10.0 * (g0 * g0 * lc * lc * path.amp.norm_sqr()).log10());
-            let _ = rng_m;
-        }
+        let sid = |path: &Path1| (path.scatterer != usize::MAX).then_some(path.scatterer);
         let df = table::frame(
             &rays_path,
             vec![
-                table::col("position", cols.0),
-                table::col("scatterer_id", cols.1),
-                table::col("kind", cols.2),
-                table::col("cluster_id", cols.3),
-                table::col("x_m", cols.4),
-                table::col("y_m", cols.5),
-                table::col("delay_ns", cols.6),
-                table::col("angle_global_deg", cols.7),
-                table::col("angle_rel_deg", cols.8),
-                table::col("power_db", cols.9),
+                table::col("position", vec![p as i32; paths.len()]),
+                table::col(
+                    "scatterer_id",
+                    paths
+                        .iter()
+                        .map(|x| sid(x).map(|i| i as i64).unwrap_or(-1))
+                        .collect::<Vec<_>>(),
+                ),
+                table::col(
+                    "kind",
+                    paths
+                        .iter()
+                        .map(|x| x.kind.name().to_string())
+                        .collect::<Vec<_>>(),
+                ),
+                table::col(
+                    "cluster_id",
+                    paths
+                        .iter()
+                        .map(|x| {
+                            sid(x)
+                                .and_then(|i| scene.scatterers[i].cluster)
+                                .map(|c| c as i64)
+                                .unwrap_or(-1)
+                        })
+                        .collect::<Vec<_>>(),
+                ),
+                table::col("x_m", paths.iter().map(|x| x.pos.x).collect::<Vec<_>>()),
+                table::col("y_m", paths.iter().map(|x| x.pos.y).collect::<Vec<_>>()),
+                table::col(
+                    "delay_ns",
+                    paths.iter().map(|x| x.tau_s * 1e9).collect::<Vec<_>>(),
+                ),
+                table::col(
+                    "angle_global_deg",
+                    paths
+                        .iter()
+                        .map(|x| x.theta.to_degrees())
+                        .collect::<Vec<_>>(),
+                ),
+                table::col(
+                    "angle_rel_deg",
+                    paths
+                        .iter()
+                        .map(|x| crate::energy::wrap_deg(x.theta.to_degrees() - pose.heading_deg))
+                        .collect::<Vec<_>>(),
+                ),
+                // boresight received power |S21|² = G0²·λc²·|A|²
+                table::col(
+                    "power_db",
+                    paths
+                        .iter()
+                        .map(|x| 10.0 * (g0 * g0 * lc * lc * x.amp.norm_sqr()).log10())
+                        .collect::<Vec<_>>(),
+                ),
             ],
         )?;
-        let _ = n;
         rays.write(&df)?;
         progress(p + 1, np);
     }
@@ -681,11 +816,21 @@ pub fn simulate(
         &truth_dir,
         vec![
             table::col("scatterer_id", (0..s.len() as i64).collect::<Vec<_>>()),
-            table::col("kind", s.iter().map(|x| x.kind.name().to_string()).collect::<Vec<_>>()),
+            table::col(
+                "kind",
+                s.iter()
+                    .map(|x| x.kind.name().to_string())
+                    .collect::<Vec<_>>(),
+            ),
             table::col("x_m", s.iter().map(|x| x.pos.x).collect::<Vec<_>>()),
             table::col("y_m", s.iter().map(|x| x.pos.y).collect::<Vec<_>>()),
             table::col("rrcs_m", s.iter().map(|x| x.x.norm()).collect::<Vec<_>>()),
-            table::col("cluster_id", s.iter().map(|x| x.cluster.map(|c| c as i64).unwrap_or(-1)).collect::<Vec<_>>()),
+            table::col(
+                "cluster_id",
+                s.iter()
+                    .map(|x| x.cluster.map(|c| c as i64).unwrap_or(-1))
+                    .collect::<Vec<_>>(),
+            ),
         ],
     )?;
     table::write_csv(&truth_dir.join("scatterers.csv"), &mut sdf)?;
@@ -697,7 +842,10 @@ pub fn simulate(
             table::col("x_m", cl.iter().map(|c| c.centre.x).collect::<Vec<_>>()),
             table::col("y_m", cl.iter().map(|c| c.centre.y).collect::<Vec<_>>()),
             table::col("arc_m", cl.iter().map(|c| c.arc_m).collect::<Vec<_>>()),
-            table::col("offset_m", cl.iter().map(|c| c.offset_m).collect::<Vec<_>>()),
+            table::col(
+                "offset_m",
+                cl.iter().map(|c| c.offset_m).collect::<Vec<_>>(),
+            ),
             table::col("rays", cl.iter().map(|c| c.rays as i64).collect::<Vec<_>>()),
         ],
     )?;
@@ -707,10 +855,17 @@ pub fn simulate(
     let layout_text = crate::io::read_text(&c.layout_path())?;
     crate::io::write_bytes(&layout_out, layout_text.as_bytes())?;
     let text = crate::io::read_text(&c.path)?;
-    let mut t: toml::Table = toml::from_str(&text).map_err(|e| Error::input(&c.path, one_line(&e.to_string())))?;
-    t.insert("layout".into(), toml::Value::String("layout.geojson".into()));
+    let mut t: toml::Table =
+        toml::from_str(&text).map_err(|e| Error::input(&c.path, one_line(&e.to_string())))?;
+    t.insert(
+        "layout".into(),
+        toml::Value::String("layout.geojson".into()),
+    );
     if let Some(toml::Value::Table(a)) = t.get_mut("array") {
-        a.insert("elements".into(), toml::Value::Integer(m.array.elements as i64));
+        a.insert(
+            "elements".into(),
+            toml::Value::Integer(m.array.elements as i64),
+        );
     }
     let sweeps = match format {
         SweepFormat::Touchstone => SweepsConfig {
@@ -732,7 +887,14 @@ pub fn simulate(
     );
     let manifest_out = out_dir.join("campaign.toml");
     let body = toml::to_string(&t).map_err(|e| Error::input(&manifest_out, e.to_string()))?;
-    crate::io::write_bytes(&manifest_out, format!("# written by pradar simulate from {}\n{body}", c.path.display()).as_bytes())?;
+    crate::io::write_bytes(
+        &manifest_out,
+        format!(
+            "# written by pradar simulate from {}\n{body}",
+            c.path.display()
+        )
+        .as_bytes(),
+    )?;
     Ok(SimReport {
         sweeps: np * nd * nk,
         scatterers: scene.scatterers.len(),

@@ -83,7 +83,10 @@ impl SweepReader {
     pub fn open(c: &Campaign) -> Result<SweepReader> {
         let m = &c.manifest;
         let cfg = m.sweeps.as_ref().ok_or_else(|| {
-            Error::input(&c.path, "no [sweeps] section (run `pradar simulate` or list the files)")
+            Error::input(
+                &c.path,
+                "no [sweeps] section (run `pradar simulate` or list the files)",
+            )
         })?;
         let (np, nd, nk) = (m.positions(), m.directions.count(), m.pulses);
         let dir = c.dir();
@@ -94,7 +97,8 @@ impl SweepReader {
                     for p in 0..np {
                         for d in 0..nd {
                             for k in 0..nk {
-                                paths[(p * nd + d) * nk + k] = dir.join(expand_pattern(pat, p, d, k));
+                                paths[(p * nd + d) * nk + k] =
+                                    dir.join(expand_pattern(pat, p, d, k));
                             }
                         }
                     }
@@ -112,7 +116,9 @@ impl SweepReader {
                         let (p, d, k) = (i / (nd * nk), (i / nk) % nd, i % nk);
                         return Err(Error::input(
                             &c.path,
-                            format!("sweeps.files: no file for position {p}, direction {d}, pulse {k}"),
+                            format!(
+                                "sweeps.files: no file for position {p}, direction {d}, pulse {k}"
+                            ),
                         ));
                     }
                 }
@@ -127,7 +133,10 @@ impl SweepReader {
             SweepFormat::Parquet => {
                 let p = dir.join(cfg.path.as_ref().expect("checked"));
                 if !p.is_file() {
-                    return Err(Error::input(&p, format!("sweep table listed in {} not found", c.path.display())));
+                    return Err(Error::input(
+                        &p,
+                        format!("sweep table listed in {} not found", c.path.display()),
+                    ));
                 }
                 let rows = table::parquet_rows(&p)?;
                 let want = np * nd * nk * m.band.points;
@@ -154,63 +163,100 @@ impl SweepReader {
         self.positions
     }
 
-    /// Read every sweep of position `p` (Touchstone files in parallel).
+    /// Positions read together by [`Self::read_positions`]: one for Touchstone (files are
+    /// read in parallel within a position), about 2^20 rows for Parquet so a read decodes
+    /// whole row groups instead of slicing one repeatedly. Memory stays bounded by this
+    /// chunk, whatever the campaign size.
+    pub fn chunk_positions(&self) -> usize {
+        match self.source {
+            Source::Touchstone(_) => 1,
+            Source::Parquet(_) => {
+                let rows = self.directions * self.pulses * self.band.points;
+                ((1usize << 20) / rows.max(1)).clamp(1, self.positions.max(1))
+            }
+        }
+    }
+
+    /// Read every sweep of position `p`.
     pub fn read_position(&self, p: usize) -> Result<PositionSweeps> {
+        Ok(self.read_positions(p, 1)?.remove(0))
+    }
+
+    /// Read positions `p0 .. p0 + count` (Touchstone files in parallel).
+    pub fn read_positions(&self, p0: usize, count: usize) -> Result<Vec<PositionSweeps>> {
         let (nd, nk, nf) = (self.directions, self.pulses, self.band.points);
-        let mut s21 = vec![Complex64::new(0.0, 0.0); nd * nk * nf];
+        let count = count.min(self.positions - p0);
+        let n = nd * nk * nf;
+        let mut out = Vec::with_capacity(count);
         match &self.source {
             Source::Touchstone(paths) => {
-                let base = p * nd * nk;
-                s21.par_chunks_mut(nf)
-                    .enumerate()
-                    .try_for_each(|(i, out)| -> Result<()> {
-                        let path = &paths[base + i];
-                        let text = crate::io::read_text(path)?;
-                        let ts = parse_s2p(&text, path)?;
-                        check_grid(path, &ts.freq_hz, &self.band)?;
-                        for (o, s) in out.iter_mut().zip(&ts.s) {
-                            *o = s[1];
-                        }
-                        Ok(())
-                    })?;
+                for p in p0..p0 + count {
+                    let mut s21 = vec![Complex64::new(0.0, 0.0); n];
+                    let base = p * nd * nk;
+                    s21.par_chunks_mut(nf)
+                        .enumerate()
+                        .try_for_each(|(i, out)| -> Result<()> {
+                            let path = &paths[base + i];
+                            let text = crate::io::read_text(path)?;
+                            let ts = parse_s2p(&text, path)?;
+                            check_grid(path, &ts.freq_hz, &self.band)?;
+                            for (o, s) in out.iter_mut().zip(&ts.s) {
+                                *o = s[1];
+                            }
+                            Ok(())
+                        })?;
+                    out.push(PositionSweeps {
+                        position: p,
+                        directions: nd,
+                        pulses: nk,
+                        points: nf,
+                        s21,
+                    });
+                }
             }
             Source::Parquet(path) => {
-                let n = nd * nk * nf;
-                let df = table::read_parquet(path, Some((p * n, n)))?;
+                let df = table::read_parquet(path, Some((p0 * n, count * n)))?;
                 let pos = table::i64_column(path, &df, "position")?;
                 let dirs = table::i64_column(path, &df, "direction")?;
                 let pulse = match df.column("pulse") {
                     Ok(_) => table::i64_column(path, &df, "pulse")?,
-                    Err(_) => vec![0; n],
+                    Err(_) => vec![0; n * count],
                 };
                 let f = table::f64_column(path, &df, "frequency_hz")?;
                 let re = table::f64_column(path, &df, "re")?;
                 let im = table::f64_column(path, &df, "im")?;
-                for i in 0..n {
-                    let (d, k, j) = (i / (nk * nf), (i / nf) % nk, i % nf);
-                    if pos[i] != p as i64 || dirs[i] != d as i64 || pulse[i] != k as i64 {
-                        return Err(Error::input(
-                            path,
-                            format!("row {}: expected position {p}, direction {d}, pulse {k} (rows must be sorted by position, direction, pulse, frequency)", p * n + i),
-                        ));
+                let tol = (1e-6 * self.band.step_hz()).max(1.0);
+                for c in 0..count {
+                    let p = p0 + c;
+                    let mut s21 = vec![Complex64::new(0.0, 0.0); n];
+                    for (i, v) in s21.iter_mut().enumerate() {
+                        let r = c * n + i;
+                        let (d, k, j) = (i / (nk * nf), (i / nf) % nk, i % nf);
+                        if pos[r] != p as i64 || dirs[r] != d as i64 || pulse[r] != k as i64 {
+                            return Err(Error::input(
+                                path,
+                                format!("row {}: expected position {p}, direction {d}, pulse {k} (rows must be sorted by position, direction, pulse, frequency)", p0 * n + r),
+                            ));
+                        }
+                        if (f[r] - self.band.freq(j)).abs() > tol {
+                            return Err(Error::input(
+                                path,
+                                format!("row {}: frequency {} Hz does not match [band] point {j} ({} Hz)", p0 * n + r, f[r], self.band.freq(j)),
+                            ));
+                        }
+                        *v = Complex64::new(re[r], im[r]);
                     }
-                    if (f[i] - self.band.freq(j)).abs() > (1e-6 * self.band.step_hz()).max(1.0) {
-                        return Err(Error::input(
-                            path,
-                            format!("row {}: frequency {} Hz does not match [band] point {j} ({} Hz)", p * n + i, f[i], self.band.freq(j)),
-                        ));
-                    }
-                    s21[i] = Complex64::new(re[i], im[i]);
+                    out.push(PositionSweeps {
+                        position: p,
+                        directions: nd,
+                        pulses: nk,
+                        points: nf,
+                        s21,
+                    });
                 }
             }
         }
-        Ok(PositionSweeps {
-            position: p,
-            directions: nd,
-            pulses: nk,
-            points: nf,
-            s21,
-        })
+        Ok(out)
     }
 }
 
@@ -238,7 +284,11 @@ pub fn write_touchstone_position(
 }
 
 /// Columns of one position's sweeps for the Parquet sweep table.
-pub fn parquet_batch(path: &Path, band: &Band, sweeps: &PositionSweeps) -> Result<polars::prelude::DataFrame> {
+pub fn parquet_batch(
+    path: &Path,
+    band: &Band,
+    sweeps: &PositionSweeps,
+) -> Result<polars::prelude::DataFrame> {
     let n = sweeps.s21.len();
     let nf = sweeps.points;
     let mut pos = Vec::with_capacity(n);

@@ -90,7 +90,10 @@ fn parse_option_line(line: &str, path: &Path, lineno: usize) -> Result<Options> 
                     Error::input(path, format!("line {lineno}: option `R` without a value"))
                 })?;
                 o.z0 = v.parse().map_err(|_| {
-                    Error::input(path, format!("line {lineno}: bad reference impedance `{v}`"))
+                    Error::input(
+                        path,
+                        format!("line {lineno}: bad reference impedance `{v}`"),
+                    )
                 })?;
             }
             _ => {
@@ -141,10 +144,16 @@ pub fn parse_s2p(text: &str, path: &Path) -> Result<Touchstone> {
         });
         for tok in line.split_ascii_whitespace() {
             let v: f64 = tok.parse().map_err(|_| {
-                Error::input(path, format!("line {lineno}: cannot parse `{tok}` as a number"))
+                Error::input(
+                    path,
+                    format!("line {lineno}: cannot parse `{tok}` as a number"),
+                )
             })?;
             if !v.is_finite() {
-                return Err(Error::input(path, format!("line {lineno}: non-finite value `{tok}`")));
+                return Err(Error::input(
+                    path,
+                    format!("line {lineno}: non-finite value `{tok}`"),
+                ));
             }
             if n == 0 {
                 row_line = lineno;
@@ -253,17 +262,28 @@ mod tests {
 
     #[test]
     fn db_format() {
-        let ts = parse_s2p("# Hz S DB R 50\n1 0 0 -20 180 0 0 0 0\n", Path::new("a.s2p")).unwrap();
+        let ts = parse_s2p(
+            "# Hz S DB R 50\n1 0 0 -20 180 0 0 0 0\n",
+            Path::new("a.s2p"),
+        )
+        .unwrap();
         assert!((ts.s[0][1] - Complex64::new(-0.1, 0.0)).norm() < 1e-12);
     }
 
     #[test]
     fn errors_name_line() {
         let e = parse_s2p("# Hz S RI R 50\n1 0 0 x 0 0 0 0 0\n", Path::new("b.s2p")).unwrap_err();
-        assert!(e.to_string().contains("b.s2p") && e.to_string().contains("line 2"), "{e}");
+        assert!(
+            e.to_string().contains("b.s2p") && e.to_string().contains("line 2"),
+            "{e}"
+        );
         let e = parse_s2p("# Hz S RI R 50\n1 0 0 NaN 0 0 0 0 0\n", Path::new("b.s2p")).unwrap_err();
         assert!(e.to_string().contains("non-finite"), "{e}");
-        let e = parse_s2p("# Hz S RI R 50\n1 0 0 1 0 0 0 0 0\n2 0 0 1\n", Path::new("b.s2p")).unwrap_err();
+        let e = parse_s2p(
+            "# Hz S RI R 50\n1 0 0 1 0 0 0 0 0\n2 0 0 1\n",
+            Path::new("b.s2p"),
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("truncated"), "{e}");
         let e = parse_s2p("# Hz Z RI R 50\n", Path::new("b.s2p")).unwrap_err();
         assert!(e.to_string().contains("only S"), "{e}");

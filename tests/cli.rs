@@ -1,0 +1,361 @@
+//! End-to-end tests of the `pradar` binary: bad input gives one clear line and a non-zero
+//! exit (never a panic, never a partial output), determinism across thread counts, formats.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pradar"))
+}
+
+struct Out {
+    code: i32,
+    stderr: String,
+}
+
+fn run(args: &[&str], threads: Option<&str>) -> Out {
+    let mut c = bin();
+    c.args(args).arg("--quiet");
+    if let Some(t) = threads {
+        c.env("RAYON_NUM_THREADS", t);
+    }
+    let o = c.output().unwrap();
+    Out {
+        code: o.status.code().unwrap_or(-1),
+        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+    }
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A small simulated campaign (2 positions, 401 points) in `dir`; returns the manifest.
+fn small_sim(dir: &Path, format: &str, threads: Option<&str>) -> PathBuf {
+    let mut t = corridor();
+    set(&mut t, "band.points", 401i64);
+    set(&mut t, "processing.max_delay_ns", 45.0);
+    set(&mut t, "processing.noise_from_ns", 50.0);
+    let poses = t["poses"].as_array().unwrap()[..2].to_vec();
+    t.insert("poses".into(), poses.into());
+    let m = write_campaign(&dir.join("in"), &t);
+    let o = run(
+        &[
+            "simulate",
+            "--campaign",
+            s(&m),
+            "--out",
+            s(&dir.join("sim")),
+            "--format",
+            format,
+            "--elements",
+            "100",
+        ],
+        threads,
+    );
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    dir.join("sim/campaign.toml")
+}
+
+fn assert_clean_error(o: &Out, must_name: &str, out: &Path) {
+    assert_ne!(o.code, 0, "expected failure");
+    assert!(!o.stderr.contains("panicked"), "panic: {}", o.stderr);
+    let lines: Vec<&str> = o.stderr.trim().lines().collect();
+    assert_eq!(lines.len(), 1, "one line expected: {}", o.stderr);
+    assert!(lines[0].starts_with("error: "), "{}", lines[0]);
+    assert!(
+        lines[0].contains(must_name),
+        "error should name `{must_name}`: {}",
+        lines[0]
+    );
+    assert!(
+        !out.exists(),
+        "partial output {} left behind",
+        out.display()
+    );
+    let parent = out.parent().unwrap();
+    if parent.is_dir() {
+        for e in std::fs::read_dir(parent).unwrap() {
+            let n = e.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(!n.contains(".tmp"), "temp file {n} left behind");
+        }
+    }
+}
+
+fn first_sweep(dir: &Path) -> PathBuf {
+    dir.join("sim/sweeps/p000_d00_k00.s2p")
+}
+
+#[test]
+fn bad_sweep_files_give_one_clear_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = small_sim(tmp.path(), "touchstone", None);
+    let out = tmp.path().join("out/energy.parquet");
+    let f = first_sweep(tmp.path());
+    let good = std::fs::read_to_string(&f).unwrap();
+    // truncated: cut in the middle of a data row
+    std::fs::write(&f, &good[..good.len() / 2]).unwrap();
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_clean_error(&o, "p000_d00_k00.s2p", &out);
+    // NaN in a value
+    let lines: Vec<String> = good.lines().map(String::from).collect();
+    let mut bad = lines.clone();
+    let i = bad
+        .iter()
+        .position(|l| !l.starts_with('!') && !l.starts_with('#'))
+        .unwrap()
+        + 3;
+    let mut toks: Vec<String> = bad[i].split_whitespace().map(String::from).collect();
+    toks[3] = "NaN".into();
+    bad[i] = toks.join(" ");
+    std::fs::write(&f, bad.join("\n")).unwrap();
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_clean_error(&o, &format!("line {}", i + 1), &out);
+    // garbage number
+    toks[3] = "0.1.2".into();
+    bad[i] = toks.join(" ");
+    std::fs::write(&f, bad.join("\n")).unwrap();
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_clean_error(&o, "cannot parse", &out);
+    // wrong band: shift every frequency by 1 GHz
+    let shifted: Vec<String> = lines
+        .iter()
+        .map(|l| {
+            if l.starts_with('!') || l.starts_with('#') {
+                return l.clone();
+            }
+            let mut t: Vec<String> = l.split_whitespace().map(String::from).collect();
+            let fr: f64 = t[0].parse().unwrap();
+            t[0] = format!("{:.0}", fr + 1e9);
+            t.join(" ")
+        })
+        .collect();
+    std::fs::write(&f, shifted.join("\n")).unwrap();
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_clean_error(&o, "does not match [band]", &out);
+    // missing sweep file
+    std::fs::remove_file(&f).unwrap();
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_clean_error(&o, "p000_d00_k00.s2p", &out);
+}
+
+#[test]
+fn bad_manifests_give_one_clear_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sim");
+    // layout file missing
+    let mut t = corridor();
+    set(&mut t, "layout", "nowhere.geojson");
+    let dir = tmp.path().join("a");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("campaign.toml"), toml::to_string(&t).unwrap()).unwrap();
+    let o = run(
+        &[
+            "simulate",
+            "--campaign",
+            s(&dir.join("campaign.toml")),
+            "--out",
+            s(&out),
+        ],
+        None,
+    );
+    assert_clean_error(&o, "layout", &out);
+    // layout key missing altogether
+    let mut t = corridor();
+    t.remove("layout");
+    let m = write_campaign(&tmp.path().join("b"), &{
+        let mut t2 = t.clone();
+        t2.insert("layout".into(), "layout.geojson".into());
+        t2
+    });
+    std::fs::write(&m, toml::to_string(&t).unwrap()).unwrap();
+    let o = run(&["simulate", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_clean_error(&o, "layout", &out);
+    // bad field values
+    for (key, val, name) in [
+        ("array.elements", toml::Value::Integer(50), "array.elements"),
+        ("band.points", toml::Value::String("many".into()), "points"),
+        (
+            "processing.oversample",
+            toml::Value::Integer(4),
+            "processing.oversample",
+        ),
+        (
+            "scene.scatterers_per_cell",
+            toml::Value::Float(2.0),
+            "scene.scatterers_per_cell",
+        ),
+        (
+            "clutter.ray_decay.unit",
+            toml::Value::String("s".into()),
+            "ray_decay.unit",
+        ),
+    ] {
+        let mut t = corridor();
+        set(&mut t, key, val);
+        let m = write_campaign(&tmp.path().join(name.replace('.', "_")), &t);
+        let o = run(&["simulate", "--campaign", s(&m), "--out", s(&out)], None);
+        assert_ne!(o.code, 0, "{key}");
+        assert!(o.stderr.contains("campaign.toml"), "{key}: {}", o.stderr);
+        assert_clean_error(&o, name, &out.join("campaign.toml"));
+    }
+    // --elements not a square
+    let m = write_campaign(&tmp.path().join("c"), &corridor());
+    let o = run(
+        &[
+            "simulate",
+            "--campaign",
+            s(&m),
+            "--out",
+            s(&out),
+            "--elements",
+            "50",
+        ],
+        None,
+    );
+    assert_clean_error(&o, "--elements", &out.join("campaign.toml"));
+    // energy on a manifest without [sweeps]
+    let e = tmp.path().join("e.parquet");
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&e)], None);
+    assert_clean_error(&o, "[sweeps]", &e);
+}
+
+fn tree_bytes(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                v.push((
+                    p.strip_prefix(dir).unwrap().display().to_string(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+#[test]
+fn same_seed_same_bytes_with_one_and_two_threads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut trees = Vec::new();
+    for (i, th) in ["1", "2"].iter().enumerate() {
+        let d = tmp.path().join(format!("t{i}"));
+        let m = small_sim(&d, "parquet", Some(th));
+        let o = run(
+            &[
+                "energy",
+                "--campaign",
+                s(&m),
+                "--out",
+                s(&d.join("sim/energy.parquet")),
+            ],
+            Some(th),
+        );
+        assert_eq!(o.code, 0, "{}", o.stderr);
+        let mut t = tree_bytes(&d.join("sim"));
+        // the manifest records the source path, which differs between the two runs
+        t.retain(|(n, _)| n != "campaign.toml");
+        trees.push(t);
+    }
+    assert_eq!(trees[0].len(), trees[1].len());
+    for (a, b) in trees[0].iter().zip(&trees[1]) {
+        assert_eq!(a.0, b.0);
+        assert!(a.1 == b.1, "{} differs between 1 and 2 threads", a.0);
+    }
+}
+
+#[test]
+fn touchstone_and_parquet_sweeps_give_the_same_energy() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut e = Vec::new();
+    for f in ["touchstone", "parquet"] {
+        let d = tmp.path().join(f);
+        let m = small_sim(&d, f, None);
+        let out = d.join("energy.parquet");
+        let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+        assert_eq!(o.code, 0, "{}", o.stderr);
+        e.push(pradar::energy::EnergyMatrix::read(&out).unwrap());
+    }
+    let peak = e[0].data.iter().cloned().fold(0.0, f64::max);
+    let worst = e[0]
+        .data
+        .iter()
+        .zip(&e[1].data)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    // Touchstone prints 12 significant digits
+    assert!(
+        worst <= 1e-9 * peak,
+        "max difference {worst:e} vs peak {peak:e}"
+    );
+    assert_eq!(e[0].meta.bin_width_ns, e[1].meta.bin_width_ns);
+}
+
+#[test]
+fn energy_parquet_is_read_by_pandas() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = small_sim(tmp.path(), "touchstone", None);
+    let out = tmp.path().join("energy.parquet");
+    let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let py = Command::new("python3")
+        .arg(root().join("scripts/read_energy.py"))
+        .arg(&out)
+        .output();
+    match py {
+        Ok(r) if r.status.success() => {
+            let text = String::from_utf8_lossy(&r.stdout);
+            eprintln!("{text}");
+            assert!(text.starts_with("ok rows="), "{text}");
+            assert!(text.contains("positions=2 directions=37"), "{text}");
+        }
+        Ok(r) if std::env::var("PRADAR_SKIP_PYTHON").is_ok() => {
+            eprintln!("skipped (PRADAR_SKIP_PYTHON): {}", String::from_utf8_lossy(&r.stderr));
+        }
+        Ok(r) => panic!(
+            "pandas could not read the energy table (install numpy pandas pyarrow, or set PRADAR_SKIP_PYTHON): {}{}",
+            String::from_utf8_lossy(&r.stdout),
+            String::from_utf8_lossy(&r.stderr)
+        ),
+        Err(e) => panic!("python3 not available: {e}"),
+    }
+}
+
+#[test]
+fn reproduce_writes_the_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = corridor();
+    set(&mut t, "band.points", 401i64);
+    set(&mut t, "processing.max_delay_ns", 45.0);
+    set(&mut t, "processing.noise_from_ns", 50.0);
+    let poses = t["poses"].as_array().unwrap()[..3].to_vec();
+    t.insert("poses".into(), poses.into());
+    let m = write_campaign(&tmp.path().join("in"), &t);
+    let out = tmp.path().join("rep");
+    let o = run(&["reproduce", "--out", s(&out), "--campaign", s(&m)], None);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    for p in 0..3 {
+        let png = format!("energy_p{p:02}.png");
+        assert!(html.contains(&png));
+        let bytes = std::fs::read(out.join(&png)).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+    }
+    assert!(html.contains("Stage timings") && html.contains("simulate"));
+}
+
+#[test]
+fn unknown_command_fails_cleanly() {
+    let o = bin().arg("frobnicate").output().unwrap();
+    assert_ne!(o.status.code(), Some(0));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("panicked"));
+}
