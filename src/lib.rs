@@ -9,6 +9,7 @@ pub mod campaign;
 pub mod energy;
 pub mod error;
 pub mod io;
+pub mod mapping;
 pub mod pipeline;
 pub mod report;
 pub mod table;
