@@ -1,0 +1,445 @@
+//! The `pradar map` job: one or several runs (campaign + energy table) → one occupancy map,
+//! its files and its metrics against the reference map.
+//!
+//! Takes [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
+//! gives in the output folder, for method `<m>` (`og` or `og-boresight`):
+//! * `<m>.png/.pgm/.yaml` — the soft map (grey = 1 − p), YAML `occupied_thresh` = η = 0.5,
+//!   `free_thresh` = 0.45 (cells left at the prior read as unknown in map_server);
+//! * `<m>_binary.png/.pgm/.yaml` — the binary map (p > η = 0.5);
+//! * `reference.png/.pgm/.yaml` — the reference map rasterised from the layout on the same
+//!   grid (occupied 0, free 254, outside 205);
+//! * `metrics.json` — figures on the observable region and on the whole map, each beside the
+//!   all-free map's; with several runs also every single run's figures and the fused map's
+//!   figures for the first n runs, n = 1..R (metrics vs number of runs).
+//!
+//! Choices:
+//! * the grid is the reference raster's ([`Layout::rasterize`]: cell 0.1 m, margin 0.5 m);
+//!   fused runs must share the layout's grid;
+//! * observable region = cells inside the −3 dB main lobe of at least one (pose, direction)
+//!   of any run, within the usable bins (coupling gate to the last bin), and not `Outside` in
+//!   the reference (mapper-independent, so all methods are scored on the same cells);
+//! * whole map = every cell of the grid, `Outside` reference cells counted as free;
+//! * usable bins start after the coupling gate (`gate_ns` from the energy metadata when the
+//!   coupling removal was `gate`) plus 2 bins (the Hann kernel's half-width), and never
+//!   before bin 2;
+//! * the energy table must match the campaign: positions = poses, directions and their
+//!   angles, headings, bin width = 1/B, and (when the metadata records it) the element count
+//!   (`--elements` overrides the manifest's).
+
+use crate::campaign::layout::{CellClass, GridSpec, Layout, ReferenceMap};
+use crate::campaign::manifest::Campaign;
+use crate::energy::{wrap_deg, EnergyMatrix};
+use crate::error::{Error, Result};
+use crate::mapping::grid::{GridParams, ObservationModel};
+use crate::mapping::metrics::{evaluate, MapMetrics};
+use crate::mapping::og::{detection_threshold, fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats};
+use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// One run: a campaign manifest and its energy table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapRun {
+    /// `campaign.toml`.
+    pub campaign: PathBuf,
+    /// Energy Parquet.
+    pub energy: PathBuf,
+}
+
+impl MapRun {
+    /// Parse `campaign.toml=energy.parquet`.
+    pub fn parse(s: &str) -> Result<MapRun> {
+        let (c, e) = s.split_once('=').ok_or_else(|| {
+            Error::param("--run", format!("`{s}`: expected campaign.toml=energy.parquet"))
+        })?;
+        if c.is_empty() || e.is_empty() {
+            return Err(Error::param(
+                "--run",
+                format!("`{s}`: expected campaign.toml=energy.parquet"),
+            ));
+        }
+        Ok(MapRun {
+            campaign: PathBuf::from(c),
+            energy: PathBuf::from(e),
+        })
+    }
+}
+
+/// Options of `pradar map`.
+#[derive(Debug, Clone)]
+pub struct MapOptions {
+    /// Inverse sensor model.
+    pub method: Method,
+    /// Runs (one, or several to fuse).
+    pub runs: Vec<MapRun>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// `--elements` override of every run's `[array] elements`.
+    pub elements: Option<usize>,
+    /// Grid / observation model parameters.
+    pub grid: GridParams,
+    /// Occupancy-grid parameters.
+    pub og: OgParams,
+}
+
+/// A loaded, checked run ready to map.
+#[derive(Debug)]
+pub struct LoadedRun {
+    /// The campaign.
+    pub campaign: Campaign,
+    /// Its layout.
+    pub layout: Layout,
+    /// The energy matrix.
+    pub energy: EnergyMatrix,
+    /// Its path.
+    pub energy_path: PathBuf,
+    /// The observation model.
+    pub model: ObservationModel,
+    /// Detector threshold (energy).
+    pub threshold: f64,
+}
+
+/// Check that an energy table belongs to a campaign (file named in every error).
+pub fn check_energy(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()> {
+    let m = &c.manifest;
+    let (np, nd) = (m.poses.len(), m.directions.count());
+    if em.positions != np || em.directions() != nd {
+        return Err(Error::input(
+            path,
+            format!(
+                "{} positions x {} directions, but campaign {} has {np} poses x {nd} directions (energy table from another campaign?)",
+                em.positions,
+                em.directions(),
+                c.path.display()
+            ),
+        ));
+    }
+    for d in 0..nd {
+        if (em.angles_rel_deg[d] - m.directions.angle_deg(d)).abs() > 1e-6 {
+            return Err(Error::input(
+                path,
+                format!(
+                    "direction {d} at {}°, campaign {} has {}° (energy table from another campaign?)",
+                    em.angles_rel_deg[d],
+                    c.path.display(),
+                    m.directions.angle_deg(d)
+                ),
+            ));
+        }
+    }
+    for (p, pose) in m.poses.iter().enumerate() {
+        let diff = wrap_deg(em.headings_deg[p] - pose.heading_deg).abs();
+        if !(diff < 1e-6) {
+            return Err(Error::input(
+                path,
+                format!(
+                    "position {p} heading {}°, campaign {} has {}° (energy table from another campaign?)",
+                    em.headings_deg[p],
+                    c.path.display(),
+                    pose.heading_deg
+                ),
+            ));
+        }
+    }
+    let tb = 1e9 / m.band.bandwidth_hz();
+    if !((em.meta.bin_width_ns - tb).abs() <= 1e-6 * tb) {
+        return Err(Error::input(
+            path,
+            format!(
+                "bin_width_ns {} but campaign {} has 1/B = {tb} ns",
+                em.meta.bin_width_ns,
+                c.path.display()
+            ),
+        ));
+    }
+    if let Some((_, v)) = em.meta.all.iter().find(|(k, _)| k == "elements") {
+        if v.parse::<usize>().ok() != Some(m.array.elements) {
+            return Err(Error::input(
+                path,
+                format!(
+                    "metadata elements = {v}, but the mapper's array has {} elements (pass --elements {v}?)",
+                    m.array.elements
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// First usable bin of an energy table (see the module docs).
+pub fn min_bin(em: &EnergyMatrix) -> usize {
+    let gate = if em.meta.coupling == "gate" {
+        em.meta
+            .all
+            .iter()
+            .find(|(k, _)| k == "gate_ns")
+            .and_then(|(_, v)| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let g = (gate.max(0.0) / em.meta.bin_width_ns).ceil() as usize;
+    (g + 2).max(2)
+}
+
+/// Load and check one run on the grid `spec` (None: the run's own reference grid).
+pub fn load_run(
+    run: &MapRun,
+    elements: Option<usize>,
+    grid: &GridParams,
+    og: &OgParams,
+    spec: Option<GridSpec>,
+) -> Result<LoadedRun> {
+    let mut c = Campaign::load(&run.campaign)?;
+    if let Some(n) = elements {
+        c.set_elements(n)?;
+    }
+    let layout = Layout::load(&c.layout_path())?;
+    let energy = EnergyMatrix::read(&run.energy)?;
+    check_energy(&c, &energy, &run.energy)?;
+    let threshold = detection_threshold(&energy.meta, og.pfa, &run.energy)?;
+    let own = GridSpec::covering(layout.bbox(), grid.cell_m, grid.margin_m);
+    let spec = match spec {
+        Some(s) => {
+            if s != own {
+                return Err(Error::input(
+                    &run.campaign,
+                    "layout differs from the first run's (fused runs must share one area)",
+                ));
+            }
+            s
+        }
+        None => own,
+    };
+    let model = ObservationModel::new(
+        spec,
+        *grid,
+        &c.manifest,
+        energy.bins,
+        energy.meta.bin_width_ns,
+        min_bin(&energy),
+    )?;
+    Ok(LoadedRun {
+        campaign: c,
+        layout,
+        energy,
+        energy_path: run.energy.clone(),
+        model,
+        threshold,
+    })
+}
+
+/// Metrics of a map and of the all-free map, on the observable region and the whole map.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MetricsPair {
+    /// The map on the observable region.
+    pub observable: MapMetrics,
+    /// The all-free map on the observable region.
+    pub observable_all_free: MapMetrics,
+    /// The map on the whole grid.
+    pub whole: MapMetrics,
+    /// The all-free map on the whole grid.
+    pub whole_all_free: MapMetrics,
+}
+
+/// Score a log-odds map (binary at p > 0.5) against the reference.
+pub fn score(map: &LogOddsMap, reference: &ReferenceMap, observable: &[bool]) -> MetricsPair {
+    let (rows, cols) = (reference.spec.rows, reference.spec.cols);
+    let refo: Vec<bool> = reference
+        .cells
+        .iter()
+        .map(|c| *c == CellClass::Occupied)
+        .collect();
+    let bin = map.binary();
+    let free = vec![false; bin.len()];
+    let all = vec![true; bin.len()];
+    MetricsPair {
+        observable: evaluate(&bin, &refo, observable, rows, cols),
+        observable_all_free: evaluate(&free, &refo, observable, rows, cols),
+        whole: evaluate(&bin, &refo, &all, rows, cols),
+        whole_all_free: evaluate(&free, &refo, &all, rows, cols),
+    }
+}
+
+/// Observable region of a set of runs on a reference (see the module docs).
+pub fn observable_region(runs: &[&ObservationModel], reference: &ReferenceMap) -> Vec<bool> {
+    let mut region: Vec<bool> = reference
+        .cells
+        .iter()
+        .map(|c| *c != CellClass::Outside)
+        .collect();
+    let mut cov = vec![false; region.len()];
+    for m in runs {
+        for (c, v) in cov.iter_mut().zip(m.main_lobe_coverage()) {
+            *c |= v;
+        }
+    }
+    for (r, c) in region.iter_mut().zip(cov) {
+        *r &= c;
+    }
+    region
+}
+
+/// One row of the fusion table.
+#[derive(Debug, Clone, Serialize)]
+pub struct FusionRow {
+    /// Runs fused (the first n).
+    pub runs: usize,
+    /// Figures of the fused map.
+    pub metrics: MetricsPair,
+}
+
+/// What `pradar map` wrote and measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapReport {
+    /// Method name.
+    pub method: String,
+    /// Grid rows.
+    pub rows: usize,
+    /// Grid columns.
+    pub cols: usize,
+    /// Cell side, m.
+    pub cell_m: f64,
+    /// Binary threshold η on p.
+    pub eta: f64,
+    /// Observable cells.
+    pub observable_cells: usize,
+    /// Figures of the (fused) map.
+    pub metrics: MetricsPair,
+    /// Per run: campaign, energy, detector threshold, work statistics, figures alone.
+    pub runs: Vec<RunSummary>,
+    /// Figures of the fused map of the first n runs (n = 1..R; one row for a single run).
+    pub fusion: Vec<FusionRow>,
+}
+
+/// Per-run summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    /// Manifest path.
+    pub campaign: String,
+    /// Energy path.
+    pub energy: String,
+    /// Detector energy threshold.
+    pub threshold: f64,
+    /// Work statistics.
+    pub stats: OgStats,
+    /// This run alone.
+    pub metrics: MetricsPair,
+}
+
+/// Run `pradar map`; `progress(done, total)` counts poses over all runs.
+pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
+    opts.grid.check()?;
+    opts.og.check()?;
+    if opts.runs.is_empty() {
+        return Err(Error::param(
+            "--run",
+            "give --campaign and --energy, or at least one --run campaign.toml=energy.parquet",
+        ));
+    }
+    let mut loaded: Vec<LoadedRun> = Vec::new();
+    for r in &opts.runs {
+        let spec = loaded.first().map(|l| l.model.spec);
+        loaded.push(load_run(r, opts.elements, &opts.grid, &opts.og, spec)?);
+    }
+    let reference = loaded[0]
+        .layout
+        .rasterize(opts.grid.cell_m, opts.grid.margin_m);
+    if reference.spec != loaded[0].model.spec {
+        return Err(Error::param("cell_m", "reference grid mismatch"));
+    }
+    let total: usize = loaded.iter().map(|l| l.model.poses.len()).sum();
+    let mut done = 0;
+    let mut maps = Vec::new();
+    let mut stats = Vec::new();
+    for l in &loaded {
+        let base = done;
+        let (m, s) = og_map_stats(
+            &l.model,
+            &l.energy,
+            &opts.og,
+            opts.method,
+            l.threshold,
+            &|d, _| progress(base + d, total),
+        )?;
+        done += l.model.poses.len();
+        maps.push(m);
+        stats.push(s);
+    }
+    let models: Vec<&ObservationModel> = loaded.iter().map(|l| &l.model).collect();
+    let region = observable_region(&models, &reference);
+    let fused = fuse(&maps)?;
+    let metrics = score(&fused, &reference, &region);
+    let mut runs = Vec::new();
+    for ((l, m), s) in loaded.iter().zip(&maps).zip(&stats) {
+        runs.push(RunSummary {
+            campaign: l.campaign.path.display().to_string(),
+            energy: l.energy_path.display().to_string(),
+            threshold: l.threshold,
+            stats: *s,
+            metrics: score(m, &reference, &region),
+        });
+    }
+    let mut fusion = Vec::new();
+    for n in 1..=maps.len() {
+        let f = fuse(&maps[..n])?;
+        fusion.push(FusionRow {
+            runs: n,
+            metrics: score(&f, &reference, &region),
+        });
+    }
+    // files
+    let spec = reference.spec;
+    let out = &opts.out;
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let name = opts.method.name();
+    let soft: Vec<u8> = fused.probs().iter().map(|&p| soft_grey(p)).collect();
+    output::write_map_files(out, name, &spec, &soft, 0.5, 0.45)?;
+    let bin: Vec<u8> = fused
+        .binary()
+        .iter()
+        .map(|&o| if o { GREY_OCCUPIED } else { GREY_FREE })
+        .collect();
+    output::write_map_files(out, &format!("{name}_binary"), &spec, &bin, 0.5, 0.45)?;
+    write_reference(out, &reference)?;
+    let report = MapReport {
+        method: name.to_string(),
+        rows: spec.rows,
+        cols: spec.cols,
+        cell_m: spec.cell_m,
+        eta: 0.5,
+        observable_cells: region.iter().filter(|&&v| v).count(),
+        metrics,
+        runs,
+        fusion,
+    };
+    let json = serde_json::to_string_pretty(&report)
+        .map_err(|e| Error::param("metrics", e.to_string()))?;
+    crate::io::write_bytes(&out.join("metrics.json"), json.as_bytes())?;
+    Ok(report)
+}
+
+/// Grey values of the reference map (occupied 0, free 254, outside 205).
+pub fn reference_grey(reference: &ReferenceMap) -> Vec<u8> {
+    reference
+        .cells
+        .iter()
+        .map(|c| match c {
+            CellClass::Occupied => GREY_OCCUPIED,
+            CellClass::Free => GREY_FREE,
+            CellClass::Outside => GREY_UNKNOWN,
+        })
+        .collect()
+}
+
+/// Write `reference.png/.pgm/.yaml` (map_server default thresholds 0.65 / 0.196).
+pub fn write_reference(out: &Path, reference: &ReferenceMap) -> Result<()> {
+    output::write_map_files(
+        out,
+        "reference",
+        &reference.spec,
+        &reference_grey(reference),
+        0.65,
+        0.196,
+    )
+}
