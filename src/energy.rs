@@ -23,7 +23,9 @@
 //! also recorded), and N0 = N0_h / TW, so a bin of signal energy E_s (averaged over N_p
 //! pulses) has mean N0·TW + E_s and variance (N0²·TW + 2·N0·E_s)/N_p (DESIGN's energy
 //! detector formulas divided by N_p, N_p² since we store the mean). N0 is estimated from
-//! the bins at delays ≥ `noise_from_ns` (signal-free by assumption) over the whole campaign.
+//! the bins at delays ≥ `noise_from_ns` (signal-free by assumption) over the whole campaign,
+//! stopping `gate_ns` + 2 ns before the end of the span (those bins hold negative delays of
+//! the circular IFFT, where the coupling's kernel tail wraps to).
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 
 use crate::campaign::manifest::{
@@ -208,28 +210,29 @@ impl EnergyProcessor {
     /// `a(f)` = `amp`·e^{−j2πfτ} (flat magnitude) at delay `tau_s`: the window kernel
     /// averaged over each bin. Returns `nbins` values.
     pub fn point_echo_energy(&self, amp2: f64, tau_s: f64) -> Vec<f64> {
+        (0..self.nbins)
+            .map(|b| self.point_echo_energy_at(amp2, tau_s, b))
+            .collect()
+    }
+
+    /// Expected energy of bin `bin` for a point echo of power `amp2` at delay `tau_s`.
+    pub fn point_echo_energy_at(&self, amp2: f64, tau_s: f64, bin: usize) -> f64 {
         let df = self.band.step_hz();
         let l = self.proc.oversample;
         let dt = 1.0 / (self.nfft as f64 * df);
         let half = ((l - 1) / 2) as i64;
-        (0..self.nbins)
-            .map(|b| {
-                let mut e = 0.0;
-                for j in -half..=half {
-                    let t = (b as i64 * l as i64 + j) as f64 * dt;
-                    let k: Complex64 = self
-                        .win
-                        .iter()
-                        .enumerate()
-                        .map(|(k, w)| {
-                            Complex64::from_polar(*w, 2.0 * PI * k as f64 * df * (t - tau_s))
-                        })
-                        .sum();
-                    e += (k / self.wsum).norm_sqr();
-                }
-                amp2 * e / l as f64
-            })
-            .collect()
+        let mut e = 0.0;
+        for j in -half..=half {
+            let t = (bin as i64 * l as i64 + j) as f64 * dt;
+            let k: Complex64 = self
+                .win
+                .iter()
+                .enumerate()
+                .map(|(k, w)| Complex64::from_polar(*w, 2.0 * PI * k as f64 * df * (t - tau_s)))
+                .sum();
+            e += (k / self.wsum).norm_sqr();
+        }
+        amp2 * e / l as f64
     }
 
     /// Energies of one position: `[direction][bin]` (nbins_full per direction), mean over
@@ -482,7 +485,11 @@ pub fn run(
     let nbf = proc.nbins_full();
     let tb = proc.bin_width_ns();
     let noise_from = (m.processing.noise_from_ns / tb).ceil() as usize;
-    if noise_from >= nbf {
+    // the last bins hold negative delays (circular IFFT): the coupling's kernel tail lives
+    // there, so the noise region stops `gate_ns + 2 ns` before the end of the span
+    let tail = ((m.processing.gate_ns + 2.0) / tb).ceil() as usize;
+    let noise_to = nbf.saturating_sub(tail);
+    if noise_from >= noise_to {
         return Err(Error::input(
             &campaign.path,
             format!(
@@ -502,8 +509,8 @@ pub fn run(
             for d in 0..nd {
                 let prof = &e[d * nbf..(d + 1) * nbf];
                 energies.extend_from_slice(&prof[..nb]);
-                noise_sum += prof[noise_from..].iter().sum::<f64>();
-                noise_n += nbf - noise_from;
+                noise_sum += prof[noise_from..noise_to].iter().sum::<f64>();
+                noise_n += noise_to - noise_from;
             }
             progress(sw.position + 1, np);
         }

@@ -10,6 +10,7 @@ pub mod energy;
 pub mod error;
 pub mod io;
 pub mod mapping;
+pub mod mpc;
 pub mod pipeline;
 pub mod report;
 pub mod table;

@@ -175,7 +175,7 @@ fn coupling_present_before_removal_and_gone_after() {
         let d = 0;
         let e = em.profile(0, d)[cb];
         let noise = em.meta.noise_mean();
-        let expect = 10f64.powf(-30.0 / 10.0);
+        let expect = 10f64.powf(-50.0 / 10.0);
         results.push((method, e, noise, expect));
         let _ = c;
     }

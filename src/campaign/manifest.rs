@@ -264,7 +264,7 @@ impl Default for Processing {
             window: WindowKind::Hann,
             oversample: 5,
             coupling: CouplingRemoval::Gate,
-            gate_ns: 1.5,
+            gate_ns: 3.0,
             max_delay_ns: 100.0,
             noise_from_ns: 80.0,
         }

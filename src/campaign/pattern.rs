@@ -165,7 +165,7 @@ impl ArrayPattern {
                         .sum();
                     af * scale * e
                 };
-                values[ki * n_ang + ai] = v;
+                values[ai * knots + ki] = v;
             }
         }
         PatternTable {
@@ -219,17 +219,31 @@ impl PatternTable {
         self.f0_hz + i as f64 * self.df_hz
     }
 
-    /// Field at knot `ki` towards `theta` (rad, array frame), linear in angle; 0 behind.
-    pub fn at_knot(&self, theta: f64, ki: usize) -> Complex64 {
+    /// Angle cell of `theta` (rad, array frame): (index, fraction), None behind the array.
+    pub fn angle_cell(&self, theta: f64) -> Option<(usize, f64)> {
         let deg = theta.to_degrees();
         if !(-90.0..=90.0).contains(&deg) {
-            return Complex64::new(0.0, 0.0);
+            return None;
         }
         let x = (deg + 90.0) / self.step_deg;
         let i = (x.floor() as usize).min(self.n_ang - 2);
-        let t = x - i as f64;
-        let row = &self.values[ki * self.n_ang..(ki + 1) * self.n_ang];
-        row[i] * (1.0 - t) + row[i + 1] * t
+        Some((i, x - i as f64))
+    }
+
+    /// The field of every knot at tabulated angle `i` (angle-major storage).
+    pub fn knots_at(&self, i: usize) -> &[Complex64] {
+        &self.values[i * self.knots..(i + 1) * self.knots]
+    }
+
+    /// Field at knot `ki` towards `theta` (rad, array frame), linear in angle; 0 behind.
+    pub fn at_knot(&self, theta: f64, ki: usize) -> Complex64 {
+        match self.angle_cell(theta) {
+            None => Complex64::new(0.0, 0.0),
+            Some((i, t)) => {
+                self.values[i * self.knots + ki] * (1.0 - t)
+                    + self.values[(i + 1) * self.knots + ki] * t
+            }
+        }
     }
 
     /// Field towards `theta` (rad, array frame) at `f_hz`, bilinear in angle and frequency.
