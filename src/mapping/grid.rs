@@ -182,7 +182,11 @@ impl GainModel {
                     }
                     let lo = (-90.0 + (s as f64 - 1.0) * STEP_DEG).to_radians();
                     let hi = (-90.0 + (i as f64 + 1.0) * STEP_DEG).to_radians();
-                    let (lo, hi) = if mechanical { (lo + ts, hi + ts) } else { (lo, hi) };
+                    let (lo, hi) = if mechanical {
+                        (lo + ts, hi + ts)
+                    } else {
+                        (lo, hi)
+                    };
                     // split at ±π
                     let (wl, wh) = (wrap_rad(lo), wrap_rad(hi));
                     if hi - lo >= 2.0 * PI {
@@ -334,6 +338,11 @@ impl ObservationModel {
     /// Number of directions.
     pub fn directions(&self) -> usize {
         self.gain.theta_s.len()
+    }
+
+    /// Boresight of direction `d` relative to the heading, rad.
+    pub fn direction_rad(&self, d: usize) -> f64 {
+        self.gain.theta_s[d]
     }
 
     /// Largest range covered by the bins, m.

@@ -32,7 +32,9 @@ use crate::energy::{wrap_deg, EnergyMatrix};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridParams, ObservationModel};
 use crate::mapping::metrics::{evaluate, MapMetrics};
-use crate::mapping::og::{detection_threshold, fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats};
+use crate::mapping::og::{
+    detection_threshold, fuse, og_map_stats, Detector, LogOddsMap, Method, OgParams, OgStats,
+};
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -50,7 +52,10 @@ impl MapRun {
     /// Parse `campaign.toml=energy.parquet`.
     pub fn parse(s: &str) -> Result<MapRun> {
         let (c, e) = s.split_once('=').ok_or_else(|| {
-            Error::param("--run", format!("`{s}`: expected campaign.toml=energy.parquet"))
+            Error::param(
+                "--run",
+                format!("`{s}`: expected campaign.toml=energy.parquet"),
+            )
         })?;
         if c.is_empty() || e.is_empty() {
             return Err(Error::param(
@@ -95,8 +100,8 @@ pub struct LoadedRun {
     pub energy_path: PathBuf,
     /// The observation model.
     pub model: ObservationModel,
-    /// Detector threshold (energy).
-    pub threshold: f64,
+    /// The run's detector.
+    pub detector: Detector,
 }
 
 /// Check that an energy table belongs to a campaign (file named in every error).
@@ -129,7 +134,7 @@ pub fn check_energy(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()> 
     }
     for (p, pose) in m.poses.iter().enumerate() {
         let diff = wrap_deg(em.headings_deg[p] - pose.heading_deg).abs();
-        if !(diff < 1e-6) {
+        if diff.is_nan() || diff >= 1e-6 {
             return Err(Error::input(
                 path,
                 format!(
@@ -142,7 +147,7 @@ pub fn check_energy(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()> 
         }
     }
     let tb = 1e9 / m.band.bandwidth_hz();
-    if !((em.meta.bin_width_ns - tb).abs() <= 1e-6 * tb) {
+    if (em.meta.bin_width_ns - tb).abs() > 1e-6 * tb || !em.meta.bin_width_ns.is_finite() {
         return Err(Error::input(
             path,
             format!(
@@ -182,6 +187,29 @@ pub fn min_bin(em: &EnergyMatrix) -> usize {
     (g + 2).max(2)
 }
 
+/// Bin-averaged window kernel of a point echo, K(m) for m = 0..=32 bins from its peak (the
+/// run's band and processing; any scale).
+pub fn window_kernel(c: &Campaign) -> Result<Vec<f64>> {
+    let m = &c.manifest;
+    let proc = crate::energy::EnergyProcessor::new(m.band, m.processing)
+        .map_err(|e| Error::input(&c.path, e.to_string()))?;
+    let tb = proc.bin_width_ns() * 1e-9;
+    let nb = proc.nbins();
+    let centre = (nb / 2).min(200);
+    let e = proc.point_echo_energy(1.0, centre as f64 * tb);
+    Ok((0..=32)
+        .map(|j| {
+            let a = e.get(centre + j).copied().unwrap_or(0.0);
+            let b = centre
+                .checked_sub(j)
+                .and_then(|i| e.get(i))
+                .copied()
+                .unwrap_or(a);
+            a.max(b)
+        })
+        .collect())
+}
+
 /// Load and check one run on the grid `spec` (None: the run's own reference grid).
 pub fn load_run(
     run: &MapRun,
@@ -198,6 +226,7 @@ pub fn load_run(
     let energy = EnergyMatrix::read(&run.energy)?;
     check_energy(&c, &energy, &run.energy)?;
     let threshold = detection_threshold(&energy.meta, og.pfa, &run.energy)?;
+    let detector = Detector::new(threshold, &window_kernel(&c)?, og.mask_db, min_bin(&energy));
     let own = GridSpec::covering(layout.bbox(), grid.cell_m, grid.margin_m);
     let spec = match spec {
         Some(s) => {
@@ -225,7 +254,7 @@ pub fn load_run(
         energy,
         energy_path: run.energy.clone(),
         model,
-        threshold,
+        detector,
     })
 }
 
@@ -359,7 +388,7 @@ pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> R
             &l.energy,
             &opts.og,
             opts.method,
-            l.threshold,
+            &l.detector,
             &|d, _| progress(base + d, total),
         )?;
         done += l.model.poses.len();
@@ -375,7 +404,7 @@ pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> R
         runs.push(RunSummary {
             campaign: l.campaign.path.display().to_string(),
             energy: l.energy_path.display().to_string(),
-            threshold: l.threshold,
+            threshold: l.detector.threshold,
             stats: *s,
             metrics: score(m, &reference, &region),
         });

@@ -90,8 +90,16 @@ pub fn manhattan_transform(src: &[bool], rows: usize, cols: usize) -> Vec<u32> {
 pub fn psi(a: &[bool], b: &[bool], region: &[bool], rows: usize, cols: usize) -> (f64, f64, f64) {
     let diameter = (rows + cols) as f64;
     let term = |class: bool| -> f64 {
-        let sa: Vec<bool> = a.iter().zip(region).map(|(&v, &r)| r && v == class).collect();
-        let sb: Vec<bool> = b.iter().zip(region).map(|(&v, &r)| r && v == class).collect();
+        let sa: Vec<bool> = a
+            .iter()
+            .zip(region)
+            .map(|(&v, &r)| r && v == class)
+            .collect();
+        let sb: Vec<bool> = b
+            .iter()
+            .zip(region)
+            .map(|(&v, &r)| r && v == class)
+            .collect();
         let (na, nb) = (
             sa.iter().filter(|&&v| v).count(),
             sb.iter().filter(|&&v| v).count(),
@@ -126,7 +134,12 @@ fn any_in_3x3(m: &[bool], rows: usize, cols: usize, i: usize) -> bool {
     for dr in -1..=1 {
         for dc in -1..=1 {
             let (rr, cc) = (r + dr, c + dc);
-            if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols && m[rr as usize * cols + cc as usize] {
+            if rr >= 0
+                && cc >= 0
+                && (rr as usize) < rows
+                && (cc as usize) < cols
+                && m[rr as usize * cols + cc as usize]
+            {
                 return true;
             }
         }

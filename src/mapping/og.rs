@@ -13,15 +13,23 @@
 //!   the noise-only bin energy, modelled as Gamma(shape TW·N_p, mean N0·TW) (mean N0·TW,
 //!   variance N0²·TW/N_p, the energy detector's statistics with the stored mean over N_p
 //!   pulses); bins before `min_bin` (coupling gate plus the window kernel's half-width) are
-//!   not used;
-//! * `og` (side-lobe aware): a detection in bin k credits every illuminated cell i of that
-//!   range ring (main and side lobes, [`crate::mapping::grid::Beam`]) with
-//!   Δl_i = l_occ·r_i, r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way pattern weight ×
-//!   the cell's share of the bin × current belief): one cause per detection, shared by
-//!   responsibility, not a blur by the pattern; the main-lobe cells (w ≥ −3 dB) of every bin
-//!   before the first detected bin get Δl_i = l_free·s_{k,i} (a cell wholly in front of the
-//!   first detection gets l_free once). Bins after the first detection without a detection
-//!   give no evidence (they may be shadowed);
+//!   not used; a detection must also be a local maximum of the profile not explained by the
+//!   window kernel's range side lobes of a stronger bin ([`Detector`]), so one echo gives
+//!   one detected bin;
+//! * `og` (side-lobe aware): a detection in bin k of direction d is first tested against the
+//!   other directions of the same scan: it is *explained by a side lobe* when
+//!   E_d(k) < β_s·w_d(θ_d')·max_{|k'−k|≤1} E_d'(k') for some direction d' outside the main
+//!   lobe of d (w_d(θ_d') the two-way weight of d towards the boresight of d', β_s =
+//!   `side_db`, 0 dB); the main-lobe cells (w ≥ −3 dB) of every bin before the first
+//!   detection *in the main lobe* (not so explained) get Δl_i = l_free·s_{k,i} (a cell wholly
+//!   in front of it gets l_free once); every detection credits the illuminated cells of its
+//!   range ring (main and side lobes down to −40 dB, [`crate::mapping::grid::Beam`]) with
+//!   Δl_i = l_occ·r_i, r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way weight × the
+//!   cell's share of the bin × current belief: one cause per detection shared by
+//!   responsibility, not a blur by the pattern); for a side-lobe detection before the first
+//!   main-lobe one the main-lobe cells are left out of the ring (they were just found free).
+//!   Bins after the first main-lobe detection without a detection give no evidence (they
+//!   may be shadowed);
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
 //!   boresight ray; a cell gets l_occ if any bin the ray spends in it is detected, l_free if
 //!   the ray leaves it before the first detected bin;
@@ -86,6 +94,14 @@ pub struct OgParams {
     pub p_free: f64,
     /// Log-odds clamp (±10).
     pub clamp: f64,
+    /// Range-side-lobe masking margin β of the detector, dB (10).
+    pub mask_db: f64,
+    /// Margin of the side-lobe explanation test, dB (0): a detection is explained by a side
+    /// lobe when E_d < 10^(side_db/10)·w_d(θ_d')·E_d'.
+    pub side_db: f64,
+    /// Passes of the side-lobe-aware model over the run (1; a pass > 1 restarts from the prior
+    /// and takes its responsibilities from the previous pass's final map).
+    pub passes: usize,
 }
 
 impl Default for OgParams {
@@ -96,6 +112,9 @@ impl Default for OgParams {
             p_occ: 0.9,
             p_free: 0.35,
             clamp: 10.0,
+            mask_db: 10.0,
+            passes: 1,
+            side_db: 0.0,
         }
     }
 }
@@ -128,6 +147,15 @@ impl OgParams {
         if !(self.clamp.is_finite() && self.clamp > 0.0) {
             return Err(Error::param("clamp", "must be > 0"));
         }
+        if !(self.mask_db.is_finite() && self.mask_db >= 0.0) {
+            return Err(Error::param("mask_db", "must be >= 0 dB"));
+        }
+        if !self.side_db.is_finite() {
+            return Err(Error::param("side_db", "must be finite"));
+        }
+        if self.passes == 0 || self.passes > 10 {
+            return Err(Error::param("passes", "must be in 1..=10"));
+        }
         if logit(self.prior).abs() >= self.clamp {
             return Err(Error::param("prior", "prior log-odds beyond the clamp"));
         }
@@ -151,10 +179,16 @@ impl OgParams {
 /// quantile of Gamma(shape TW·N_p, rate N_p/N0). `file` names the energy table in errors.
 pub fn detection_threshold(meta: &EnergyMeta, pfa: f64, file: &std::path::Path) -> Result<f64> {
     if !(meta.n0.is_finite() && meta.n0 > 0.0) {
-        return Err(Error::input(file, "metadata `n0` must be a positive number"));
+        return Err(Error::input(
+            file,
+            "metadata `n0` must be a positive number",
+        ));
     }
     if !(meta.tw.is_finite() && meta.tw > 0.0) || meta.pulses == 0 {
-        return Err(Error::input(file, "metadata `tw`/`pulses` must be positive"));
+        return Err(Error::input(
+            file,
+            "metadata `tw`/`pulses` must be positive",
+        ));
     }
     let shape = meta.tw * meta.pulses as f64;
     let rate = meta.pulses as f64 / meta.n0;
@@ -162,9 +196,84 @@ pub fn detection_threshold(meta: &EnergyMeta, pfa: f64, file: &std::path::Path) 
         .map_err(|e| Error::input(file, format!("noise statistics: {e}")))?;
     let t = g.inverse_cdf(1.0 - pfa);
     if !t.is_finite() || t <= 0.0 {
-        return Err(Error::input(file, "could not compute the detection threshold"));
+        return Err(Error::input(
+            file,
+            "could not compute the detection threshold",
+        ));
     }
     Ok(t)
+}
+
+/// The per-bin energy detector shared by both inverse sensor models.
+///
+/// Bin k is a detection when (1) E_k > η_E (noise threshold at the false-alarm rate),
+/// (2) E_k is a local maximum of the profile (E_k ≥ E_{k−1}, E_k > E_{k+1}, k − 1 usable):
+/// one detection
+/// per echo, at its peak, instead of the window kernel's 4-5 bins, and (3) E_k is not
+/// explained by the window kernel's range side lobes of a stronger bin j:
+/// E_k ≥ β·E_j·K(|k − j|) for every j within ±M bins, K the bin-averaged kernel of a point
+/// echo normalised to its peak (from the run's band and processing), β = `mask_db` (10 dB:
+/// the kernel seen through frequency-dependent patterns is wider than the ideal one).
+#[derive(Debug, Clone)]
+pub struct Detector {
+    /// Noise threshold η_E.
+    pub threshold: f64,
+    /// Kernel K(m), m = 0..=M (K(0) = 1).
+    pub kernel: Vec<f64>,
+    /// Margin β (linear).
+    pub margin: f64,
+    /// First usable bin.
+    pub min_bin: usize,
+}
+
+impl Detector {
+    /// Detector from the threshold, the window kernel (`kernel[m]` = energy at m bins from the
+    /// peak, any scale) and the masking margin in dB. Kernel values below −80 dB of the peak
+    /// are dropped.
+    pub fn new(threshold: f64, kernel: &[f64], mask_db: f64, min_bin: usize) -> Detector {
+        let k0 = kernel
+            .first()
+            .copied()
+            .unwrap_or(1.0)
+            .max(f64::MIN_POSITIVE);
+        let mut k: Vec<f64> = kernel.iter().map(|v| v / k0).collect();
+        while k.len() > 1 && k[k.len() - 1] < 1e-8 {
+            k.pop();
+        }
+        k.truncate(32);
+        Detector {
+            threshold,
+            kernel: k,
+            margin: 10f64.powf(mask_db / 10.0),
+            min_bin,
+        }
+    }
+
+    /// Detections of one profile (true = detected), bins before `min_bin` never.
+    pub fn detect(&self, prof: &[f64], out: &mut Vec<bool>) {
+        let n = prof.len();
+        out.clear();
+        out.resize(n, false);
+        let m = self.kernel.len();
+        // k − 1 must be usable too: a profile still falling at the first usable bin is the
+        // tail of a gated echo, not a new one
+        for k in self.min_bin + 1..n {
+            let e = prof[k];
+            if e <= self.threshold || prof[k - 1] > e {
+                continue;
+            }
+            if k + 1 < n && prof[k + 1] >= e {
+                continue;
+            }
+            let lo = k.saturating_sub(m - 1);
+            let hi = (k + m).min(n);
+            let masked = (lo..hi)
+                .any(|j| prof[j] > e && e < self.margin * prof[j] * self.kernel[j.abs_diff(k)]);
+            if !masked {
+                out[k] = true;
+            }
+        }
+    }
 }
 
 /// A log-odds occupancy map.
@@ -217,10 +326,11 @@ pub struct OgStats {
 }
 
 /// Side-lobe-aware increments of one scan (beam + profile) into `out`.
+#[allow(clippy::too_many_arguments)]
 fn scan_og(
     beam: &Beam,
-    prof: &[f64],
-    thr: f64,
+    det: &[bool],
+    side: &[bool],
     min_bin: usize,
     belief: &[f32],
     l_occ: f64,
@@ -228,8 +338,11 @@ fn scan_og(
     main_w: f32,
     out: &mut Vec<(u32, f32)>,
 ) -> u64 {
-    let bins = prof.len().min(beam.ptr.len() - 1);
-    let first = (min_bin..bins).find(|&k| prof[k] > thr).unwrap_or(bins);
+    let bins = det.len().min(beam.ptr.len() - 1);
+    // first detection in the main lobe (not explained by a side lobe)
+    let first = (min_bin..bins)
+        .find(|&k| det[k] && !side[k])
+        .unwrap_or(bins);
     let lf = l_free as f32;
     for k in min_bin..first {
         let rg = beam.bin_range(k);
@@ -240,14 +353,23 @@ fn scan_og(
         }
     }
     let mut dets = 0;
-    for k in first..bins {
-        if prof[k] <= thr {
-            continue;
-        }
+    for (k, _) in det
+        .iter()
+        .enumerate()
+        .take(bins)
+        .skip(min_bin)
+        .filter(|x| *x.1)
+    {
         dets += 1;
+        // a side-lobe detection before the first main-lobe one: its main-lobe cells were
+        // just found free, so only the side-lobe cells share it
+        let side_only = k < first;
         let rg = beam.bin_range(k);
         let mut denom = 0.0f32;
         for j in rg.clone() {
+            if side_only && beam.weight[j] >= main_w {
+                continue;
+            }
             denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
         }
         if denom <= 0.0 {
@@ -255,6 +377,9 @@ fn scan_og(
         }
         let scale = l_occ as f32 / denom;
         for j in rg {
+            if side_only && beam.weight[j] >= main_w {
+                continue;
+            }
             let c = beam.cell[j];
             out.push((
                 c,
@@ -265,41 +390,78 @@ fn scan_og(
     dets
 }
 
+/// Per bin of direction `d` at pose `p`: true when the detection is explained by a side
+/// lobe of `d` towards another direction d' of the same scan: E_d(k) < β·w_d(θ_d')·E_d'(k'),
+/// k' within ±1 bin, for a d' outside the main lobe of d (w_d(θ_d') < main-lobe weight).
+fn side_lobe_flags(
+    em: &EnergyMatrix,
+    p: usize,
+    d: usize,
+    det: &[bool],
+    cross: &[Vec<f64>],
+    margin: f64,
+    main_w: f64,
+) -> Vec<bool> {
+    let prof = em.profile(p, d);
+    let n = prof.len();
+    let mut side = vec![false; n];
+    for k in 0..n {
+        if !det[k] {
+            continue;
+        }
+        let e = prof[k];
+        side[k] = (0..cross.len()).any(|d2| {
+            if d2 == d {
+                return false;
+            }
+            let w = cross[d][d2];
+            if w <= 0.0 || w >= main_w {
+                return false;
+            }
+            let o = em.profile(p, d2);
+            let lo = k.saturating_sub(1);
+            let hi = (k + 2).min(n);
+            let m = o[lo..hi].iter().cloned().fold(0.0, f64::max);
+            e < margin * w * m
+        });
+    }
+    side
+}
+
 /// Boresight-only increments of one scan into `out`.
 fn scan_boresight(
     ray: &[crate::mapping::grid::RayCell],
-    prof: &[f64],
-    thr: f64,
+    det: &[bool],
     min_bin: usize,
     l_occ: f64,
     l_free: f64,
     out: &mut Vec<(u32, f32)>,
 ) -> u64 {
-    let bins = prof.len();
-    let first = (min_bin..bins).find(|&k| prof[k] > thr).unwrap_or(bins);
-    let dets = (first..bins).filter(|&k| prof[k] > thr).count() as u64;
+    let bins = det.len();
+    let first = (min_bin..bins).find(|&k| det[k]).unwrap_or(bins);
+    let dets = (first..bins).filter(|&k| det[k]).count() as u64;
     for rc in ray {
         let (lo, hi) = (rc.bin_lo as usize, (rc.bin_hi as usize).min(bins - 1));
         if (hi as isize) < first as isize {
             out.push((rc.cell, l_free as f32));
-        } else if lo <= hi && (lo..=hi).any(|k| k >= first && prof[k] > thr) {
+        } else if lo <= hi && (lo..=hi).any(|k| det[k]) {
             out.push((rc.cell, l_occ as f32));
         }
     }
     dets
 }
 
-/// Map one run. `threshold` is the detector's energy threshold ([`detection_threshold`]);
-/// `progress(done, total)` is called after each pose.
+/// Map one run with the run's [`Detector`]; `progress(done, total)` is called after each
+/// pose.
 pub fn og_map(
     model: &ObservationModel,
     em: &EnergyMatrix,
     params: &OgParams,
     method: Method,
-    threshold: f64,
+    detector: &Detector,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<LogOddsMap> {
-    og_map_stats(model, em, params, method, threshold, progress).map(|r| r.0)
+    og_map_stats(model, em, params, method, detector, progress).map(|r| r.0)
 }
 
 /// [`og_map`] with the work statistics.
@@ -308,7 +470,7 @@ pub fn og_map_stats(
     em: &EnergyMatrix,
     params: &OgParams,
     method: Method,
-    threshold: f64,
+    detector: &Detector,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(LogOddsMap, OgStats)> {
     params.check()?;
@@ -326,69 +488,107 @@ pub fn og_map_stats(
     }
     let t0 = Instant::now();
     let spec = model.spec;
-    let mut map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
     let (l_occ, l_free, clamp) = (params.l_occ(), params.l_free(), params.clamp);
     let main_w = model.params.main_weight() as f32;
-    let min_bin = model.min_bin;
+    let min_bin = model.min_bin.max(detector.min_bin);
     let mut stats = OgStats::default();
-    let mut belief: Vec<f32> = Vec::new();
-    // pose geometries are independent of the map: build them a batch at a time in parallel
-    let batch = (2 * rayon::current_num_threads()).max(2);
-    let mut p0 = 0;
-    while p0 < np {
-        let p1 = (p0 + batch).min(np);
-        let geoms: Vec<_> = if method == Method::Og {
-            (p0..p1)
-                .into_par_iter()
-                .map(|p| Some(model.pose_geometry(p)))
+    let passes = if method == Method::Og {
+        params.passes
+    } else {
+        1
+    };
+    let side_margin = 10f64.powf(params.side_db / 10.0);
+    // cross[d][d'] = two-way weight of direction d towards the boresight of direction d'
+    let cross: Vec<Vec<f64>> = (0..nd)
+        .map(|d| {
+            (0..nd)
+                .map(|d2| model.weight(d, model.direction_rad(d2)))
                 .collect()
-        } else {
-            (p0..p1).map(|_| None).collect()
-        };
-        for (p, geom) in (p0..p1).zip(geoms) {
-            if method == Method::Og {
-                map.logodds
-                    .par_iter()
-                    .map(|&l| sigmoid(l) as f32)
-                    .collect_into_vec(&mut belief);
-            }
-            let scans: Vec<(Vec<(u32, f32)>, u64)> = (0..nd)
-                .into_par_iter()
-                .map(|d| {
-                    let prof = em.profile(p, d);
-                    let mut out = Vec::new();
-                    let dets = match (&geom, method) {
-                        (Some(g), Method::Og) => {
-                            let beam = model.beam(g, d);
-                            out.reserve(beam.len() / 2);
-                            scan_og(
-                                &beam, prof, threshold, min_bin, &belief, l_occ, l_free, main_w,
-                                &mut out,
-                            )
-                        }
-                        _ => {
-                            let ray = model.boresight_ray(p, d);
-                            scan_boresight(
-                                &ray, prof, threshold, min_bin, l_occ, l_free, &mut out,
-                            )
-                        }
-                    };
-                    (out, dets)
-                })
-                .collect();
-            for (inc, dets) in scans {
-                stats.scans += 1;
-                stats.detections += dets;
-                stats.cell_updates += inc.len() as u64;
-                for (c, dl) in inc {
-                    let c = c as usize;
-                    map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
-                    map.observed[c] = true;
-                }
-            }
-            progress(p + 1, np);
+        })
+        .collect();
+    let mut map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
+    // belief of the previous pass (pass ≥ 2 uses it, fixed, for the responsibilities)
+    let mut fixed_belief: Option<Vec<f32>> = None;
+    for pass in 0..passes {
+        if pass > 0 {
+            fixed_belief = Some(map.logodds.par_iter().map(|&l| sigmoid(l) as f32).collect());
+            map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
         }
-        p0 = p1;
+        let mut belief: Vec<f32> = Vec::new();
+        // pose geometries are independent of the map: build them a batch at a time in parallel
+        let batch = (2 * rayon::current_num_threads()).max(2);
+        let mut p0 = 0;
+        while p0 < np {
+            let p1 = (p0 + batch).min(np);
+            let geoms: Vec<_> = if method == Method::Og {
+                (p0..p1)
+                    .into_par_iter()
+                    .map(|p| Some(model.pose_geometry(p)))
+                    .collect()
+            } else {
+                (p0..p1).map(|_| None).collect()
+            };
+            for (p, geom) in (p0..p1).zip(geoms) {
+                if method == Method::Og && fixed_belief.is_none() {
+                    map.logodds
+                        .par_iter()
+                        .map(|&l| sigmoid(l) as f32)
+                        .collect_into_vec(&mut belief);
+                }
+                let bel: &[f32] = fixed_belief.as_deref().unwrap_or(&belief);
+                let dets: Vec<Vec<bool>> = (0..nd)
+                    .into_par_iter()
+                    .map(|d| {
+                        let mut det = Vec::new();
+                        detector.detect(em.profile(p, d), &mut det);
+                        det
+                    })
+                    .collect();
+                let scans: Vec<(Vec<(u32, f32)>, u64)> = (0..nd)
+                    .into_par_iter()
+                    .map(|d| {
+                        let det = &dets[d];
+                        let mut out = Vec::new();
+                        let dets = match (&geom, method) {
+                            (Some(g), Method::Og) => {
+                                let beam = model.beam(g, d);
+                                let side = side_lobe_flags(
+                                    em,
+                                    p,
+                                    d,
+                                    det,
+                                    &cross,
+                                    side_margin,
+                                    main_w as f64,
+                                );
+                                out.reserve(beam.len() / 2);
+                                scan_og(
+                                    &beam, det, &side, min_bin, bel, l_occ, l_free, main_w,
+                                    &mut out,
+                                )
+                            }
+                            _ => {
+                                let ray = model.boresight_ray(p, d);
+                                scan_boresight(&ray, det, min_bin, l_occ, l_free, &mut out)
+                            }
+                        };
+                        (out, dets)
+                    })
+                    .collect();
+                for (inc, dets) in scans {
+                    stats.scans += 1;
+                    stats.detections += dets;
+                    stats.cell_updates += inc.len() as u64;
+                    for (c, dl) in inc {
+                        let c = c as usize;
+                        map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
+                        map.observed[c] = true;
+                    }
+                }
+                progress(pass * np + p + 1, passes * np);
+            }
+            p0 = p1;
+        }
     }
     stats.seconds = t0.elapsed().as_secs_f64();
     Ok((map, stats))
