@@ -22,9 +22,10 @@
 //! * radar-equation coefficient c_{k,i} = G(θ_i)²·λ_c²/((4π)³·d_i⁴)·s_{k,i} (d_i the range of
 //!   the cell centre), so a cell of RRCS x_i adds c_{k,i}·x_i² to the energy of bin k
 //!   (before the window kernel, which the EKF may fold in);
-//! * cells are found per pose once (range, bearing, bin shares: [`PoseGeometry`]) sorted by
-//!   bearing; a direction's beam then visits only the bearings inside its lobes above the
-//!   floor (binary search), so the cost is proportional to the illuminated cells.
+//! * cells are found per pose once (range, bearing, bin shares: [`PoseGeometry`]) and
+//!   bucketed by bearing (0.05° buckets, counting sort); a direction's beam then visits only
+//!   the buckets inside its lobes above the floor, so the cost is proportional to the
+//!   illuminated cells.
 //!
 //! Occlusion is not modelled (the inverse sensor models handle it through "free before the
 //! first detection"). Beams are built on demand per pose and reused for every bin and every
@@ -225,12 +226,23 @@ impl GainModel {
     }
 }
 
-/// Cells within range of one pose, sorted by bearing, with their bin shares.
+/// Bearing buckets of [`PoseGeometry`] (0.05° each).
+const BUCKETS: usize = 7200;
+
+#[inline]
+fn bucket_of(theta: f64) -> usize {
+    (((theta + PI) / (2.0 * PI) * BUCKETS as f64) as usize).min(BUCKETS - 1)
+}
+
+/// Cells within range of one pose, bucketed by bearing (0.05° buckets, ascending; cells in
+/// row-major order within a bucket), with their bin shares.
 #[derive(Debug, Clone, Default)]
 pub struct PoseGeometry {
     /// Cell indices (row-major).
     pub cell: Vec<u32>,
-    /// Bearing relative to the pose heading, rad in (−π, π], ascending.
+    /// `bucket[b]..bucket[b+1]` are the cells whose bearing falls in bucket b (len 7201).
+    pub bucket: Vec<u32>,
+    /// Bearing relative to the pose heading, rad in (−π, π].
     pub theta: Vec<f64>,
     /// Range of the cell centre, m.
     pub range: Vec<f64>,
@@ -391,7 +403,7 @@ impl ObservationModel {
                     let x = spec.x0_m + (col as f64 + fa) * spec.cell_m - pose.x_m;
                     for &fb in &sub {
                         let y = spec.y0_m + (row as f64 + fb) * spec.cell_m - pose.y_m;
-                        let k = self.bin_of_range(x.hypot(y));
+                        let k = self.bin_of_range((x * x + y * y).sqrt());
                         if k < self.min_bin as f64 || k >= self.bins as f64 {
                             continue;
                         }
@@ -417,17 +429,33 @@ impl ObservationModel {
                 flat.extend_from_slice(&hist);
             }
         }
-        items.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        // counting sort by bearing bucket (stable: row-major within a bucket)
+        let mut bucket = vec![0u32; BUCKETS + 1];
+        for it in &items {
+            bucket[bucket_of(it.0) + 1] += 1;
+        }
+        for b in 0..BUCKETS {
+            bucket[b + 1] += bucket[b];
+        }
+        let mut order = vec![0u32; items.len()];
+        let mut next = bucket.clone();
+        for (i, it) in items.iter().enumerate() {
+            let b = bucket_of(it.0);
+            order[next[b] as usize] = i as u32;
+            next[b] += 1;
+        }
         let mut g = PoseGeometry {
             ptr: Vec::with_capacity(items.len() + 1),
             cell: Vec::with_capacity(items.len()),
+            bucket,
             theta: Vec::with_capacity(items.len()),
             range: Vec::with_capacity(items.len()),
             bin: Vec::with_capacity(flat.len()),
             share: Vec::with_capacity(flat.len()),
         };
         g.ptr.push(0);
-        for (th, cell, r, start, n) in items {
+        for &o in &order {
+            let (th, cell, r, start, n) = items[o as usize];
             g.cell.push(cell);
             g.theta.push(th);
             g.range.push(r);
@@ -449,8 +477,8 @@ impl ObservationModel {
         let mut counts = vec![0u32; self.bins + 1];
         let mut tmp: Vec<(u32, u32, f32, f32, f32)> = Vec::new();
         for &(lo, hi) in &self.gain.intervals[d] {
-            let a = geom.theta.partition_point(|&t| t < lo);
-            let b = geom.theta.partition_point(|&t| t <= hi);
+            let a = geom.bucket[bucket_of(lo)] as usize;
+            let b = geom.bucket[bucket_of(hi) + 1] as usize;
             for i in a..b {
                 let g = self.gain.gain(d, geom.theta[i]);
                 let w = (g / gmax) * (g / gmax);

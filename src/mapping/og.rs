@@ -321,6 +321,9 @@ pub struct OgStats {
     pub detections: u64,
     /// Cell updates (log-odds increments applied).
     pub cell_updates: u64,
+    /// (cell, bin) entries evaluated by the inverse sensor model (beam entries for `og`,
+    /// ray cells for `og-boresight`).
+    pub entries: u64,
     /// Wall time, s.
     pub seconds: f64,
 }
@@ -544,14 +547,16 @@ pub fn og_map_stats(
                         det
                     })
                     .collect();
-                let scans: Vec<(Vec<(u32, f32)>, u64)> = (0..nd)
+                let scans: Vec<(Vec<(u32, f32)>, u64, u64)> = (0..nd)
                     .into_par_iter()
                     .map(|d| {
                         let det = &dets[d];
                         let mut out = Vec::new();
+                        let mut entries = 0u64;
                         let dets = match (&geom, method) {
                             (Some(g), Method::Og) => {
                                 let beam = model.beam(g, d);
+                                entries = beam.len() as u64;
                                 let side = side_lobe_flags(
                                     em,
                                     p,
@@ -569,14 +574,16 @@ pub fn og_map_stats(
                             }
                             _ => {
                                 let ray = model.boresight_ray(p, d);
+                                entries = ray.len() as u64;
                                 scan_boresight(&ray, det, min_bin, l_occ, l_free, &mut out)
                             }
                         };
-                        (out, dets)
+                        (out, dets, entries)
                     })
                     .collect();
-                for (inc, dets) in scans {
+                for (inc, dets, entries) in scans {
                     stats.scans += 1;
+                    stats.entries += entries;
                     stats.detections += dets;
                     stats.cell_updates += inc.len() as u64;
                     for (c, dl) in inc {
