@@ -472,3 +472,87 @@ pub fn write_reference(out: &Path, reference: &ReferenceMap) -> Result<()> {
         0.196,
     )
 }
+
+/// The `reproduce` report section: both occupancy maps (`og`, `og-boresight`) of one run,
+/// written under `report_dir/<sub>/<method>/`, shown beside the reference map with their
+/// figures and the all-free map's.
+pub fn report_section(
+    campaign: &Path,
+    energy: &Path,
+    report_dir: &Path,
+    sub: &str,
+) -> Result<crate::report::Section> {
+    use crate::report::html_escape;
+    let mut rows = String::new();
+    let mut imgs = String::new();
+    let mut all_free: Option<MetricsPair> = None;
+    for (i, method) in [Method::Og, Method::OgBoresight].into_iter().enumerate() {
+        let name = method.name();
+        let opts = MapOptions {
+            method,
+            runs: vec![MapRun {
+                campaign: campaign.to_path_buf(),
+                energy: energy.to_path_buf(),
+            }],
+            out: report_dir.join(sub).join(name),
+            elements: None,
+            grid: GridParams::default(),
+            og: OgParams::default(),
+        };
+        let r = run_map(&opts, &|_, _| {})?;
+        if i == 0 {
+            imgs.push_str(&format!(
+                "<figure><img src=\"{sub}/{name}/reference.png\" alt=\"reference\"><figcaption>reference</figcaption></figure>\n"
+            ));
+        }
+        for stem in [name.to_string(), format!("{name}_binary")] {
+            imgs.push_str(&format!(
+                "<figure><img src=\"{sub}/{name}/{stem}.png\" alt=\"{stem}\"><figcaption>{}</figcaption></figure>\n",
+                html_escape(&stem)
+            ));
+        }
+        rows.push_str(&metric_row(
+            name,
+            &r.metrics,
+            &format!("{sub}/{name}/metrics.json"),
+        ));
+        all_free = Some(r.metrics);
+    }
+    if let Some(m) = all_free {
+        let free = MetricsPair {
+            observable: m.observable_all_free,
+            observable_all_free: m.observable_all_free,
+            whole: m.whole_all_free,
+            whole_all_free: m.whole_all_free,
+        };
+        rows.push_str(&metric_row("all-free map", &free, ""));
+    }
+    let html = format!(
+        "<p>Occupancy grids (0.1 m cells; binary map: p &gt; 0.5). Observable region: cells inside the −3 dB main lobe of some (pose, direction) within the usable bins, not outside the perimeter; whole map: every cell, outside cells counted as free. ψ in cells (lower is better).</p>\n<div>{imgs}</div>\n<table>\n<tr><th>map</th><th>ψ obs.</th><th>F1 obs.</th><th>F1 (1 cell) obs.</th><th>wrong cells obs.</th><th>ψ whole</th><th>F1 whole</th><th>F1 (1 cell) whole</th><th>wrong cells whole</th><th>metrics</th></tr>\n{rows}</table>\n"
+    );
+    Ok(crate::report::Section {
+        title: "Occupancy-grid maps (side-lobe aware vs boresight)".into(),
+        html,
+    })
+}
+
+fn metric_row(name: &str, m: &MetricsPair, link: &str) -> String {
+    let (o, w) = (&m.observable, &m.whole);
+    let link = if link.is_empty() {
+        String::new()
+    } else {
+        format!("<a href=\"{link}\">metrics.json</a>")
+    };
+    format!(
+        "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{link}</td></tr>\n",
+        crate::report::html_escape(name),
+        o.psi,
+        o.f1,
+        o.f1_1,
+        o.wrong_cell_rate,
+        w.psi,
+        w.f1,
+        w.f1_1,
+        w.wrong_cell_rate
+    )
+}

@@ -552,7 +552,7 @@ pub fn og_map_stats(
                     .map(|d| {
                         let det = &dets[d];
                         let mut out = Vec::new();
-                        let mut entries = 0u64;
+                        let entries;
                         let dets = match (&geom, method) {
                             (Some(g), Method::Og) => {
                                 let beam = model.beam(g, d);
