@@ -129,13 +129,16 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     for p in 0..em.positions {
         heat.push_str(&format!("<a href=\"energy_p{p:02}.png\"><img src=\"energy_p{p:02}.png\" alt=\"position {p}\"></a>\n"));
     }
+    let t = Instant::now();
+    let maps = crate::mapping::job::report_section(&sim.manifest, &energy_path, out, "maps")?;
+    timings.push(("OG maps".into(), t.elapsed().as_secs_f64()));
     let total: f64 = timings.iter().map(|t| t.1).sum();
     let mut trows: Vec<(String, String)> = timings
         .iter()
         .map(|(k, v)| (k.clone(), format!("{v:.2} s")))
         .collect();
     trows.push(("total".into(), format!("{total:.2} s")));
-    let sections = vec![
+    let mut sections = vec![
         Section {
             title: "Campaign".into(),
             html: kv_table(&summary),
@@ -149,6 +152,7 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
             html: kv_table(&trows),
         },
     ];
+    sections.insert(sections.len() - 1, maps);
     let index = out.join("index.html");
     report::write_index(&index, &format!("pradar report: {}", m.name), &sections)?;
     Ok(index)
