@@ -20,14 +20,16 @@
 //!   other directions of the same scan: it is *explained by a side lobe* when
 //!   E_d(k) < β_s·w_d(θ_d')·max_{|k'−k|≤1} E_d'(k') for some direction d' outside the main
 //!   lobe of d (w_d(θ_d') the two-way weight of d towards the boresight of d', β_s =
-//!   `side_db`, 0 dB); the main-lobe cells (w ≥ −3 dB) of every bin before the first
-//!   detection *in the main lobe* (not so explained) get Δl_i = l_free·s_{k,i} (a cell wholly
-//!   in front of it gets l_free once); every detection credits the illuminated cells of its
+//!   `side_db`, 0 dB); the cells with w ≥ `free_db` (−10 dB) of every bin before the first
+//!   detection *in the main lobe* (not so explained) get Δl_i = l_free·s_{k,i}·w_i (a cell
+//!   wholly in front of it on boresight gets l_free once; weaker illumination, weaker free
+//!   evidence); every detection credits the illuminated cells of its
 //!   range ring (main and side lobes down to −40 dB, [`crate::mapping::grid::Beam`]) with
 //!   Δl_i = l_occ·r_i, r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way weight × the
 //!   cell's share of the bin × current belief: one cause per detection shared by
 //!   responsibility, not a blur by the pattern); for a side-lobe detection before the first
-//!   main-lobe one the main-lobe cells are left out of the ring (they were just found free).
+//!   main-lobe one the main-lobe cells (w ≥ −3 dB) are left out of the ring (they were just
+//!   found free).
 //!   Bins after the first main-lobe detection without a detection give no evidence (they
 //!   may be shadowed);
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
@@ -99,6 +101,9 @@ pub struct OgParams {
     /// Margin of the side-lobe explanation test, dB (0): a detection is explained by a side
     /// lobe when E_d < 10^(side_db/10)·w_d(θ_d')·E_d'.
     pub side_db: f64,
+    /// Lowest two-way weight of a cell that gets free evidence, dB (−10); the evidence is
+    /// l_free·s·w (weighted by the two-way pattern).
+    pub free_db: f64,
     /// Passes of the side-lobe-aware model over the run (1; a pass > 1 restarts from the prior
     /// and takes its responsibilities from the previous pass's final map).
     pub passes: usize,
@@ -115,6 +120,7 @@ impl Default for OgParams {
             mask_db: 10.0,
             passes: 1,
             side_db: 0.0,
+            free_db: -10.0,
         }
     }
 }
@@ -149,6 +155,9 @@ impl OgParams {
         }
         if !(self.mask_db.is_finite() && self.mask_db >= 0.0) {
             return Err(Error::param("mask_db", "must be >= 0 dB"));
+        }
+        if !(self.free_db.is_finite() && self.free_db <= 0.0) {
+            return Err(Error::param("free_db", "must be <= 0 dB"));
         }
         if !self.side_db.is_finite() {
             return Err(Error::param("side_db", "must be finite"));
@@ -328,6 +337,9 @@ pub struct OgStats {
     pub seconds: f64,
 }
 
+/// One scan's increments (cell, Δl), detections and evaluated entries.
+type ScanResult = (Vec<(u32, f32)>, u64, u64);
+
 /// Side-lobe-aware increments of one scan (beam + profile) into `out`.
 #[allow(clippy::too_many_arguments)]
 fn scan_og(
@@ -339,6 +351,7 @@ fn scan_og(
     l_occ: f64,
     l_free: f64,
     main_w: f32,
+    free_w: f32,
     out: &mut Vec<(u32, f32)>,
 ) -> u64 {
     let bins = det.len().min(beam.ptr.len() - 1);
@@ -350,8 +363,9 @@ fn scan_og(
     for k in min_bin..first {
         let rg = beam.bin_range(k);
         for j in rg {
-            if beam.weight[j] >= main_w {
-                out.push((beam.cell[j], lf * beam.share[j]));
+            let w = beam.weight[j];
+            if w >= free_w {
+                out.push((beam.cell[j], lf * beam.share[j] * w.min(1.0)));
             }
         }
     }
@@ -493,6 +507,7 @@ pub fn og_map_stats(
     let spec = model.spec;
     let (l_occ, l_free, clamp) = (params.l_occ(), params.l_free(), params.clamp);
     let main_w = model.params.main_weight() as f32;
+    let free_w = 10f64.powf(params.free_db / 10.0) as f32;
     let min_bin = model.min_bin.max(detector.min_bin);
     let mut stats = OgStats::default();
     let passes = if method == Method::Og {
@@ -547,7 +562,7 @@ pub fn og_map_stats(
                         det
                     })
                     .collect();
-                let scans: Vec<(Vec<(u32, f32)>, u64, u64)> = (0..nd)
+                let scans: Vec<ScanResult> = (0..nd)
                     .into_par_iter()
                     .map(|d| {
                         let det = &dets[d];
@@ -568,7 +583,7 @@ pub fn og_map_stats(
                                 );
                                 out.reserve(beam.len() / 2);
                                 scan_og(
-                                    &beam, det, &side, min_bin, bel, l_occ, l_free, main_w,
+                                    &beam, det, &side, min_bin, bel, l_occ, l_free, main_w, free_w,
                                     &mut out,
                                 )
                             }
