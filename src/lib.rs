@@ -6,6 +6,7 @@
 #![deny(missing_docs)]
 
 pub mod campaign;
+pub mod cluster;
 pub mod energy;
 pub mod error;
 pub mod io;

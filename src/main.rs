@@ -34,6 +34,19 @@ enum MapMethod {
     OgBoresight,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum ExtractMethod {
+    Clean,
+    Peaks,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum KCriterion {
+    Silhouette,
+    Ch,
+    Gap,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Simulate a campaign: sweeps (Touchstone or Parquet), manifest with [sweeps], truth/.
@@ -89,6 +102,42 @@ enum Cmd {
         /// Prior occupancy probability.
         #[arg(long, default_value_t = 0.5)]
         prior: f64,
+    },
+    /// Extract MPCs (2-D CLEAN, or the local-maximum baseline) from an energy table.
+    Extract {
+        /// Energy Parquet.
+        #[arg(long)]
+        energy: PathBuf,
+        /// The campaign the energy came from.
+        #[arg(long)]
+        campaign: PathBuf,
+        /// Output MPC Parquet.
+        #[arg(long)]
+        out: PathBuf,
+        /// Method.
+        #[arg(long, value_enum, default_value = "clean")]
+        method: ExtractMethod,
+        /// Keep components above the floor plus this margin, dB.
+        #[arg(long, default_value_t = 13.0)]
+        margin_db: f64,
+    },
+    /// Cluster MPCs per position with K-means (writes <out> and <stem>_summary.parquet).
+    Cluster {
+        /// MPC Parquet from `extract`.
+        #[arg(long)]
+        mpcs: PathBuf,
+        /// Output clustered MPC Parquet.
+        #[arg(long)]
+        out: PathBuf,
+        /// Largest K tried per position.
+        #[arg(long, default_value_t = 8)]
+        k_max: usize,
+        /// Seed of the k-means++ draws.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Criterion choosing K.
+        #[arg(long, value_enum, default_value = "silhouette")]
+        criterion: KCriterion,
     },
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce {
@@ -223,6 +272,81 @@ fn run(cli: Cli) -> Result<()> {
                     m.psi,
                     m.f1,
                     r.metrics.observable_all_free.psi
+                );
+            }
+        }
+        Cmd::Extract {
+            energy,
+            campaign,
+            out,
+            method,
+            margin_db,
+        } => {
+            let c = Campaign::load(&campaign)?;
+            let em = pradar::energy::EnergyMatrix::read(&energy)?;
+            let params = pradar::mpc::ExtractParams::default()
+                .method(match method {
+                    ExtractMethod::Clean => pradar::mpc::Method::Clean,
+                    ExtractMethod::Peaks => pradar::mpc::Method::Peaks,
+                })
+                .margin_db(margin_db);
+            let mpcs = pradar::mpc::extract(&em, &c, &params)?;
+            let meta = vec![
+                ("schema_version".to_string(), "1".to_string()),
+                (
+                    "method".into(),
+                    format!("{:?}", params.method).to_lowercase(),
+                ),
+                ("floor".into(), format!("{:.17e}", em.meta.noise_mean())),
+                ("margin_db".into(), margin_db.to_string()),
+                ("positions".into(), em.positions.to_string()),
+            ];
+            pradar::mpc::write_mpcs(&out, &mpcs, meta)?;
+            if !quiet {
+                println!(
+                    "{} MPCs from {} positions -> {}",
+                    mpcs.len(),
+                    em.positions,
+                    out.display()
+                );
+            }
+        }
+        Cmd::Cluster {
+            mpcs,
+            out,
+            k_max,
+            seed,
+            criterion,
+        } => {
+            let m = pradar::mpc::read_mpcs(&mpcs)?;
+            let params = pradar::cluster::ClusterParams::default()
+                .k_max(k_max)
+                .seed(seed)
+                .criterion(match criterion {
+                    KCriterion::Silhouette => pradar::cluster::Criterion::Silhouette,
+                    KCriterion::Ch => pradar::cluster::Criterion::CalinskiHarabasz,
+                    KCriterion::Gap => pradar::cluster::Criterion::Gap,
+                });
+            let headings: Vec<f64> = {
+                let np = m.iter().map(|x| x.position + 1).max().unwrap_or(0);
+                (0..np)
+                    .map(|p| {
+                        m.iter()
+                            .find(|x| x.position == p)
+                            .map(|x| x.angle_global_deg - x.angle_rel_deg)
+                            .unwrap_or(0.0)
+                    })
+                    .collect()
+            };
+            let c = pradar::cluster::cluster(&m, &headings, &params)?;
+            let summary = pradar::cluster::write(&out, &c)?;
+            if !quiet {
+                println!(
+                    "{} clusters over {} positions -> {} and {}",
+                    c.summary.len(),
+                    c.positions.len(),
+                    out.display(),
+                    summary.display()
                 );
             }
         }

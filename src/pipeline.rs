@@ -7,6 +7,7 @@ use crate::campaign::simulate::simulate;
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
 use crate::report::{self, kv_table, Section};
+use crate::{cluster, mpc};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -63,13 +64,74 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let cb = progress("energy", np);
     let er = energy::run(&sc, &energy_path, &*cb)?;
     timings.push(("energy".into(), t.elapsed().as_secs_f64()));
-    let t = Instant::now();
     let em = EnergyMatrix::read(&energy_path)?;
-    let cb = progress("heat maps", np);
+    // MPC extraction and clustering
+    let t = Instant::now();
+    let mpcs = mpc::extract(&em, &sc, &mpc::ExtractParams::default())?;
+    mpc::write_mpcs(
+        &work.join("mpcs.parquet"),
+        &mpcs,
+        vec![("schema_version".into(), "1".into())],
+    )?;
+    timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
+    let clustering = cluster::cluster(&mpcs, &headings, &cluster::ClusterParams::default())?;
+    cluster::write(&work.join("clusters.parquet"), &clustering)?;
+    timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let cb = progress("plots", np);
+    let max_delay = em.delay_ns(em.bins - 1);
     for p in 0..em.positions {
-        report::energy_heatmap(&em, p, &out.join(format!("energy_p{p:02}.png")), -60.0)?;
+        let marks: Vec<(f64, f64)> = mpcs
+            .iter()
+            .filter(|m| m.position == p)
+            .map(|m| {
+                (
+                    m.angle_rel_deg,
+                    m.delay_ns * 1e-9 * crate::campaign::manifest::C0 / 2.0,
+                )
+            })
+            .collect();
+        report::energy_heatmap(
+            &em,
+            p,
+            &out.join(format!("energy_p{p:02}.png")),
+            -60.0,
+            &marks,
+        )?;
+        let idx: Vec<usize> = (0..mpcs.len()).filter(|&i| mpcs[i].position == p).collect();
+        let pts: Vec<(f64, f64, f64)> = idx
+            .iter()
+            .map(|&i| (mpcs[i].angle_rel_deg, mpcs[i].delay_ns, mpcs[i].power_db))
+            .collect();
+        let labels = &clustering.positions[p].labels;
+        report::mpc_clusters_plot(
+            &out.join(format!("clusters_p{p:02}.png")),
+            &format!(
+                "position {p}: {} MPCs in {} clusters",
+                pts.len(),
+                clustering.positions[p].k
+            ),
+            &pts,
+            labels,
+            max_delay,
+        )?;
         cb(p + 1, em.positions);
     }
+    let layout = crate::campaign::Layout::load(&sc.layout_path())?;
+    let poses: Vec<(f64, f64)> = sc.manifest.poses.iter().map(|p| (p.x_m, p.y_m)).collect();
+    let pts: Vec<(f64, f64, usize)> = mpcs
+        .iter()
+        .zip(&clustering.cluster_id)
+        .map(|(m, &c)| (m.x_m, m.y_m, c))
+        .collect();
+    let cents: Vec<(f64, f64, usize)> = clustering
+        .summary
+        .iter()
+        .map(|s| (s.centroid_x_m, s.centroid_y_m, s.cluster_id))
+        .collect();
+    report::global_map_plot(&out.join("mpcs_global.png"), &layout, &poses, &pts, &cents)?;
     timings.push(("report plots".into(), t.elapsed().as_secs_f64()));
     let m = &sc.manifest;
     let summary = vec![
@@ -132,6 +194,36 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let t = Instant::now();
     let maps = crate::mapping::job::report_section(&sim.manifest, &energy_path, out, "maps")?;
     timings.push(("OG maps".into(), t.elapsed().as_secs_f64()));
+    let ks: Vec<String> = clustering
+        .positions
+        .iter()
+        .map(|p| p.k.to_string())
+        .collect();
+    let mut mpc_html = kv_table(&[
+        (
+            "MPCs".to_string(),
+            format!(
+                "{} over {} positions (work/mpcs.parquet)",
+                mpcs.len(),
+                em.positions
+            ),
+        ),
+        (
+            "clusters".to_string(),
+            format!(
+                "{} (work/clusters.parquet, work/clusters_summary.parquet)",
+                clustering.summary.len()
+            ),
+        ),
+        (
+            "K per position (silhouette rule)".to_string(),
+            ks.join(", "),
+        ),
+    ]);
+    mpc_html.push_str("<p>MPCs are marked (white circles) on the energy heat maps above.</p>\n<a href=\"mpcs_global.png\"><img style=\"max-width:900px\" src=\"mpcs_global.png\" alt=\"global\"></a><br>\n");
+    for p in 0..em.positions {
+        mpc_html.push_str(&format!("<a href=\"clusters_p{p:02}.png\"><img src=\"clusters_p{p:02}.png\" alt=\"clusters {p}\"></a>\n"));
+    }
     let total: f64 = timings.iter().map(|t| t.1).sum();
     let mut trows: Vec<(String, String)> = timings
         .iter()
@@ -146,6 +238,10 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
         Section {
             title: "Energy matrices (range vs direction, dB re position peak)".into(),
             html: heat,
+        },
+        Section {
+            title: "MPCs (2-D CLEAN) and clusters (K-means)".into(),
+            html: mpc_html,
         },
         Section {
             title: "Stage timings".into(),

@@ -29,7 +29,14 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
 
 /// Heat map of one position: direction (x, degrees relative) vs range (y, m = delay·c/2),
 /// colour = energy in dB relative to the position's peak, clipped at `floor_db`.
-pub fn energy_heatmap(em: &EnergyMatrix, p: usize, path: &Path, floor_db: f64) -> Result<()> {
+/// `marks` are (angle_rel_deg, range_m) points drawn as white circles (extracted MPCs).
+pub fn energy_heatmap(
+    em: &EnergyMatrix,
+    p: usize,
+    path: &Path,
+    floor_db: f64,
+    marks: &[(f64, f64)],
+) -> Result<()> {
     register_font();
     crate::io::ensure_parent(path)?;
     let tmp = crate::io::temp_path(path).with_extension("png");
@@ -89,6 +96,149 @@ pub fn energy_heatmap(em: &EnergyMatrix, p: usize, path: &Path, floor_db: f64) -
                     )
                 })
             }))
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .draw_series(
+                marks
+                    .iter()
+                    .map(|&(a, r)| Circle::new((a, r), 4, WHITE.stroke_width(1))),
+            )
+            .map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// A distinct colour for cluster `i`.
+pub fn cluster_colour(i: usize) -> RGBColor {
+    const P: [RGBColor; 10] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+    ];
+    P[i % P.len()]
+}
+
+/// MPCs of one position in the delay–angle plane, coloured by cluster (`labels` local to the
+/// position), marker size by power.
+pub fn mpc_clusters_plot(
+    path: &Path,
+    title: &str,
+    pts: &[(f64, f64, f64)],
+    labels: &[usize],
+    max_delay_ns: f64,
+) -> Result<()> {
+    register_font();
+    crate::io::ensure_parent(path)?;
+    let tmp = crate::io::temp_path(path).with_extension("png");
+    {
+        let root = BitMapBackend::new(&tmp, (560, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(-95.0..95.0, 0.0..max_delay_ns.max(1.0))
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("angle re heading (deg)")
+            .y_desc("delay (ns)")
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        let pmax = pts.iter().map(|p| p.2).fold(f64::MIN, f64::max);
+        chart
+            .draw_series(pts.iter().zip(labels).map(|(&(a, d, pw), &l)| {
+                let size = (6.0 + (pw - pmax) / 6.0).clamp(2.0, 6.0) as i32;
+                Circle::new((a, d), size, cluster_colour(l).filled())
+            }))
+            .map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// MPCs (dots, coloured by campaign-wide cluster id) and cluster centroids (crosses) in the
+/// global frame over the layout's walls, with the poses (black triangles).
+pub fn global_map_plot(
+    path: &Path,
+    layout: &crate::campaign::Layout,
+    poses: &[(f64, f64)],
+    mpcs: &[(f64, f64, usize)],
+    centroids: &[(f64, f64, usize)],
+) -> Result<()> {
+    register_font();
+    crate::io::ensure_parent(path)?;
+    let tmp = crate::io::temp_path(path).with_extension("png");
+    let bb = layout.bbox();
+    let (x0, x1, y0, y1) = (
+        bb.min().x - 1.0,
+        bb.max().x + 1.0,
+        bb.min().y - 1.0,
+        bb.max().y + 1.0,
+    );
+    let w = 1000u32;
+    let h = ((w as f64) * (y1 - y0) / (x1 - x0)).clamp(250.0, 1000.0) as u32 + 60;
+    {
+        let root = BitMapBackend::new(&tmp, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "MPCs and cluster centroids, global frame (m)",
+                ("sans-serif", 16),
+            )
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(40)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .draw_series(layout.walls.iter().map(|wl| {
+                PathElement::new(
+                    vec![
+                        (wl.line.start.x, wl.line.start.y),
+                        (wl.line.end.x, wl.line.end.y),
+                    ],
+                    BLACK.stroke_width(2),
+                )
+            }))
+            .map_err(|e| plot_err(path, e))?;
+        let clip = |x: f64, y: f64| x > x0 && x < x1 && y > y0 && y < y1;
+        chart
+            .draw_series(
+                mpcs.iter()
+                    .filter(|m| clip(m.0, m.1))
+                    .map(|&(x, y, c)| Circle::new((x, y), 2, cluster_colour(c).filled())),
+            )
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .draw_series(
+                centroids
+                    .iter()
+                    .filter(|m| clip(m.0, m.1))
+                    .map(|&(x, y, c)| Cross::new((x, y), 6, cluster_colour(c).stroke_width(2))),
+            )
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .draw_series(
+                poses
+                    .iter()
+                    .map(|&(x, y)| TriangleMarker::new((x, y), 5, BLACK.filled())),
+            )
             .map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, e))?;
     }

@@ -1,0 +1,646 @@
+//! Clustering of MPCs (DESIGN §2 "Clustering"): K-means (linfa-clustering, k-means++,
+//! seeded) per position on scaled (delay, angle_rel), K from a stated criterion.
+//!
+//! Takes the MPCs of each position; gives a cluster label per MPC (ids unique over the
+//! campaign, numbered position by position) and a per-cluster summary.
+//!
+//! * Features: (delay_ns, angle_rel_deg) standardised per position (z-scores: minus the
+//!   position's mean, divided by its standard deviation; a feature with zero spread is only
+//!   centred). Relative angles never wrap (the half-plane −90°..90°).
+//! * For K = 2..min(K_max, n − 1): K-means with k-means++ initialisation, `n_runs` restarts,
+//!   the RNG seeded from (seed, position); the mean silhouette
+//!   s = mean_i (b_i − a_i)/max(a_i, b_i) (a_i mean distance to its own cluster, b_i to the
+//!   nearest other; 0 for singletons) and the Calinski–Harabasz index
+//!   CH = [B/(K−1)] / [W/(n−K)] (between/within sums of squares) are computed — linfa has
+//!   neither, so they are written here.
+//! * Choice: the K with the largest mean silhouette (or CH, `Criterion::CalinskiHarabasz`);
+//!   K = 1 when no K ≥ 2 reaches a mean silhouette of `min_silhouette` (0.25 by default:
+//!   Kaufman & Rousseeuw's "no substantial structure" limit), when n ≤ 2, or when K_max = 1.
+//! * Summary per cluster: members, centroid delay and angles (member means), first arrival
+//!   (smallest delay), reference ray (strongest member) delay and angle, total power
+//!   (10·log10 Σ 10^{p/10}), centroid x/y in the global frame (member mean).
+
+use crate::error::{Error, Result};
+use crate::mpc::Mpc;
+use crate::table;
+use linfa::prelude::*;
+use linfa_clustering::{KMeans, KMeansInit};
+use ndarray::Array2;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Criterion that picks K among 2..K_max.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Criterion {
+    /// Largest mean silhouette.
+    Silhouette,
+    /// Largest Calinski–Harabasz index.
+    CalinskiHarabasz,
+    /// Gap statistic (Tibshirani, Walther & Hastie 2001) against `gap_refs` uniform
+    /// reference sets over the data's bounding box: the smallest K with
+    /// Gap(K) ≥ Gap(K+1) − s(K+1); handles K = 1 natively.
+    Gap,
+}
+
+/// Clustering parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClusterParams {
+    /// Largest K tried.
+    pub k_max: usize,
+    /// Seed of the k-means++ draws.
+    pub seed: u64,
+    /// K-means restarts per K.
+    pub n_runs: usize,
+    /// Below this best mean silhouette, K = 1.
+    pub min_silhouette: f64,
+    /// Criterion.
+    pub criterion: Criterion,
+    /// Reference data sets of the gap statistic.
+    pub gap_refs: usize,
+}
+
+impl Default for ClusterParams {
+    fn default() -> Self {
+        ClusterParams {
+            k_max: 8,
+            seed: 1,
+            n_runs: 10,
+            min_silhouette: 0.25,
+            criterion: Criterion::Silhouette,
+            gap_refs: 10,
+        }
+    }
+}
+
+impl ClusterParams {
+    /// Builder: K_max.
+    pub fn k_max(mut self, k: usize) -> Self {
+        self.k_max = k;
+        self
+    }
+    /// Builder: criterion.
+    pub fn criterion(mut self, c: Criterion) -> Self {
+        self.criterion = c;
+        self
+    }
+    /// Builder: seed.
+    pub fn seed(mut self, s: u64) -> Self {
+        self.seed = s;
+        self
+    }
+    /// Validate.
+    pub fn check(&self) -> Result<()> {
+        if self.k_max == 0 {
+            return Err(Error::param("k_max", "must be >= 1"));
+        }
+        if self.n_runs == 0 {
+            return Err(Error::param("n_runs", "must be >= 1"));
+        }
+        if !(-1.0..=1.0).contains(&self.min_silhouette) {
+            return Err(Error::param("min_silhouette", "must lie in [-1, 1]"));
+        }
+        Ok(())
+    }
+}
+
+/// A cluster summary row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClusterSummary {
+    /// Position.
+    pub position: usize,
+    /// Campaign-wide cluster id.
+    pub cluster_id: usize,
+    /// Members.
+    pub members: usize,
+    /// Mean delay, ns.
+    pub centroid_delay_ns: f64,
+    /// Mean relative angle, deg.
+    pub centroid_angle_rel_deg: f64,
+    /// Mean global angle (members' mean offset added to the pose heading), deg.
+    pub centroid_angle_global_deg: f64,
+    /// Smallest delay, ns.
+    pub first_arrival_ns: f64,
+    /// Strongest member's delay, ns.
+    pub ref_delay_ns: f64,
+    /// Strongest member's relative angle, deg.
+    pub ref_angle_rel_deg: f64,
+    /// Total power, dB.
+    pub power_db: f64,
+    /// Centroid x, m.
+    pub centroid_x_m: f64,
+    /// Centroid y, m.
+    pub centroid_y_m: f64,
+}
+
+/// Result of clustering one position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PositionClustering {
+    /// Chosen K (0 for no MPCs).
+    pub k: usize,
+    /// Label per MPC (0..k).
+    pub labels: Vec<usize>,
+    /// Mean silhouette per tried K (K, s).
+    pub silhouettes: Vec<(usize, f64)>,
+    /// CH per tried K.
+    pub ch: Vec<(usize, f64)>,
+}
+
+fn standardise(mpcs: &[&Mpc]) -> Vec<[f64; 2]> {
+    let n = mpcs.len() as f64;
+    let f = |g: &dyn Fn(&Mpc) -> f64| {
+        let mean = mpcs.iter().map(|m| g(m)).sum::<f64>() / n;
+        let sd = (mpcs.iter().map(|m| (g(m) - mean).powi(2)).sum::<f64>() / n).sqrt();
+        (mean, if sd > 1e-12 { sd } else { 1.0 })
+    };
+    let (md, sd) = f(&|m| m.delay_ns);
+    let (ma, sa) = f(&|m| m.angle_rel_deg);
+    mpcs.iter()
+        .map(|m| [(m.delay_ns - md) / sd, (m.angle_rel_deg - ma) / sa])
+        .collect()
+}
+
+fn dist(a: &[f64; 2], b: &[f64; 2]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+}
+
+/// Mean silhouette of a labelling (singletons count 0).
+pub fn silhouette(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
+    let n = x.len();
+    if k < 2 || n < 2 {
+        return 0.0;
+    }
+    let mut size = vec![0usize; k];
+    labels.iter().for_each(|&l| size[l] += 1);
+    let mut total = 0.0;
+    let mut sums = vec![0.0; k];
+    for i in 0..n {
+        sums.iter_mut().for_each(|s| *s = 0.0);
+        for j in 0..n {
+            if i != j {
+                sums[labels[j]] += dist(&x[i], &x[j]);
+            }
+        }
+        let li = labels[i];
+        if size[li] <= 1 {
+            continue;
+        }
+        let a = sums[li] / (size[li] - 1) as f64;
+        let b = (0..k)
+            .filter(|&c| c != li && size[c] > 0)
+            .map(|c| sums[c] / size[c] as f64)
+            .fold(f64::INFINITY, f64::min);
+        if b.is_finite() {
+            let m = a.max(b);
+            if m > 0.0 {
+                total += (b - a) / m;
+            }
+        }
+    }
+    total / n as f64
+}
+
+/// Calinski–Harabasz index of a labelling.
+pub fn calinski_harabasz(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
+    let n = x.len();
+    if k < 2 || n <= k {
+        return 0.0;
+    }
+    let mean = [
+        x.iter().map(|p| p[0]).sum::<f64>() / n as f64,
+        x.iter().map(|p| p[1]).sum::<f64>() / n as f64,
+    ];
+    let mut c = vec![[0.0f64; 2]; k];
+    let mut size = vec![0usize; k];
+    for (p, &l) in x.iter().zip(labels) {
+        c[l][0] += p[0];
+        c[l][1] += p[1];
+        size[l] += 1;
+    }
+    for (ci, &s) in c.iter_mut().zip(&size) {
+        if s > 0 {
+            ci[0] /= s as f64;
+            ci[1] /= s as f64;
+        }
+    }
+    let b: f64 = c
+        .iter()
+        .zip(&size)
+        .map(|(ci, &s)| s as f64 * dist(ci, &mean).powi(2))
+        .sum();
+    let w: f64 = x
+        .iter()
+        .zip(labels)
+        .map(|(p, &l)| dist(p, &c[l]).powi(2))
+        .sum();
+    if w <= 0.0 {
+        return f64::INFINITY;
+    }
+    (b / (k - 1) as f64) / (w / (n - k) as f64)
+}
+
+/// Pooled within-cluster sum of squares.
+pub fn within_ss(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
+    let mut c = vec![[0.0f64; 2]; k.max(1)];
+    let mut size = vec![0usize; k.max(1)];
+    for (p, &l) in x.iter().zip(labels) {
+        c[l][0] += p[0];
+        c[l][1] += p[1];
+        size[l] += 1;
+    }
+    for (ci, &s) in c.iter_mut().zip(&size) {
+        if s > 0 {
+            ci[0] /= s as f64;
+            ci[1] /= s as f64;
+        }
+    }
+    x.iter()
+        .zip(labels)
+        .map(|(p, &l)| dist(p, &c[l]).powi(2))
+        .sum()
+}
+
+fn log_w(x: &[[f64; 2]], k: usize, seed: u64, n_runs: usize) -> Result<f64> {
+    let labels = if k == 1 {
+        vec![0; x.len()]
+    } else {
+        kmeans_labels(x, k, seed, n_runs)?
+    };
+    let kk = labels.iter().max().map(|m| m + 1).unwrap_or(1);
+    Ok(within_ss(x, &labels, kk).max(1e-300).ln())
+}
+
+/// K by the gap statistic over 1..=kmax.
+fn gap_k(x: &[[f64; 2]], kmax: usize, params: &ClusterParams, seed: u64) -> Result<usize> {
+    use rand::Rng;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x05EE_D6A9);
+    let lo = [
+        x.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min),
+        x.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min),
+    ];
+    let hi = [
+        x.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max),
+        x.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max),
+    ];
+    let b = params.gap_refs.max(2);
+    let refs: Vec<Vec<[f64; 2]>> = (0..b)
+        .map(|_| {
+            (0..x.len())
+                .map(|_| {
+                    [
+                        lo[0] + (hi[0] - lo[0]) * rng.gen::<f64>(),
+                        lo[1] + (hi[1] - lo[1]) * rng.gen::<f64>(),
+                    ]
+                })
+                .collect()
+        })
+        .collect();
+    let mut gap = Vec::new();
+    let mut sd = Vec::new();
+    for k in 1..=(kmax + 1).min(x.len()) {
+        let lw = log_w(x, k, seed ^ k as u64, params.n_runs)?;
+        let lr: Vec<f64> = refs
+            .iter()
+            .map(|r| log_w(r, k, seed ^ k as u64, params.n_runs))
+            .collect::<Result<_>>()?;
+        let mean = lr.iter().sum::<f64>() / b as f64;
+        let var = lr.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / b as f64;
+        gap.push(mean - lw);
+        sd.push(var.sqrt() * (1.0 + 1.0 / b as f64).sqrt());
+    }
+    for k in 0..gap.len().saturating_sub(1) {
+        if gap[k] >= gap[k + 1] - sd[k + 1] {
+            return Ok(k + 1);
+        }
+    }
+    Ok(gap.len().min(kmax).max(1))
+}
+
+/// K-means labels for K clusters (linfa, k-means++, seeded).
+pub fn kmeans_labels(x: &[[f64; 2]], k: usize, seed: u64, n_runs: usize) -> Result<Vec<usize>> {
+    let flat: Vec<f64> = x.iter().flat_map(|p| [p[0], p[1]]).collect();
+    let arr = Array2::from_shape_vec((x.len(), 2), flat)
+        .map_err(|e| Error::param("mpcs", e.to_string()))?;
+    let ds = DatasetBase::from(arr);
+    let rng = ChaCha8Rng::seed_from_u64(seed);
+    let model = KMeans::params_with_rng(k, rng)
+        .n_runs(n_runs)
+        .init_method(KMeansInit::KMeansPlusPlus)
+        .tolerance(1e-8)
+        .max_n_iterations(300)
+        .fit(&ds)
+        .map_err(|e| Error::param("kmeans", e.to_string()))?;
+    let labels = model.predict(&ds);
+    // relabel in order of first appearance so labels do not depend on centroid order
+    let mut map = BTreeMap::new();
+    Ok(labels
+        .iter()
+        .map(|&l| {
+            let next = map.len();
+            *map.entry(l).or_insert(next)
+        })
+        .collect())
+}
+
+/// Cluster the MPCs of one position.
+pub fn cluster_position(
+    mpcs: &[&Mpc],
+    params: &ClusterParams,
+    position: usize,
+) -> Result<PositionClustering> {
+    let n = mpcs.len();
+    if n == 0 {
+        return Ok(PositionClustering {
+            k: 0,
+            labels: vec![],
+            silhouettes: vec![],
+            ch: vec![],
+        });
+    }
+    let x = standardise(mpcs);
+    let kmax = params.k_max.min(n.saturating_sub(1));
+    let mut best: Option<(f64, usize, Vec<usize>, f64)> = None;
+    let (mut sil, mut chs) = (Vec::new(), Vec::new());
+    for k in 2..=kmax {
+        let seed = params.seed ^ (position as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ k as u64;
+        let labels = kmeans_labels(&x, k, seed, params.n_runs)?;
+        let kk = labels.iter().max().map(|m| m + 1).unwrap_or(0);
+        let s = silhouette(&x, &labels, kk);
+        let c = calinski_harabasz(&x, &labels, kk);
+        sil.push((k, s));
+        chs.push((k, c));
+        let score = match params.criterion {
+            Criterion::Silhouette => s,
+            Criterion::CalinskiHarabasz | Criterion::Gap => c,
+        };
+        if best.as_ref().map(|b| score > b.0).unwrap_or(true) {
+            best = Some((score, kk, labels, s));
+        }
+    }
+    if params.criterion == Criterion::Gap {
+        let seed = params.seed ^ (position as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let k = if kmax >= 2 {
+            gap_k(&x, kmax, params, seed)?
+        } else {
+            1
+        };
+        let labels = if k >= 2 {
+            let seed = seed ^ k as u64;
+            kmeans_labels(&x, k, seed, params.n_runs)?
+        } else {
+            vec![0; n]
+        };
+        let k = labels.iter().max().map(|m| m + 1).unwrap_or(1);
+        return Ok(PositionClustering {
+            k,
+            labels,
+            silhouettes: sil,
+            ch: chs,
+        });
+    }
+    match best {
+        Some((_, k, labels, s)) if s >= params.min_silhouette => Ok(PositionClustering {
+            k,
+            labels,
+            silhouettes: sil,
+            ch: chs,
+        }),
+        _ => Ok(PositionClustering {
+            k: 1,
+            labels: vec![0; n],
+            silhouettes: sil,
+            ch: chs,
+        }),
+    }
+}
+
+/// Clustering of a whole campaign.
+#[derive(Debug, Clone)]
+pub struct Clustering {
+    /// MPCs in input order.
+    pub mpcs: Vec<Mpc>,
+    /// Campaign-wide cluster id per MPC.
+    pub cluster_id: Vec<usize>,
+    /// Per-cluster summaries.
+    pub summary: Vec<ClusterSummary>,
+    /// Per-position details (index = position).
+    pub positions: Vec<PositionClustering>,
+}
+
+/// Cluster every position (positions in parallel; deterministic for any thread count).
+/// `headings_deg[p]` gives the pose heading for the global centroid angle.
+pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterParams) -> Result<Clustering> {
+    params.check()?;
+    let np = mpcs
+        .iter()
+        .map(|m| m.position + 1)
+        .max()
+        .unwrap_or(0)
+        .max(headings_deg.len());
+    let mut by_pos: Vec<Vec<usize>> = vec![Vec::new(); np];
+    for (i, m) in mpcs.iter().enumerate() {
+        by_pos[m.position].push(i);
+    }
+    let per: Vec<PositionClustering> = by_pos
+        .par_iter()
+        .enumerate()
+        .map(|(p, idx)| {
+            let ms: Vec<&Mpc> = idx.iter().map(|&i| &mpcs[i]).collect();
+            cluster_position(&ms, params, p)
+        })
+        .collect::<Result<_>>()?;
+    let mut cluster_id = vec![0usize; mpcs.len()];
+    let mut summary = Vec::new();
+    let mut next = 0;
+    for (p, (idx, pc)) in by_pos.iter().zip(&per).enumerate() {
+        for c in 0..pc.k {
+            let members: Vec<&Mpc> = idx
+                .iter()
+                .zip(&pc.labels)
+                .filter(|(_, &l)| l == c)
+                .map(|(&i, _)| &mpcs[i])
+                .collect();
+            if members.is_empty() {
+                continue;
+            }
+            for (&i, &l) in idx.iter().zip(&pc.labels) {
+                if l == c {
+                    cluster_id[i] = next;
+                }
+            }
+            let n = members.len() as f64;
+            let mean = |g: &dyn Fn(&Mpc) -> f64| members.iter().map(|m| g(m)).sum::<f64>() / n;
+            let strongest = members
+                .iter()
+                .max_by(|a, b| a.power_db.total_cmp(&b.power_db))
+                .expect("non-empty");
+            let arel = mean(&|m| m.angle_rel_deg);
+            let heading = headings_deg
+                .get(p)
+                .copied()
+                .unwrap_or(members[0].angle_global_deg - members[0].angle_rel_deg);
+            summary.push(ClusterSummary {
+                position: p,
+                cluster_id: next,
+                members: members.len(),
+                centroid_delay_ns: mean(&|m| m.delay_ns),
+                centroid_angle_rel_deg: arel,
+                centroid_angle_global_deg: crate::energy::wrap_deg(heading + arel),
+                first_arrival_ns: members
+                    .iter()
+                    .map(|m| m.delay_ns)
+                    .fold(f64::INFINITY, f64::min),
+                ref_delay_ns: strongest.delay_ns,
+                ref_angle_rel_deg: strongest.angle_rel_deg,
+                power_db: 10.0
+                    * members
+                        .iter()
+                        .map(|m| 10f64.powf(m.power_db / 10.0))
+                        .sum::<f64>()
+                        .log10(),
+                centroid_x_m: mean(&|m| m.x_m),
+                centroid_y_m: mean(&|m| m.y_m),
+            });
+            next += 1;
+        }
+    }
+    Ok(Clustering {
+        mpcs: mpcs.to_vec(),
+        cluster_id,
+        summary,
+        positions: per,
+    })
+}
+
+/// Adjusted Rand index between two labellings (Hubert & Arabie 1985).
+pub fn adjusted_rand_index(a: &[usize], b: &[usize]) -> f64 {
+    let n = a.len();
+    if n < 2 {
+        return 1.0;
+    }
+    let mut table: BTreeMap<(usize, usize), f64> = BTreeMap::new();
+    let mut ra: BTreeMap<usize, f64> = BTreeMap::new();
+    let mut rb: BTreeMap<usize, f64> = BTreeMap::new();
+    for (&x, &y) in a.iter().zip(b) {
+        *table.entry((x, y)).or_default() += 1.0;
+        *ra.entry(x).or_default() += 1.0;
+        *rb.entry(y).or_default() += 1.0;
+    }
+    let c2 = |v: f64| v * (v - 1.0) / 2.0;
+    let index: f64 = table.values().map(|&v| c2(v)).sum();
+    let sa: f64 = ra.values().map(|&v| c2(v)).sum();
+    let sb: f64 = rb.values().map(|&v| c2(v)).sum();
+    let expected = sa * sb / c2(n as f64);
+    let max = 0.5 * (sa + sb);
+    if (max - expected).abs() < 1e-12 {
+        return 1.0;
+    }
+    (index - expected) / (max - expected)
+}
+
+/// Write the clustered MPC table (`path`) and the summary (`<stem>_summary.parquet`).
+pub fn write(path: &Path, c: &Clustering) -> Result<std::path::PathBuf> {
+    let mut df = crate::mpc::mpc_frame(path, &c.mpcs)?;
+    df.with_column(table::col(
+        "cluster_id",
+        c.cluster_id.iter().map(|&i| i as i64).collect::<Vec<_>>(),
+    ))
+    .map_err(|e| Error::table(path, e))?;
+    table::write_parquet(path, &df, vec![("schema_version".into(), "1".into())])?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "clusters".into());
+    let spath = path.with_file_name(format!("{stem}_summary.parquet"));
+    let s = &c.summary;
+    let sdf = table::frame(
+        &spath,
+        vec![
+            table::col(
+                "position",
+                s.iter().map(|x| x.position as i32).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "cluster_id",
+                s.iter().map(|x| x.cluster_id as i64).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "members",
+                s.iter().map(|x| x.members as i64).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "centroid_delay_ns",
+                s.iter().map(|x| x.centroid_delay_ns).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "centroid_angle_rel_deg",
+                s.iter()
+                    .map(|x| x.centroid_angle_rel_deg)
+                    .collect::<Vec<_>>(),
+            ),
+            table::col(
+                "centroid_angle_global_deg",
+                s.iter()
+                    .map(|x| x.centroid_angle_global_deg)
+                    .collect::<Vec<_>>(),
+            ),
+            table::col(
+                "first_arrival_ns",
+                s.iter().map(|x| x.first_arrival_ns).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "ref_delay_ns",
+                s.iter().map(|x| x.ref_delay_ns).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "ref_angle_rel_deg",
+                s.iter().map(|x| x.ref_angle_rel_deg).collect::<Vec<_>>(),
+            ),
+            table::col("power_db", s.iter().map(|x| x.power_db).collect::<Vec<_>>()),
+            table::col(
+                "centroid_x_m",
+                s.iter().map(|x| x.centroid_x_m).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "centroid_y_m",
+                s.iter().map(|x| x.centroid_y_m).collect::<Vec<_>>(),
+            ),
+        ],
+    )?;
+    table::write_parquet(&spath, &sdf, vec![("schema_version".into(), "1".into())])?;
+    Ok(spath)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ari_known_values() {
+        assert!((adjusted_rand_index(&[0, 0, 1, 1], &[1, 1, 0, 0]) - 1.0).abs() < 1e-12);
+        // sklearn.metrics.adjusted_rand_score([0,0,1,1],[0,0,1,2]) = 0.5714285714285715
+        assert!(
+            (adjusted_rand_index(&[0, 0, 1, 1], &[0, 0, 1, 2]) - 0.5714285714285715).abs() < 1e-12
+        );
+    }
+
+    #[test]
+    fn silhouette_and_ch_separate_blobs() {
+        let x: Vec<[f64; 2]> = (0..20)
+            .map(|i| {
+                if i < 10 {
+                    [i as f64 * 0.01, 0.0]
+                } else {
+                    [10.0 + i as f64 * 0.01, 0.0]
+                }
+            })
+            .collect();
+        let good: Vec<usize> = (0..20).map(|i| usize::from(i >= 10)).collect();
+        let bad: Vec<usize> = (0..20).map(|i| i % 2).collect();
+        assert!(silhouette(&x, &good, 2) > 0.95);
+        assert!(silhouette(&x, &bad, 2) < 0.1);
+        assert!(calinski_harabasz(&x, &good, 2) > 1e4 * calinski_harabasz(&x, &bad, 2).max(1e-9));
+    }
+}
