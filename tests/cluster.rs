@@ -116,13 +116,13 @@ fn same_labels_with_one_and_two_threads() {
             .num_threads(t)
             .build()
             .unwrap();
-        pool.install(|| cluster(&mpcs, &vec![0.0; 20], &ClusterParams::default()).unwrap())
+        pool.install(|| cluster(&mpcs, &[0.0; 20], &ClusterParams::default()).unwrap())
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.cluster_id, b.cluster_id);
     assert_eq!(a.summary, b.summary);
     // and another seed may differ but stays a valid labelling
-    let c = cluster(&mpcs, &vec![0.0; 20], &ClusterParams::default().seed(99)).unwrap();
+    let c = cluster(&mpcs, &[0.0; 20], &ClusterParams::default().seed(99)).unwrap();
     assert_eq!(c.cluster_id.len(), mpcs.len());
 }
 
