@@ -58,7 +58,7 @@ noise_from_ns = 100.0
     for i in 0..floor_poses() {
         let lane = i / 50;
         let k = i % 50;
-        let y = 0.5 + lane as f64 * (19.0 / 19.0);
+        let y = 0.5 + lane as f64; // 20 lanes, 1 m apart
         let (x, h) = if lane % 2 == 0 {
             (0.5 + k as f64 * 0.38, 0.0)
         } else {
