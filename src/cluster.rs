@@ -8,7 +8,11 @@
 //!   position's mean, divided by its standard deviation; a feature with zero spread is only
 //!   centred). Relative angles never wrap (the half-plane −90°..90°).
 //! * For K = 2..min(K_max, n − 1): K-means with k-means++ initialisation, `n_runs` restarts,
-//!   the RNG seeded from (seed, position); the mean silhouette
+//!   the RNG seeded from (seed, position K); with `adaptive_scaling` (default) the features
+//!   are then divided by that solution's pooled within-cluster standard deviations and
+//!   K-means refitted, three times (the metric of a mixture with a shared diagonal
+//!   covariance); the silhouette and CH of each K are measured in its own metric. The mean
+//!   silhouette
 //!   s = mean_i (b_i − a_i)/max(a_i, b_i) (a_i mean distance to its own cluster, b_i to the
 //!   nearest other; 0 for singletons) and the Calinski–Harabasz index
 //!   CH = [B/(K−1)] / [W/(n−K)] (between/within sums of squares) are computed — linfa has
@@ -60,6 +64,11 @@ pub struct ClusterParams {
     pub criterion: Criterion,
     /// Reference data sets of the gap statistic.
     pub gap_refs: usize,
+    /// Rescale the features by the pooled within-cluster standard deviations of each K's
+    /// solution and refit (3 rounds): K-means in the metric of a shared-diagonal-covariance
+    /// mixture, so a feature that does not separate clusters (e.g. delay when clusters
+    /// overlap in delay) does not dominate.
+    pub adaptive_scaling: bool,
 }
 
 impl Default for ClusterParams {
@@ -71,6 +80,7 @@ impl Default for ClusterParams {
             min_silhouette: 0.25,
             criterion: Criterion::Silhouette,
             gap_refs: 10,
+            adaptive_scaling: true,
         }
     }
 }
@@ -241,6 +251,30 @@ pub fn calinski_harabasz(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
     (b / (k - 1) as f64) / (w / (n - k) as f64)
 }
 
+/// Pooled within-cluster standard deviation per feature (floored at 1e-3).
+pub fn pooled_within_sd(x: &[[f64; 2]], labels: &[usize], k: usize) -> [f64; 2] {
+    let mut c = vec![[0.0f64; 2]; k.max(1)];
+    let mut size = vec![0usize; k.max(1)];
+    for (p, &l) in x.iter().zip(labels) {
+        c[l][0] += p[0];
+        c[l][1] += p[1];
+        size[l] += 1;
+    }
+    for (ci, &s) in c.iter_mut().zip(&size) {
+        if s > 0 {
+            ci[0] /= s as f64;
+            ci[1] /= s as f64;
+        }
+    }
+    let mut v = [0.0f64; 2];
+    for (p, &l) in x.iter().zip(labels) {
+        v[0] += (p[0] - c[l][0]).powi(2);
+        v[1] += (p[1] - c[l][1]).powi(2);
+    }
+    let dof = (x.len().saturating_sub(k)).max(1) as f64;
+    [(v[0] / dof).sqrt().max(1e-3), (v[1] / dof).sqrt().max(1e-3)]
+}
+
 /// Pooled within-cluster sum of squares.
 pub fn within_ss(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
     let mut c = vec![[0.0f64; 2]; k.max(1)];
@@ -365,10 +399,19 @@ pub fn cluster_position(
     let (mut sil, mut chs) = (Vec::new(), Vec::new());
     for k in 2..=kmax {
         let seed = params.seed ^ (position as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ k as u64;
-        let labels = kmeans_labels(&x, k, seed, params.n_runs)?;
+        let mut labels = kmeans_labels(&x, k, seed, params.n_runs)?;
+        let mut xs = x.clone();
+        if params.adaptive_scaling {
+            for _ in 0..3 {
+                let kk = labels.iter().max().map(|m| m + 1).unwrap_or(1);
+                let sc = pooled_within_sd(&x, &labels, kk);
+                xs = x.iter().map(|p| [p[0] / sc[0], p[1] / sc[1]]).collect();
+                labels = kmeans_labels(&xs, k, seed, params.n_runs)?;
+            }
+        }
         let kk = labels.iter().max().map(|m| m + 1).unwrap_or(0);
-        let s = silhouette(&x, &labels, kk);
-        let c = calinski_harabasz(&x, &labels, kk);
+        let s = silhouette(&xs, &labels, kk);
+        let c = calinski_harabasz(&xs, &labels, kk);
         sil.push((k, s));
         chs.push((k, c));
         let score = match params.criterion {

@@ -101,11 +101,16 @@ fn k_recovered_on_table1_clusters() {
         let ari = adjusted_rand_index(&truth, &c.cluster_id);
         eprintln!("{crit:?}: K within ±1 of truth at {within}/{} positions ({frac:.2}), exact at {exact}; ARI {ari:.3}", k_true.len());
         fracs.push(frac);
+        let mut conf = [[0usize; 9]; 5];
+        for (t, pc) in k_true.iter().zip(&c.positions) {
+            conf[*t][pc.k.min(8)] += 1;
+        }
+        eprintln!("  true K -> chosen K counts: {:?}", &conf[1..]);
     }
-    // The issue asks for >= 0.8 with the default criterion; the z-scored silhouette rule
-    // reaches 0.58 on this scene (recorded in the issue notes, not hidden by a weaker target
-    // elsewhere). Guard against regressions of what is achieved today.
-    assert!(fracs[0] >= 0.55, "silhouette: K within ±1 at {}", fracs[0]);
+    // The issue asks for >= 0.8 with the default criterion; the silhouette rule reaches 0.72
+    // on this scene (K = 1 is never chosen and K = 4 often merges to 2: recorded in the issue
+    // notes). Guard against regressions of what is achieved today.
+    assert!(fracs[0] >= 0.7, "silhouette: K within ±1 at {}", fracs[0]);
 }
 
 #[test]
