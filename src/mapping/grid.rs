@@ -389,7 +389,12 @@ impl ObservationModel {
         let (c_lo, c_hi) = col_span(spec, pose.x_m, rmax);
         let (r_lo, r_hi) = row_span(spec, pose.y_m, rmax);
         let mut hist: Vec<(u32, f32)> = Vec::with_capacity(16);
-        let sub: Vec<f64> = (0..s).map(|a| (a as f64 + 0.5) / s as f64).collect();
+        let off: Vec<f64> = (0..s)
+            .map(|a| ((a as f64 + 0.5) / s as f64 - 0.5) * spec.cell_m)
+            .collect();
+        let scale = 2.0 / (C0 * self.bin_width_s);
+        let mut ks = vec![0i64; s * s];
+        let mut counts = [0u32; 64];
         for row in r_lo..r_hi {
             for col in c_lo..c_hi {
                 let c = spec.center(row, col);
@@ -399,12 +404,45 @@ impl ObservationModel {
                     continue;
                 }
                 hist.clear();
-                for &fa in &sub {
-                    let x = spec.x0_m + (col as f64 + fa) * spec.cell_m - pose.x_m;
-                    for &fb in &sub {
-                        let y = spec.y0_m + (row as f64 + fb) * spec.cell_m - pose.y_m;
-                        let k = self.bin_of_range((x * x + y * y).sqrt());
-                        if k < self.min_bin as f64 || k >= self.bins as f64 {
+                // sub-point bins: exact ranges near the pose, first-order ranges beyond 2 m
+                // (error ≤ δ²/2r ≈ 1 mm for 0.1 m cells, against 2.5 cm bins)
+                let mut n = 0;
+                if r > 2.0 {
+                    let (ux, uy) = (dx / r, dy / r);
+                    for &oa in &off {
+                        let ra = r + ux * oa;
+                        for &ob in &off {
+                            ks[n] = ((ra + uy * ob) * scale).round() as i64;
+                            n += 1;
+                        }
+                    }
+                } else {
+                    for &oa in &off {
+                        let x = dx + oa;
+                        for &ob in &off {
+                            let y = dy + ob;
+                            ks[n] = ((x * x + y * y).sqrt() * scale).round() as i64;
+                            n += 1;
+                        }
+                    }
+                }
+                let kmin = *ks[..n].iter().min().unwrap_or(&0);
+                let kmax = *ks[..n].iter().max().unwrap_or(&0);
+                let span = (kmax - kmin + 1) as usize;
+                if span <= counts.len() {
+                    counts[..span].iter_mut().for_each(|c| *c = 0);
+                    for &k in &ks[..n] {
+                        counts[(k - kmin) as usize] += 1;
+                    }
+                    for (j, &cnt) in counts[..span].iter().enumerate() {
+                        let k = kmin + j as i64;
+                        if cnt > 0 && k >= self.min_bin as i64 && k < self.bins as i64 {
+                            hist.push((k as u32, (cnt as f64 * inv) as f32));
+                        }
+                    }
+                } else {
+                    for &k in &ks[..n] {
+                        if k < self.min_bin as i64 || k >= self.bins as i64 {
                             continue;
                         }
                         let k = k as u32;
