@@ -216,11 +216,13 @@ fn corridor(dir: &Path, crit: &mut Criterion) {
     for threads in [1, 2] {
         let (_, st) = pool(threads).install(|| run(&l.model, &l.energy, &l.detector, Method::Og));
         println!(
-            "corridor og ({} cells, 12 x 37 scans), {threads} thread(s): {:.3} s, {} cell updates, {:.3e} cell updates/s",
+            "corridor og ({} cells, 12 x 37 scans), {threads} thread(s): {:.3} s, {} increments ({:.3e}/s), {} entries evaluated ({:.3e}/s)",
             l.model.spec.len(),
             st.seconds,
             st.cell_updates,
-            st.cell_updates as f64 / st.seconds
+            st.cell_updates as f64 / st.seconds,
+            st.entries,
+            st.entries as f64 / st.seconds
         );
     }
 }
