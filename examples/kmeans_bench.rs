@@ -11,7 +11,10 @@ use std::time::Instant;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    anyhow::ensure!(args.len() == 3, "usage: kmeans_bench CLUSTERS.parquet OUT.csv");
+    anyhow::ensure!(
+        args.len() == 3,
+        "usage: kmeans_bench CLUSTERS.parquet OUT.csv"
+    );
     let mpcs = pradar::mpc::read_mpcs(std::path::Path::new(&args[1]))?;
     let np = mpcs.iter().map(|m| m.position + 1).max().unwrap_or(0);
     let mut sets = Vec::new();
@@ -23,12 +26,20 @@ fn main() -> anyhow::Result<()> {
         let n = ms.len() as f64;
         let z = |v: Vec<f64>| {
             let mean = v.iter().sum::<f64>() / n;
-            let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt().max(1e-12);
+            let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n)
+                .sqrt()
+                .max(1e-12);
             v.into_iter().map(|x| (x - mean) / sd).collect::<Vec<_>>()
         };
         let d = z(ms.iter().map(|m| m.delay_ns).collect());
         let a = z(ms.iter().map(|m| m.angle_rel_deg).collect());
-        sets.push((p, d.iter().zip(&a).map(|(x, y)| [*x, *y]).collect::<Vec<[f64; 2]>>()));
+        sets.push((
+            p,
+            d.iter()
+                .zip(&a)
+                .map(|(x, y)| [*x, *y])
+                .collect::<Vec<[f64; 2]>>(),
+        ));
     }
     let t = Instant::now();
     let mut out = Vec::new();
@@ -46,6 +57,10 @@ fn main() -> anyhow::Result<()> {
             writeln!(f, "{p},{k},{i},{:.17e},{:.17e},{l}", v[0], v[1])?;
         }
     }
-    println!("fits={} points={} seconds={secs:.6}", out.len(), sets.iter().map(|s| s.1.len()).sum::<usize>() * 7);
+    println!(
+        "fits={} points={} seconds={secs:.6}",
+        out.len(),
+        sets.iter().map(|s| s.1.len()).sum::<usize>() * 7
+    );
     Ok(())
 }

@@ -222,19 +222,7 @@ pub fn calinski_harabasz(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
         x.iter().map(|p| p[0]).sum::<f64>() / n as f64,
         x.iter().map(|p| p[1]).sum::<f64>() / n as f64,
     ];
-    let mut c = vec![[0.0f64; 2]; k];
-    let mut size = vec![0usize; k];
-    for (p, &l) in x.iter().zip(labels) {
-        c[l][0] += p[0];
-        c[l][1] += p[1];
-        size[l] += 1;
-    }
-    for (ci, &s) in c.iter_mut().zip(&size) {
-        if s > 0 {
-            ci[0] /= s as f64;
-            ci[1] /= s as f64;
-        }
-    }
+    let (c, size) = centroids(x, labels, k);
     let b: f64 = c
         .iter()
         .zip(&size)
@@ -251,8 +239,8 @@ pub fn calinski_harabasz(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
     (b / (k - 1) as f64) / (w / (n - k) as f64)
 }
 
-/// Pooled within-cluster standard deviation per feature (floored at 1e-3).
-pub fn pooled_within_sd(x: &[[f64; 2]], labels: &[usize], k: usize) -> [f64; 2] {
+/// Centroids and sizes of a labelling (k clusters, at least one slot).
+fn centroids(x: &[[f64; 2]], labels: &[usize], k: usize) -> (Vec<[f64; 2]>, Vec<usize>) {
     let mut c = vec![[0.0f64; 2]; k.max(1)];
     let mut size = vec![0usize; k.max(1)];
     for (p, &l) in x.iter().zip(labels) {
@@ -266,6 +254,12 @@ pub fn pooled_within_sd(x: &[[f64; 2]], labels: &[usize], k: usize) -> [f64; 2] 
             ci[1] /= s as f64;
         }
     }
+    (c, size)
+}
+
+/// Pooled within-cluster standard deviation per feature (floored at 1e-3).
+pub fn pooled_within_sd(x: &[[f64; 2]], labels: &[usize], k: usize) -> [f64; 2] {
+    let (c, _) = centroids(x, labels, k);
     let mut v = [0.0f64; 2];
     for (p, &l) in x.iter().zip(labels) {
         v[0] += (p[0] - c[l][0]).powi(2);
@@ -277,19 +271,7 @@ pub fn pooled_within_sd(x: &[[f64; 2]], labels: &[usize], k: usize) -> [f64; 2] 
 
 /// Pooled within-cluster sum of squares.
 pub fn within_ss(x: &[[f64; 2]], labels: &[usize], k: usize) -> f64 {
-    let mut c = vec![[0.0f64; 2]; k.max(1)];
-    let mut size = vec![0usize; k.max(1)];
-    for (p, &l) in x.iter().zip(labels) {
-        c[l][0] += p[0];
-        c[l][1] += p[1];
-        size[l] += 1;
-    }
-    for (ci, &s) in c.iter_mut().zip(&size) {
-        if s > 0 {
-            ci[0] /= s as f64;
-            ci[1] /= s as f64;
-        }
-    }
+    let (c, _) = centroids(x, labels, k);
     x.iter()
         .zip(labels)
         .map(|(p, &l)| dist(p, &c[l]).powi(2))

@@ -36,7 +36,12 @@ fn scene(
         .as_table_mut()
         .unwrap()
         .insert("targets".into(), arr.into());
-    let m = write_campaign(&dir.join("in"), &t);
+    chain(dir, &t)
+}
+
+/// Write a manifest, simulate it (Parquet sweeps) and compute its energy matrix.
+fn chain(dir: &std::path::Path, t: &toml::Table) -> (Campaign, EnergyMatrix) {
+    let m = write_campaign(&dir.join("in"), t);
     let c = Campaign::load(&m).unwrap();
     let sim = simulate(&c, &dir.join("sim"), SweepFormat::Parquet, &|_, _| {}).unwrap();
     let sc = Campaign::load(&sim.manifest).unwrap();
@@ -186,13 +191,7 @@ fn corridor_strong_scatterer_recall_is_printed() {
         let mut t = corridor();
         set(&mut t, "array.elements", n as i64);
         let dir = tmp.path().join(format!("c{n}"));
-        let m = write_campaign(&dir.join("in"), &t);
-        let c = Campaign::load(&m).unwrap();
-        let sim = simulate(&c, &dir.join("sim"), SweepFormat::Parquet, &|_, _| {}).unwrap();
-        let sc = Campaign::load(&sim.manifest).unwrap();
-        let e = dir.join("energy.parquet");
-        energy::run(&sc, &e, &|_, _| {}).unwrap();
-        let em = EnergyMatrix::read(&e).unwrap();
+        let (sc, em) = chain(&dir, &t);
         let mpcs = extract(&em, &sc, &ExtractParams::default()).unwrap();
         let rays = pradar::table::read_parquet(&dir.join("sim/truth/rays.parquet"), None).unwrap();
         let path = std::path::Path::new("rays");
