@@ -9,6 +9,7 @@ pub mod campaign;
 pub mod cluster;
 pub mod energy;
 pub mod error;
+pub mod fit;
 pub mod io;
 pub mod mapping;
 pub mod mpc;
