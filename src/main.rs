@@ -139,6 +139,27 @@ enum Cmd {
         #[arg(long, value_enum, default_value = "silhouette")]
         criterion: KCriterion,
     },
+    /// Fit the channel model (Table 1) from clustered MPCs.
+    Fit {
+        /// Clustered MPC Parquet from `cluster`.
+        #[arg(long)]
+        clusters: PathBuf,
+        /// The campaign (analysis view: [scene]/[clutter] are never read).
+        #[arg(long)]
+        campaign: PathBuf,
+        /// Output model file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Table 1 Markdown (a CSV is written beside it).
+        #[arg(long)]
+        table: PathBuf,
+        /// Bootstrap resamples.
+        #[arg(long, default_value_t = 1000)]
+        bootstrap: usize,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce {
         /// Report folder.
@@ -348,6 +369,25 @@ fn run(cli: Cli) -> Result<()> {
                     out.display(),
                     summary.display()
                 );
+            }
+        }
+        Cmd::Fit {
+            clusters,
+            campaign,
+            out,
+            table,
+            bootstrap,
+            seed,
+        } => {
+            let c = Campaign::load(&campaign)?;
+            let params = pradar::fit::channel::FitParams { bootstrap, seed };
+            let f = pradar::fit::channel::fit_channel(&clusters, &c, &params)?;
+            f.model.save(&out)?;
+            pradar::fit::channel::write_table1(&table, &f)?;
+            if !quiet {
+                for r in pradar::fit::channel::table1_rows(&f) {
+                    println!("{:<38} {:<60} {}", r[0], r[1], r[2]);
+                }
             }
         }
         Cmd::Reproduce {

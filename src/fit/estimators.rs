@@ -1,5 +1,4 @@
-//! Channel fitting, part 1: the estimators (DESIGN §2 "Fitting"). The `fit` command (Table 1,
-//! model file) builds on these; see the issue notes for what is still to come.
+//! Estimators of the channel fit (DESIGN §2 "Fitting").
 //!
 //! Takes samples (inter-arrival gaps, AoA offsets, perimeter distances, …); gives maximum-
 //! likelihood fits of candidate families, their log-likelihoods and AIC = 2k − 2·ln L, the

@@ -1,0 +1,142 @@
+//! `pradar fit` end to end: never reads the ground truth, clear errors, model round trip.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use std::process::Command;
+
+fn pradar(args: &[&str]) -> (i32, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn fit_ignores_ground_truth_and_round_trips_its_model() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = corridor();
+    set(&mut t, "band.points", 401i64);
+    set(&mut t, "processing.max_delay_ns", 45.0);
+    set(&mut t, "processing.noise_from_ns", 50.0);
+    let m = write_campaign(&tmp.path().join("in"), &t);
+    let rep = tmp.path().join("rep");
+    let (code, err) = pradar(&["reproduce", "--out", s(&rep), "--campaign", s(&m)]);
+    assert_eq!(code, 0, "{err}");
+    let work = rep.join("work");
+    let sim_manifest = work.join("simulated/campaign.toml");
+    // the same manifest without [scene] and [clutter]
+    let text = std::fs::read_to_string(&sim_manifest).unwrap();
+    let mut table: toml::Table = toml::from_str(&text).unwrap();
+    assert!(table.remove("scene").is_some() && table.remove("clutter").is_some());
+    let stripped = work.join("simulated/campaign_no_truth.toml");
+    std::fs::write(&stripped, toml::to_string(&table).unwrap()).unwrap();
+    let mut outs = Vec::new();
+    for (i, man) in [&sim_manifest, &stripped].iter().enumerate() {
+        let model = tmp.path().join(format!("model{i}.toml"));
+        let md = tmp.path().join(format!("table{i}.md"));
+        let (code, err) = pradar(&[
+            "fit",
+            "--clusters",
+            s(&work.join("clusters.parquet")),
+            "--campaign",
+            s(man),
+            "--out",
+            s(&model),
+            "--table",
+            s(&md),
+            "--bootstrap",
+            "200",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        outs.push((std::fs::read(&model).unwrap(), std::fs::read(&md).unwrap()));
+    }
+    assert!(
+        outs[0] == outs[1],
+        "fit output changed when [scene]/[clutter] were removed"
+    );
+    let text = String::from_utf8(outs[0].0.clone()).unwrap();
+    assert!(
+        !text.to_lowercase().contains("nan"),
+        "NaN in the model:\n{text}"
+    );
+    // read back and written unchanged
+    let m0 = tmp.path().join("model0.toml");
+    let model = pradar::campaign::modelfile::ModelConfig::load(&m0).unwrap();
+    let again = tmp.path().join("again.toml");
+    model.save(&again).unwrap();
+    assert_eq!(std::fs::read(&m0).unwrap(), std::fs::read(&again).unwrap());
+    eprintln!("{}", String::from_utf8_lossy(&outs[0].1));
+}
+
+#[test]
+fn bad_model_files_and_too_few_clusters_give_clear_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut m = pradar::campaign::modelfile::ModelConfig::table1_defaults();
+    m.intra_cluster_aoa.unit = "rad".into();
+    let text = toml::to_string(&m).unwrap();
+    let p = tmp.path().join("bad.toml");
+    std::fs::write(&p, text).unwrap();
+    let e = pradar::campaign::modelfile::ModelConfig::load(&p)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bad.toml") && e.contains("intra_cluster_aoa.unit"),
+        "{e}"
+    );
+    std::fs::write(
+        &p,
+        "schema_version = 1\n[inter_cluster_rate]\nvalue = 0.2\n",
+    )
+    .unwrap();
+    let e = pradar::campaign::modelfile::ModelConfig::load(&p)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("bad.toml") && e.contains("unit"), "{e}");
+    // a clusters table with a single cluster cannot give inter-cluster gaps
+    let mpcs = vec![pradar::mpc::Mpc {
+        position: 0,
+        delay_ns: 10.0,
+        angle_rel_deg: 0.0,
+        angle_global_deg: 0.0,
+        power_db: -80.0,
+        snr_db: 30.0,
+        x_m: 1.5,
+        y_m: 0.0,
+        direction: 18,
+        bin: 60,
+    }];
+    let c = pradar::cluster::cluster(&mpcs, &[0.0], &Default::default()).unwrap();
+    let cl = tmp.path().join("clusters.parquet");
+    pradar::cluster::write(&cl, &c).unwrap();
+    let man = write_campaign(&tmp.path().join("in"), &corridor());
+    let (code, err) = pradar(&[
+        "fit",
+        "--clusters",
+        s(&cl),
+        "--campaign",
+        s(&man),
+        "--out",
+        s(&tmp.path().join("m.toml")),
+        "--table",
+        s(&tmp.path().join("t.md")),
+    ]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("inter_cluster_rate")
+            && !err.contains("panicked")
+            && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    assert!(!tmp.path().join("m.toml").exists());
+}
