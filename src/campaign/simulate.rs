@@ -37,7 +37,7 @@
 //! bytes do not depend on the thread count. The energy/mapping models know none of the
 //! specular, Lambertian, clutter-geometry or coupling details (no inverse crime).
 
-use crate::campaign::layout::{Layout, WallKind};
+use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{one_line, Campaign, Steering, SweepFormat, SweepsConfig, C0};
 use crate::campaign::modelfile::ModelConfig;
 use crate::campaign::pattern::{ArrayPattern, PatternTable};
@@ -531,7 +531,6 @@ impl Scene {
                     kind: ScattererKind::Specular,
                     pos: foot,
                 });
-                let _ = WallKind::Perimeter;
             }
         }
         out
