@@ -344,6 +344,7 @@ fn fig(v: &serde_json::Value, path: &[&str]) -> f64 {
 fn corridor_side_lobe_aware_beats_boresight_and_n100_beats_n16() {
     let tmp = tempfile::tempdir().unwrap();
     let mut psi_og = Vec::new();
+    let mut f1_og = Vec::new();
     for (n, c, e) in corridor_runs() {
         let mut figs = Vec::new();
         for method in ["og", "og-boresight"] {
@@ -409,9 +410,12 @@ fn corridor_side_lobe_aware_beats_boresight_and_n100_beats_n16() {
         );
         assert!(og_f1 > bs_f1, "N={n}: og F1 {og_f1} vs boresight {bs_f1}");
         psi_og.push(og_psi);
+        f1_og.push(og_f1);
     }
     eprintln!("og psi: N=16 {:.3}, N=100 {:.3}", psi_og[0], psi_og[1]);
+    eprintln!("og F1: N=16 {:.3}, N=100 {:.3}", f1_og[0], f1_og[1]);
     assert!(psi_og[1] < psi_og[0], "N = 100 should beat N = 16 on psi");
+    assert!(f1_og[1] > f1_og[0], "N = 100 should beat N = 16 on F1");
 }
 
 #[test]
