@@ -5,8 +5,7 @@ mod common;
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat, C0};
 use pradar::campaign::pattern::{beam_metrics, ArrayPattern};
-use pradar::campaign::simulate::simulate;
-use pradar::energy::{self, EnergyMatrix, EnergyProcessor};
+use pradar::energy::{EnergyMatrix, EnergyProcessor};
 use pradar::mpc::{extract, ExtractParams, Method, Mpc};
 
 /// Simulate a point-target scene (targets as (range m, angle deg, rrcs m)) and compute its
@@ -36,18 +35,7 @@ fn scene(
         .as_table_mut()
         .unwrap()
         .insert("targets".into(), arr.into());
-    chain(dir, &t)
-}
-
-/// Write a manifest, simulate it (Parquet sweeps) and compute its energy matrix.
-fn chain(dir: &std::path::Path, t: &toml::Table) -> (Campaign, EnergyMatrix) {
-    let m = write_campaign(&dir.join("in"), t);
-    let c = Campaign::load(&m).unwrap();
-    let sim = simulate(&c, &dir.join("sim"), SweepFormat::Parquet, &|_, _| {}).unwrap();
-    let sc = Campaign::load(&sim.manifest).unwrap();
-    let e = dir.join("energy.parquet");
-    energy::run(&sc, &e, &|_, _| {}).unwrap();
-    (sc, EnergyMatrix::read(&e).unwrap())
+    chain(dir, &t, SweepFormat::Parquet)
 }
 
 /// (recall, precision) by count within (2 bins, 5°).
@@ -191,7 +179,7 @@ fn corridor_strong_scatterer_recall_is_printed() {
         let mut t = corridor();
         set(&mut t, "array.elements", n as i64);
         let dir = tmp.path().join(format!("c{n}"));
-        let (sc, em) = chain(&dir, &t);
+        let (sc, em) = chain(&dir, &t, SweepFormat::Parquet);
         let mpcs = extract(&em, &sc, &ExtractParams::default()).unwrap();
         let rays = pradar::table::read_parquet(&dir.join("sim/truth/rays.parquet"), None).unwrap();
         let path = std::path::Path::new("rays");

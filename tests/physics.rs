@@ -7,18 +7,11 @@ use num_complex::Complex64;
 use pradar::campaign::layout::Layout;
 use pradar::campaign::manifest::{Campaign, SweepFormat, C0};
 use pradar::campaign::pattern::ArrayPattern;
-use pradar::campaign::simulate::simulate;
-use pradar::energy::{self, EnergyMatrix, EnergyProcessor};
+use pradar::energy::{EnergyMatrix, EnergyProcessor};
 use std::f64::consts::PI;
 
 fn run_chain(dir: &std::path::Path, t: &toml::Table) -> (Campaign, EnergyMatrix) {
-    let m = write_campaign(&dir.join("in"), t);
-    let c = Campaign::load(&m).unwrap();
-    let sim = simulate(&c, &dir.join("sim"), SweepFormat::Touchstone, &|_, _| {}).unwrap();
-    let sc = Campaign::load(&sim.manifest).unwrap();
-    let e = dir.join("energy.parquet");
-    energy::run(&sc, &e, &|_, _| {}).unwrap();
-    (sc, EnergyMatrix::read(&e).unwrap())
+    chain(dir, t, SweepFormat::Touchstone)
 }
 
 fn argmax(em: &EnergyMatrix, p: usize) -> (usize, usize, f64) {

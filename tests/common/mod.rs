@@ -50,3 +50,21 @@ pub fn write_campaign(dir: &Path, t: &toml::Table) -> PathBuf {
 pub fn corridor() -> toml::Table {
     fixture("corridor/campaign.toml")
 }
+
+/// Write a manifest into `dir/in`, simulate it into `dir/sim` (sweeps in `format`) and
+/// compute its energy matrix into `dir/energy.parquet`.
+pub fn chain(
+    dir: &Path,
+    t: &toml::Table,
+    format: pradar::campaign::manifest::SweepFormat,
+) -> (pradar::campaign::Campaign, pradar::energy::EnergyMatrix) {
+    use pradar::campaign::Campaign;
+    let m = write_campaign(&dir.join("in"), t);
+    let c = Campaign::load(&m).unwrap();
+    let sim =
+        pradar::campaign::simulate::simulate(&c, &dir.join("sim"), format, &|_, _| {}).unwrap();
+    let sc = Campaign::load(&sim.manifest).unwrap();
+    let e = dir.join("energy.parquet");
+    pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
+    (sc, pradar::energy::EnergyMatrix::read(&e).unwrap())
+}
