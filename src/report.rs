@@ -289,3 +289,121 @@ pub fn write_index(path: &Path, title: &str, sections: &[Section]) -> Result<()>
     h.push_str("</body></html>\n");
     crate::io::write_bytes(path, h.as_bytes())
 }
+
+/// Histogram of `samples` (density-normalised) with the fitted pdf, and the empirical vs
+/// fitted CDF beside it.
+pub fn fit_plot(
+    path: &Path,
+    title: &str,
+    unit: &str,
+    samples: &[f64],
+    fitted: &crate::fit::Fitted,
+) -> Result<()> {
+    register_font();
+    crate::io::ensure_parent(path)?;
+    if samples.len() < 2 {
+        return Err(Error::input(path, "fewer than 2 samples to plot"));
+    }
+    let tmp = crate::io::temp_path(path).with_extension("png");
+    let mut v = samples.to_vec();
+    v.sort_by(f64::total_cmp);
+    let lo = v[(v.len() as f64 * 0.005) as usize].min(0.0_f64.max(v[0]));
+    let hi = v[((v.len() - 1) as f64 * 0.995) as usize];
+    let (lo, hi) = if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 1.0, lo + 1.0)
+    };
+    let nbins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 40);
+    let w = (hi - lo) / nbins as f64;
+    let mut counts = vec![0usize; nbins];
+    for &x in &v {
+        if x >= lo && x <= hi {
+            counts[(((x - lo) / w) as usize).min(nbins - 1)] += 1;
+        }
+    }
+    let dens: Vec<f64> = counts
+        .iter()
+        .map(|&c| c as f64 / (v.len() as f64 * w))
+        .collect();
+    let grid: Vec<f64> = (0..=200)
+        .map(|i| lo + (hi - lo) * i as f64 / 200.0)
+        .collect();
+    let pdf: Vec<f64> = grid.iter().map(|&x| fitted.pdf(x)).collect();
+    let ymax = dens
+        .iter()
+        .chain(&pdf)
+        .cloned()
+        .fold(0.0, f64::max)
+        .max(1e-12)
+        * 1.1;
+    {
+        let root = BitMapBackend::new(&tmp, (900, 360)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let (left, right) = root.split_horizontally(450);
+        let mut c1 = ChartBuilder::on(&left)
+            .caption(
+                format!("{title}: histogram, fitted {}", fitted.family.name()),
+                ("sans-serif", 14),
+            )
+            .margin(8)
+            .x_label_area_size(35)
+            .y_label_area_size(50)
+            .build_cartesian_2d(lo..hi, 0.0..ymax)
+            .map_err(|e| plot_err(path, e))?;
+        c1.configure_mesh()
+            .x_desc(unit)
+            .y_desc("density")
+            .label_style(("sans-serif", 11))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        c1.draw_series(dens.iter().enumerate().map(|(i, &d)| {
+            let x0 = lo + i as f64 * w;
+            Rectangle::new(
+                [(x0, 0.0), (x0 + w, d)],
+                RGBColor(31, 119, 180).mix(0.5).filled(),
+            )
+        }))
+        .map_err(|e| plot_err(path, e))?;
+        c1.draw_series(line_path(
+            grid.iter().cloned().zip(pdf.iter().cloned()),
+            RED.stroke_width(2),
+        ))
+        .map_err(|e| plot_err(path, e))?;
+        let mut c2 = ChartBuilder::on(&right)
+            .caption("empirical vs fitted CDF", ("sans-serif", 14))
+            .margin(8)
+            .x_label_area_size(35)
+            .y_label_area_size(40)
+            .build_cartesian_2d(lo..hi, 0.0..1.0)
+            .map_err(|e| plot_err(path, e))?;
+        c2.configure_mesh()
+            .x_desc(unit)
+            .label_style(("sans-serif", 11))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        let n = v.len() as f64;
+        c2.draw_series(line_path(
+            v.iter().enumerate().map(|(i, &x)| (x, (i + 1) as f64 / n)),
+            BLACK.stroke_width(1),
+        ))
+        .map_err(|e| plot_err(path, e))?;
+        c2.draw_series(line_path(
+            grid.iter().map(|&x| (x, fitted.cdf(x))),
+            RED.stroke_width(2),
+        ))
+        .map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+fn line_path(
+    points: impl IntoIterator<Item = (f64, f64)>,
+    style: ShapeStyle,
+) -> std::iter::Once<PathElement<(f64, f64)>> {
+    std::iter::once(PathElement::new(
+        points.into_iter().collect::<Vec<_>>(),
+        style,
+    ))
+}

@@ -33,6 +33,19 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
     let rep = tmp.path().join("rep");
     let (code, err) = pradar(&["reproduce", "--out", s(&rep), "--campaign", s(&m)]);
     assert_eq!(code, 0, "{err}");
+    // the report carries Table 1 and a histogram/CDF plot per fitted quantity
+    let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    assert!(html.contains("Table 1") && html.contains("0.21 1/ns"));
+    for q in [
+        "inter_cluster_rate",
+        "intra_cluster_rate",
+        "intra_cluster_aoa",
+        "perimeter_offset",
+        "perimeter_spacing",
+    ] {
+        let png = std::fs::read(rep.join(format!("fit_{q}.png"))).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
     let work = rep.join("work");
     let sim_manifest = work.join("simulated/campaign.toml");
     // the same manifest without [scene] and [clutter]

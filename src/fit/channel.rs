@@ -77,6 +77,8 @@ pub struct FittedQuantity {
     pub aic: Vec<(String, f64)>,
     /// Samples per position (for plots).
     pub samples: Vec<f64>,
+    /// The fitted law of the samples.
+    pub fitted: crate::fit::Fitted,
 }
 
 /// Samples grouped by position.
@@ -132,6 +134,7 @@ fn quantity(
         },
         aic,
         samples: x,
+        fitted: f,
     })
 }
 

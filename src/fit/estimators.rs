@@ -225,6 +225,12 @@ impl Fitted {
         2.0 * self.k() as f64 - 2.0 * self.loglik
     }
 
+    /// Probability density (central difference of the CDF, for plots).
+    pub fn pdf(&self, x: f64) -> f64 {
+        let h = 1e-5 * (1.0 + x.abs());
+        ((self.cdf(x + h) - self.cdf(x - h)) / (2.0 * h)).max(0.0)
+    }
+
     /// Cumulative distribution function.
     pub fn cdf(&self, x: f64) -> f64 {
         let p = &self.params;
