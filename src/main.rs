@@ -159,6 +159,9 @@ enum Cmd {
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// A simulator's truth/ folder: add the same estimators on its true clusters.
+        #[arg(long)]
+        truth: Option<PathBuf>,
     },
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce {
@@ -378,15 +381,20 @@ fn run(cli: Cli) -> Result<()> {
             table,
             bootstrap,
             seed,
+            truth,
         } => {
             let c = Campaign::load(&campaign)?;
             let params = pradar::fit::channel::FitParams { bootstrap, seed };
             let f = pradar::fit::channel::fit_channel(&clusters, &c, &params)?;
+            let t = match &truth {
+                Some(dir) => Some(pradar::fit::channel::fit_truth(dir, &c, &params)?),
+                None => None,
+            };
             f.model.save(&out)?;
-            pradar::fit::channel::write_table1(&table, &f)?;
+            pradar::fit::channel::write_table1(&table, &f, t.as_ref())?;
             if !quiet {
-                for r in pradar::fit::channel::table1_rows(&f) {
-                    println!("{:<38} {:<60} {}", r[0], r[1], r[2]);
+                for r in pradar::fit::channel::table1_rows(&f, t.as_ref()) {
+                    println!("{:<38} {:<60} {:<20} truth {}", r[0], r[1], r[2], r[7]);
                 }
             }
         }

@@ -82,12 +82,14 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let t = Instant::now();
     let fitted =
         crate::fit::channel::fit_channel(&work.join("clusters.parquet"), &sc, &Default::default());
+    let truth =
+        crate::fit::channel::fit_truth(&sim_dir.join("truth"), &sc, &Default::default()).ok();
     let table1_html = match &fitted {
         Ok(f) => {
             f.model.save(&out.join("fitted_model.toml"))?;
-            crate::fit::channel::write_table1(&out.join("table1.md"), f)?;
-            let mut h = String::from("<table><tr><th>parameter</th><th>pradar</th><th>95% interval</th><th>family</th><th>KS p</th><th>best by AIC</th><th>paper</th></tr>\n");
-            for r in crate::fit::channel::table1_rows(f) {
+            crate::fit::channel::write_table1(&out.join("table1.md"), f, truth.as_ref())?;
+            let mut h = String::from("<table><tr><th>parameter</th><th>pradar</th><th>95% interval</th><th>family</th><th>KS p</th><th>best by AIC</th><th>paper</th><th>simulator truth (same estimators)</th></tr>\n");
+            for r in crate::fit::channel::table1_rows(f, truth.as_ref()) {
                 h.push_str("<tr>");
                 for c in r.iter() {
                     h.push_str(&format!("<td>{}</td>", report::html_escape(c)));
