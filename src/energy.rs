@@ -303,6 +303,18 @@ pub struct EnergyMeta {
 }
 
 impl EnergyMeta {
+    /// The coupling gate applied, ns (0 unless `coupling = "gate"`).
+    pub fn gate_ns(&self) -> f64 {
+        if self.coupling != "gate" {
+            return 0.0;
+        }
+        self.all
+            .iter()
+            .find(|(k, _)| k == "gate_ns")
+            .and_then(|(_, v)| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    }
+
     /// Mean energy of a noise-only bin, N0·TW.
     pub fn noise_mean(&self) -> f64 {
         self.n0 * self.tw
@@ -438,6 +450,73 @@ impl EnergyMatrix {
             data,
         })
     }
+}
+
+/// Check that an energy table belongs to a campaign (file named in every error).
+pub fn check_campaign(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()> {
+    let m = &c.manifest;
+    let (np, nd) = (m.poses.len(), m.directions.count());
+    if em.positions != np || em.directions() != nd {
+        return Err(Error::input(
+            path,
+            format!(
+                "{} positions x {} directions, but campaign {} has {np} poses x {nd} directions (energy table from another campaign?)",
+                em.positions,
+                em.directions(),
+                c.path.display()
+            ),
+        ));
+    }
+    for d in 0..nd {
+        if (em.angles_rel_deg[d] - m.directions.angle_deg(d)).abs() > 1e-6 {
+            return Err(Error::input(
+                path,
+                format!(
+                    "direction {d} at {}°, campaign {} has {}° (energy table from another campaign?)",
+                    em.angles_rel_deg[d],
+                    c.path.display(),
+                    m.directions.angle_deg(d)
+                ),
+            ));
+        }
+    }
+    for (p, pose) in m.poses.iter().enumerate() {
+        let diff = wrap_deg(em.headings_deg[p] - pose.heading_deg).abs();
+        if diff.is_nan() || diff >= 1e-6 {
+            return Err(Error::input(
+                path,
+                format!(
+                    "position {p} heading {}°, campaign {} has {}° (energy table from another campaign?)",
+                    em.headings_deg[p],
+                    c.path.display(),
+                    pose.heading_deg
+                ),
+            ));
+        }
+    }
+    let tb = 1e9 / m.band.bandwidth_hz();
+    if (em.meta.bin_width_ns - tb).abs() > 1e-6 * tb || !em.meta.bin_width_ns.is_finite() {
+        return Err(Error::input(
+            path,
+            format!(
+                "bin_width_ns {} but campaign {} has 1/B = {tb} ns",
+                em.meta.bin_width_ns,
+                c.path.display()
+            ),
+        ));
+    }
+    if let Some((_, v)) = em.meta.all.iter().find(|(k, _)| k == "elements") {
+        if v.parse::<usize>().ok() != Some(m.array.elements) {
+            return Err(Error::input(
+                path,
+                format!(
+                    "metadata elements = {v}, but the campaign's array has {} elements (pass --elements {v}?)",
+                    m.array.elements
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Wrap an angle to (−180, 180] degrees.

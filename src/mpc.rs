@@ -397,15 +397,8 @@ fn extract_position(
 
 /// The automatic lower delay limit (see [`ExtractParams::min_delay_ns`]).
 pub fn auto_min_delay_ns(em: &EnergyMatrix) -> f64 {
-    let gate = em
-        .meta
-        .all
-        .iter()
-        .find(|(k, _)| k == "gate_ns")
-        .and_then(|(_, v)| v.parse::<f64>().ok())
-        .unwrap_or(0.0);
     if em.meta.coupling == "gate" {
-        gate + 4.0 * em.meta.bin_width_ns
+        em.meta.gate_ns() + 4.0 * em.meta.bin_width_ns
     } else {
         0.0
     }
@@ -414,7 +407,7 @@ pub fn auto_min_delay_ns(em: &EnergyMatrix) -> f64 {
 /// Extract MPCs from every position (positions in parallel, results in position order).
 pub fn extract(em: &EnergyMatrix, c: &Campaign, params: &ExtractParams) -> Result<Vec<Mpc>> {
     params.check()?;
-    check_matches(em, c)?;
+    crate::energy::check_campaign(c, em, &c.path)?;
     let floor = em.meta.noise_mean();
     if !(floor.is_finite() && floor > 0.0) {
         return Err(Error::param(
@@ -431,35 +424,6 @@ pub fn extract(em: &EnergyMatrix, c: &Campaign, params: &ExtractParams) -> Resul
         .map(|p| extract_position(em, c, fp.as_ref(), p, params, floor))
         .collect();
     Ok(per.into_iter().flatten().collect())
-}
-
-/// Check that an energy table belongs to a campaign (positions, directions).
-pub fn check_matches(em: &EnergyMatrix, c: &Campaign) -> Result<()> {
-    let m = &c.manifest;
-    if em.positions != m.positions() || em.directions() != m.directions.count() {
-        return Err(Error::input(
-            &c.path,
-            format!(
-                "energy table has {} positions x {} directions, the campaign {} x {}",
-                em.positions,
-                em.directions(),
-                m.positions(),
-                m.directions.count()
-            ),
-        ));
-    }
-    for (d, a) in em.angles_rel_deg.iter().enumerate() {
-        if (a - m.directions.angle_deg(d)).abs() > 1e-6 {
-            return Err(Error::input(
-                &c.path,
-                format!(
-                    "direction {d}: energy table angle {a} vs campaign {}",
-                    m.directions.angle_deg(d)
-                ),
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// Columns of the MPC table.

@@ -15,9 +15,7 @@
 //! walls: never observable, reported separately by the metrics).
 
 use crate::error::{Error, Result};
-use geo::{
-    BoundingRect, Contains, Coord, Intersects, Line, LineString, Point, Polygon, Rect, Winding,
-};
+use geo::{BoundingRect, Contains, Coord, Intersects, Line, Point, Polygon, Rect, Winding};
 use geojson::GeoJson;
 use std::path::Path;
 
@@ -437,11 +435,6 @@ impl Layout {
             }
         }
         ReferenceMap { spec, cells }
-    }
-
-    /// The perimeter as a line string (closed).
-    pub fn perimeter_ring(&self) -> &LineString<f64> {
-        self.perimeter.exterior()
     }
 }
 

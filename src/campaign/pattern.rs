@@ -253,11 +253,6 @@ impl PatternTable {
         let t = x - i as f64;
         self.at_knot(theta, i) * (1.0 - t) + self.at_knot(theta, i + 1) * t
     }
-
-    /// Two-way power gain |F|⁴ at the band centre knot nearest `f_hz`.
-    pub fn two_way_gain(&self, theta: f64, f_hz: f64) -> f64 {
-        self.field(theta, f_hz).norm_sqr().powi(2)
-    }
 }
 
 /// Convert a power ratio to dB.

@@ -28,7 +28,7 @@
 
 use crate::campaign::layout::{CellClass, GridSpec, Layout, ReferenceMap};
 use crate::campaign::manifest::Campaign;
-use crate::energy::{wrap_deg, EnergyMatrix};
+use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridParams, ObservationModel};
 use crate::mapping::metrics::{evaluate, MapMetrics};
@@ -104,85 +104,9 @@ pub struct LoadedRun {
     pub detector: Detector,
 }
 
-/// Check that an energy table belongs to a campaign (file named in every error).
-pub fn check_energy(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()> {
-    let m = &c.manifest;
-    let (np, nd) = (m.poses.len(), m.directions.count());
-    if em.positions != np || em.directions() != nd {
-        return Err(Error::input(
-            path,
-            format!(
-                "{} positions x {} directions, but campaign {} has {np} poses x {nd} directions (energy table from another campaign?)",
-                em.positions,
-                em.directions(),
-                c.path.display()
-            ),
-        ));
-    }
-    for d in 0..nd {
-        if (em.angles_rel_deg[d] - m.directions.angle_deg(d)).abs() > 1e-6 {
-            return Err(Error::input(
-                path,
-                format!(
-                    "direction {d} at {}°, campaign {} has {}° (energy table from another campaign?)",
-                    em.angles_rel_deg[d],
-                    c.path.display(),
-                    m.directions.angle_deg(d)
-                ),
-            ));
-        }
-    }
-    for (p, pose) in m.poses.iter().enumerate() {
-        let diff = wrap_deg(em.headings_deg[p] - pose.heading_deg).abs();
-        if diff.is_nan() || diff >= 1e-6 {
-            return Err(Error::input(
-                path,
-                format!(
-                    "position {p} heading {}°, campaign {} has {}° (energy table from another campaign?)",
-                    em.headings_deg[p],
-                    c.path.display(),
-                    pose.heading_deg
-                ),
-            ));
-        }
-    }
-    let tb = 1e9 / m.band.bandwidth_hz();
-    if (em.meta.bin_width_ns - tb).abs() > 1e-6 * tb || !em.meta.bin_width_ns.is_finite() {
-        return Err(Error::input(
-            path,
-            format!(
-                "bin_width_ns {} but campaign {} has 1/B = {tb} ns",
-                em.meta.bin_width_ns,
-                c.path.display()
-            ),
-        ));
-    }
-    if let Some((_, v)) = em.meta.all.iter().find(|(k, _)| k == "elements") {
-        if v.parse::<usize>().ok() != Some(m.array.elements) {
-            return Err(Error::input(
-                path,
-                format!(
-                    "metadata elements = {v}, but the mapper's array has {} elements (pass --elements {v}?)",
-                    m.array.elements
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
 /// First usable bin of an energy table (see the module docs).
 pub fn min_bin(em: &EnergyMatrix) -> usize {
-    let gate = if em.meta.coupling == "gate" {
-        em.meta
-            .all
-            .iter()
-            .find(|(k, _)| k == "gate_ns")
-            .and_then(|(_, v)| v.parse::<f64>().ok())
-            .unwrap_or(0.0)
-    } else {
-        0.0
-    };
+    let gate = em.meta.gate_ns();
     let g = (gate.max(0.0) / em.meta.bin_width_ns).ceil() as usize;
     (g + 2).max(2)
 }
@@ -224,7 +148,7 @@ pub fn load_run(
     }
     let layout = Layout::load(&c.layout_path())?;
     let energy = EnergyMatrix::read(&run.energy)?;
-    check_energy(&c, &energy, &run.energy)?;
+    crate::energy::check_campaign(&c, &energy, &run.energy)?;
     let threshold = detection_threshold(&energy.meta, og.pfa, &run.energy)?;
     let detector = Detector::new(threshold, &window_kernel(&c)?, og.mask_db, min_bin(&energy));
     let own = GridSpec::covering(layout.bbox(), grid.cell_m, grid.margin_m);
