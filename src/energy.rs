@@ -29,7 +29,7 @@
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 
 use crate::campaign::manifest::{
-    Band, Campaign, CouplingRemoval, Processing, WindowKind, SCHEMA_VERSION,
+    Band, Campaign, CouplingRemoval, Manifest, Processing, WindowKind, SCHEMA_VERSION,
 };
 use crate::campaign::sweeps::{PositionSweeps, SweepReader};
 use crate::error::{Error, Result};
@@ -597,9 +597,30 @@ pub fn run(
     }
     let noise_bin_mean = noise_sum / noise_n as f64;
     let n0 = noise_bin_mean / proc.tw();
-    let meta = vec![
+    let meta = table_metadata(m, &proc, n0, noise_bin_mean);
+    write_table(out, m, nb, &energies, meta)?;
+    Ok(EnergyReport {
+        sweeps: np * nd * m.pulses,
+        rows: np * nd * nb,
+        n0,
+        noise_bin_mean,
+    })
+}
+
+/// The key-value metadata of an energy table (DESIGN §3 plus `tw`, `window`, `coupling`,
+/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `campaign`, `band`).
+pub fn table_metadata(
+    m: &Manifest,
+    proc: &EnergyProcessor,
+    n0: f64,
+    noise_bin_mean: f64,
+) -> Vec<(String, String)> {
+    vec![
         ("schema_version".to_string(), SCHEMA_VERSION.to_string()),
-        ("bin_width_ns".into(), format!("{tb:.17e}")),
+        (
+            "bin_width_ns".into(),
+            format!("{:.17e}", proc.bin_width_ns()),
+        ),
         ("pulses".into(), m.pulses.to_string()),
         ("n0".into(), format!("{n0:.17e}")),
         ("enbw".into(), format!("{:.17e}", proc.enbw())),
@@ -626,7 +647,30 @@ pub fn run(
             "band".into(),
             format!("{} {} {}", m.band.start_hz, m.band.stop_hz, m.band.points),
         ),
-    ];
+    ]
+}
+
+/// Write an energy table (`energies` as `[position][direction][bin]`, `nb` bins per
+/// profile) with its metadata, atomically, about 2^20 rows per row group.
+pub fn write_table(
+    out: &Path,
+    m: &Manifest,
+    nb: usize,
+    energies: &[f64],
+    meta: Vec<(String, String)>,
+) -> Result<()> {
+    let np = m.positions();
+    let nd = m.directions.count();
+    let tb = 1e9 / m.band.bandwidth_hz();
+    if energies.len() != np * nd * nb {
+        return Err(Error::input(
+            out,
+            format!(
+                "energy table: {} values for {np} positions x {nd} directions x {nb} bins",
+                energies.len()
+            ),
+        ));
+    }
     let mut stream = table::ParquetStream::create(out)?;
     stream.set_metadata(meta);
     let angles = m.directions.angles_deg();
@@ -672,12 +716,7 @@ pub fn run(
         stream.write(&df)?;
     }
     stream.finish(None)?;
-    Ok(EnergyReport {
-        sweeps: np * nd * m.pulses,
-        rows: np * nd * nb,
-        n0,
-        noise_bin_mean,
-    })
+    Ok(())
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! compute energy matrices, characterise the channel and map.
 //!
 //! Data flows one way: [`campaign`] (manifest, formats, simulator) → [`energy`] →
-//! (mpc → cluster → fit → model → mapping) → [`report`].
+//! [`mpc`] → [`cluster`] → [`fit`] → [`model`] → [`mapping`] → [`report`].
 #![deny(missing_docs)]
 
 pub mod campaign;
@@ -12,6 +12,7 @@ pub mod error;
 pub mod fit;
 pub mod io;
 pub mod mapping;
+pub mod model;
 pub mod mpc;
 pub mod pipeline;
 pub mod report;

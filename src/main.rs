@@ -73,6 +73,27 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Statistical channel model: an energy table (and its truth) from a model file.
+    Synth {
+        /// Model file (fitted_model.toml or hand-written, DESIGN §3 "Model").
+        #[arg(long)]
+        model: PathBuf,
+        /// Campaign manifest (layout, poses, directions, band, array, noise; no sweeps).
+        #[arg(long)]
+        campaign: PathBuf,
+        /// Output energy Parquet.
+        #[arg(long)]
+        out: PathBuf,
+        /// Override [array] elements (16, 100, 400).
+        #[arg(long)]
+        elements: Option<usize>,
+        /// Seed (default: the campaign's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Ground-truth folder (default: <out stem>_truth beside the output).
+        #[arg(long)]
+        truth: Option<PathBuf>,
+    },
     /// Occupancy-grid map from one run (--campaign + --energy) or several (--run, fused).
     Map {
         /// Inverse sensor model.
@@ -236,6 +257,38 @@ fn run(cli: Cli) -> Result<()> {
                     out.display(),
                     r.n0,
                     r.noise_bin_mean
+                );
+            }
+        }
+        Cmd::Synth {
+            model,
+            campaign,
+            out,
+            elements,
+            seed,
+            truth,
+        } => {
+            let mut c = Campaign::load(&campaign)?;
+            if let Some(n) = elements {
+                c.set_elements(n)?;
+            }
+            let m = pradar::campaign::modelfile::ModelConfig::load(&model)?;
+            let p = pradar::model::SynthParams {
+                seed,
+                truth_dir: truth,
+                ..Default::default()
+            };
+            let pb = bar(quiet, "synth", c.manifest.positions());
+            let r = pradar::model::synth(&c, &m, &out, &p, &|d, _| pb.set_position(d as u64))?;
+            pb.finish_and_clear();
+            if !quiet {
+                println!(
+                    "synthesised {} profiles ({} clusters, {:.1} rays seen per position) -> {} (truth in {})",
+                    r.profiles,
+                    r.clusters,
+                    r.rays_per_position,
+                    out.display(),
+                    r.truth_dir.display()
                 );
             }
         }

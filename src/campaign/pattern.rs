@@ -209,6 +209,16 @@ pub struct PatternTable {
 }
 
 impl PatternTable {
+    /// Number of tabulated angles (−90° to 90°).
+    pub fn angles(&self) -> usize {
+        self.n_ang
+    }
+
+    /// Angular step of the table, degrees.
+    pub fn step_deg(&self) -> f64 {
+        self.step_deg
+    }
+
     /// Number of frequency knots.
     pub fn knots(&self) -> usize {
         self.knots

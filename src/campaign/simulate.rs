@@ -256,6 +256,8 @@ pub struct TruthCluster {
     pub offset_m: f64,
     /// Number of rays.
     pub rays: usize,
+    /// σ of its first ray, m².
+    pub sigma_m2: f64,
 }
 
 /// One propagation path seen from a pose.
@@ -300,6 +302,51 @@ fn cgauss(rng: &mut ChaCha8Rng) -> Complex64 {
     let a: f64 = StandardNormal.sample(rng);
     let b: f64 = StandardNormal.sample(rng);
     Complex64::new(a, b) * std::f64::consts::FRAC_1_SQRT_2
+}
+
+/// Rays of a cluster: 1 + Poisson(mean − 1).
+pub fn draw_rays(rng: &mut ChaCha8Rng, mean: f64) -> usize {
+    let mean_extra = (mean - 1.0).max(0.0);
+    1 + rand_distr::Poisson::new(mean_extra.max(1e-9))
+        .map(|d| d.sample(rng) as usize)
+        .unwrap_or(0)
+}
+
+/// A cluster's σ: `mean` times log-normal shadowing of 0.69 neper (3 dB) standard deviation.
+pub fn draw_shadowed(rng: &mut ChaCha8Rng, mean: f64) -> f64 {
+    mean * Normal::<f64>::new(0.0, 0.69).expect("ok").sample(rng).exp()
+}
+
+/// A zero-mean Laplacian draw of scale `b` (inverse CDF).
+pub fn laplace(rng: &mut ChaCha8Rng, b: f64) -> f64 {
+    let u: f64 = rng.gen::<f64>() - 0.5;
+    -b * u.signum() * (1.0 - 2.0 * u.abs()).ln()
+}
+
+/// Walk the layout perimeter placing cluster centres (DESIGN §2: clusters along the
+/// perimeter): the first at an arc length uniform in [0, d_c), then spacings drawn from
+/// `perimeter_spacing` (its family, at least 0.05 m); each centre offset into the room along
+/// the inward normal by a draw from `perimeter_offset` (at most 1.5 m). `each(rng, arc,
+/// offset, centre, normal)` is called per centre right after its offset draw, so it may draw
+/// the cluster's contents from the same stream; it decides whether to keep the centre.
+pub fn perimeter_walk(
+    layout: &Layout,
+    m: &ModelConfig,
+    rng: &mut ChaCha8Rng,
+    mut each: impl FnMut(&mut ChaCha8Rng, f64, f64, Coord<f64>, Coord<f64>),
+) {
+    let total = layout.perimeter_length();
+    let mut s = rng.gen::<f64>() * m.perimeter_spacing.value;
+    while s < total {
+        let (p, nrm) = layout.perimeter_point(s);
+        let off = draw(rng, &m.perimeter_offset.family, m.perimeter_offset.value).min(1.5);
+        let centre = Coord {
+            x: p.x + nrm.x * off,
+            y: p.y + nrm.y * off,
+        };
+        each(rng, s, off, centre, nrm);
+        s += draw(rng, &m.perimeter_spacing.family, m.perimeter_spacing.value).max(0.05);
+    }
 }
 
 impl Scene {
@@ -371,81 +418,54 @@ impl Scene {
                 }
             }
             if let Some(m) = clutter {
-                let total = layout.perimeter_length();
-                let mut s = rng.gen::<f64>() * m.perimeter_spacing.value;
                 let b = m.intra_cluster_aoa.value.to_radians() / 2f64.sqrt();
                 let d_ref = 2.0;
-                while s < total {
-                    let (p, nrm) = layout.perimeter_point(s);
-                    let off = draw(
-                        &mut rng,
-                        &m.perimeter_offset.family,
-                        m.perimeter_offset.value,
-                    )
-                    .min(1.5);
-                    let centre = Coord {
-                        x: p.x + nrm.x * off,
-                        y: p.y + nrm.y * off,
-                    };
+                perimeter_walk(&layout, m, &mut rng, |rng, s, off, centre, nrm| {
                     let tangent = Coord {
                         x: nrm.y,
                         y: -nrm.x,
                     };
-                    let mean_extra = (m.rays_per_cluster.value - 1.0).max(0.0);
-                    let nrays = 1 + rand_distr::Poisson::new(mean_extra.max(1e-9))
-                        .map(|d| d.sample(&mut rng) as usize)
-                        .unwrap_or(0);
-                    let sigma_c = m.cluster_rrcs.value
-                        * Normal::<f64>::new(0.0, 0.69)
-                            .expect("ok")
-                            .sample(&mut rng)
-                            .exp();
-                    if layout.is_free(centre) {
-                        let cid = clusters.len();
-                        let mut tau = 0.0;
-                        for r in 0..nrays {
-                            if r > 0 {
-                                tau += Exp::new(m.intra_cluster_rate.value)
-                                    .expect("positive")
-                                    .sample(&mut rng);
-                            }
-                            let u: f64 = rng.gen::<f64>() - 0.5;
-                            let lap = if r == 0 {
-                                0.0
-                            } else {
-                                -b * u.signum() * (1.0 - 2.0 * u.abs()).ln()
-                            };
-                            let depth = C0 * tau * 1e-9 / 2.0;
-                            let lateral = d_ref * lap.tan();
-                            let pos = Coord {
-                                x: centre.x - nrm.x * depth + tangent.x * lateral,
-                                y: centre.y - nrm.y * depth + tangent.y * lateral,
-                            };
-                            let sigma = sigma_c * (-tau / m.ray_decay.value).exp();
-                            let phase: f64 = rng.gen::<f64>() * 2.0 * PI;
-                            sc.push(Scatterer {
-                                kind: ScattererKind::Clutter,
-                                pos,
-                                x: Complex64::from_polar(sigma.sqrt(), phase),
-                                cluster: Some(cid),
-                                anchor: centre,
-                                normal: None,
-                            });
+                    let nrays = draw_rays(rng, m.rays_per_cluster.value);
+                    let sigma_c = draw_shadowed(rng, m.cluster_rrcs.value);
+                    if !layout.is_free(centre) {
+                        return;
+                    }
+                    let cid = clusters.len();
+                    let mut tau = 0.0;
+                    for r in 0..nrays {
+                        if r > 0 {
+                            tau += Exp::new(m.intra_cluster_rate.value)
+                                .expect("positive")
+                                .sample(rng);
                         }
-                        clusters.push(TruthCluster {
-                            centre,
-                            arc_m: s,
-                            offset_m: off,
-                            rays: nrays,
+                        // drawn for the reference ray too (keeps the stream)
+                        let lap = laplace(rng, b);
+                        let lap = if r == 0 { 0.0 } else { lap };
+                        let depth = C0 * tau * 1e-9 / 2.0;
+                        let lateral = d_ref * lap.tan();
+                        let pos = Coord {
+                            x: centre.x - nrm.x * depth + tangent.x * lateral,
+                            y: centre.y - nrm.y * depth + tangent.y * lateral,
+                        };
+                        let sigma = sigma_c * (-tau / m.ray_decay.value).exp();
+                        let phase: f64 = rng.gen::<f64>() * 2.0 * PI;
+                        sc.push(Scatterer {
+                            kind: ScattererKind::Clutter,
+                            pos,
+                            x: Complex64::from_polar(sigma.sqrt(), phase),
+                            cluster: Some(cid),
+                            anchor: centre,
+                            normal: None,
                         });
                     }
-                    s += draw(
-                        &mut rng,
-                        &m.perimeter_spacing.family,
-                        m.perimeter_spacing.value,
-                    )
-                    .max(0.05);
-                }
+                    clusters.push(TruthCluster {
+                        centre,
+                        arc_m: s,
+                        offset_m: off,
+                        rays: nrays,
+                        sigma_m2: sigma_c,
+                    });
+                });
             }
         }
         for t in &cfg.targets {
@@ -673,6 +693,86 @@ pub fn scene_sections(c: &Campaign) -> Result<(SceneConfig, Option<ModelConfig>)
     Ok((scene, clutter))
 }
 
+/// One row of `truth/rays.parquet` (a path seen from a position).
+#[derive(Debug, Clone, Copy)]
+pub struct TruthRay {
+    /// Scatterer (−1 for specular paths).
+    pub scatterer_id: i64,
+    /// Kind name (`clutter`, `diffuse`, …).
+    pub kind: &'static str,
+    /// Clutter cluster (−1 outside clusters).
+    pub cluster_id: i64,
+    /// Where the path's echo maps to in the global frame, m.
+    pub pos: Coord<f64>,
+    /// Round-trip delay, ns.
+    pub delay_ns: f64,
+    /// Global angle of arrival, degrees.
+    pub angle_global_deg: f64,
+    /// Received power at boresight, dB (|S21|² = G0²·λc²·|A|²).
+    pub power_db: f64,
+}
+
+/// One position's rows of `truth/rays.parquet` (columns position, scatterer_id, kind,
+/// cluster_id, x_m, y_m, delay_ns, angle_global_deg, angle_rel_deg, power_db).
+pub fn truth_rays_frame(
+    path: &Path,
+    position: usize,
+    heading_deg: f64,
+    rows: &[TruthRay],
+) -> Result<polars::prelude::DataFrame> {
+    let f = |g: &dyn Fn(&TruthRay) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
+    table::frame(
+        path,
+        vec![
+            table::col("position", vec![position as i32; rows.len()]),
+            table::col(
+                "scatterer_id",
+                rows.iter().map(|r| r.scatterer_id).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "kind",
+                rows.iter().map(|r| r.kind.to_string()).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "cluster_id",
+                rows.iter().map(|r| r.cluster_id).collect::<Vec<_>>(),
+            ),
+            table::col("x_m", f(&|r| r.pos.x)),
+            table::col("y_m", f(&|r| r.pos.y)),
+            table::col("delay_ns", f(&|r| r.delay_ns)),
+            table::col("angle_global_deg", f(&|r| r.angle_global_deg)),
+            table::col(
+                "angle_rel_deg",
+                f(&|r| crate::energy::wrap_deg(r.angle_global_deg - heading_deg)),
+            ),
+            table::col("power_db", f(&|r| r.power_db)),
+        ],
+    )
+}
+
+/// Write `dir/clusters.csv` (cluster_id, x_m, y_m, arc_m, offset_m, rays, sigma_m2).
+pub fn write_truth_clusters(dir: &Path, cl: &[TruthCluster]) -> Result<()> {
+    let mut cdf = table::frame(
+        dir,
+        vec![
+            table::col("cluster_id", (0..cl.len() as i64).collect::<Vec<_>>()),
+            table::col("x_m", cl.iter().map(|c| c.centre.x).collect::<Vec<_>>()),
+            table::col("y_m", cl.iter().map(|c| c.centre.y).collect::<Vec<_>>()),
+            table::col("arc_m", cl.iter().map(|c| c.arc_m).collect::<Vec<_>>()),
+            table::col(
+                "offset_m",
+                cl.iter().map(|c| c.offset_m).collect::<Vec<_>>(),
+            ),
+            table::col("rays", cl.iter().map(|c| c.rays as i64).collect::<Vec<_>>()),
+            table::col(
+                "sigma_m2",
+                cl.iter().map(|c| c.sigma_m2).collect::<Vec<_>>(),
+            ),
+        ],
+    )?;
+    table::write_csv(&dir.join("clusters.csv"), &mut cdf)
+}
+
 /// Run the simulator: write the campaign into `out_dir`.
 pub fn simulate(
     c: &Campaign,
@@ -776,66 +876,23 @@ pub fn simulate(
         }
         // truth rays of this position
         let sid = |path: &Path1| (path.scatterer != usize::MAX).then_some(path.scatterer);
-        let df = table::frame(
-            &rays_path,
-            vec![
-                table::col("position", vec![p as i32; paths.len()]),
-                table::col(
-                    "scatterer_id",
-                    paths
-                        .iter()
-                        .map(|x| sid(x).map(|i| i as i64).unwrap_or(-1))
-                        .collect::<Vec<_>>(),
-                ),
-                table::col(
-                    "kind",
-                    paths
-                        .iter()
-                        .map(|x| x.kind.name().to_string())
-                        .collect::<Vec<_>>(),
-                ),
-                table::col(
-                    "cluster_id",
-                    paths
-                        .iter()
-                        .map(|x| {
-                            sid(x)
-                                .and_then(|i| scene.scatterers[i].cluster)
-                                .map(|c| c as i64)
-                                .unwrap_or(-1)
-                        })
-                        .collect::<Vec<_>>(),
-                ),
-                table::col("x_m", paths.iter().map(|x| x.pos.x).collect::<Vec<_>>()),
-                table::col("y_m", paths.iter().map(|x| x.pos.y).collect::<Vec<_>>()),
-                table::col(
-                    "delay_ns",
-                    paths.iter().map(|x| x.tau_s * 1e9).collect::<Vec<_>>(),
-                ),
-                table::col(
-                    "angle_global_deg",
-                    paths
-                        .iter()
-                        .map(|x| x.theta.to_degrees())
-                        .collect::<Vec<_>>(),
-                ),
-                table::col(
-                    "angle_rel_deg",
-                    paths
-                        .iter()
-                        .map(|x| crate::energy::wrap_deg(x.theta.to_degrees() - pose.heading_deg))
-                        .collect::<Vec<_>>(),
-                ),
+        let rows: Vec<TruthRay> = paths
+            .iter()
+            .map(|x| TruthRay {
+                scatterer_id: sid(x).map(|i| i as i64).unwrap_or(-1),
+                kind: x.kind.name(),
+                cluster_id: sid(x)
+                    .and_then(|i| scene.scatterers[i].cluster)
+                    .map(|c| c as i64)
+                    .unwrap_or(-1),
+                pos: x.pos,
+                delay_ns: x.tau_s * 1e9,
+                angle_global_deg: x.theta.to_degrees(),
                 // boresight received power |S21|² = G0²·λc²·|A|²
-                table::col(
-                    "power_db",
-                    paths
-                        .iter()
-                        .map(|x| 10.0 * (g0 * g0 * lc * lc * x.amp.norm_sqr()).log10())
-                        .collect::<Vec<_>>(),
-                ),
-            ],
-        )?;
+                power_db: 10.0 * (g0 * g0 * lc * lc * x.amp.norm_sqr()).log10(),
+            })
+            .collect();
+        let df = truth_rays_frame(&rays_path, p, pose.heading_deg, &rows)?;
         rays.write(&df)?;
         progress(p + 1, np);
     }
@@ -867,22 +924,7 @@ pub fn simulate(
         ],
     )?;
     table::write_csv(&truth_dir.join("scatterers.csv"), &mut sdf)?;
-    let cl = &scene.clusters;
-    let mut cdf = table::frame(
-        &truth_dir,
-        vec![
-            table::col("cluster_id", (0..cl.len() as i64).collect::<Vec<_>>()),
-            table::col("x_m", cl.iter().map(|c| c.centre.x).collect::<Vec<_>>()),
-            table::col("y_m", cl.iter().map(|c| c.centre.y).collect::<Vec<_>>()),
-            table::col("arc_m", cl.iter().map(|c| c.arc_m).collect::<Vec<_>>()),
-            table::col(
-                "offset_m",
-                cl.iter().map(|c| c.offset_m).collect::<Vec<_>>(),
-            ),
-            table::col("rays", cl.iter().map(|c| c.rays as i64).collect::<Vec<_>>()),
-        ],
-    )?;
-    table::write_csv(&truth_dir.join("clusters.csv"), &mut cdf)?;
+    write_truth_clusters(&truth_dir, &scene.clusters)?;
     // the layout and the manifest
     let layout_out = out_dir.join("layout.geojson");
     let layout_text = crate::io::read_text(&c.layout_path())?;

@@ -221,7 +221,8 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     let delta = 1e9 / m.band.bandwidth_hz();
     let np = m.positions();
     // clusters: id -> rays
-    let mut by_cluster: BTreeMap<usize, Vec<Ray>> = BTreeMap::new();
+    // keyed by (position, cluster): truth cluster ids name objects seen from many positions
+    let mut by_cluster: BTreeMap<(usize, usize), Vec<Ray>> = BTreeMap::new();
     for r in &rays {
         if r.position >= np {
             return Err(Error::input(
@@ -232,7 +233,10 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
                 ),
             ));
         }
-        by_cluster.entry(r.cluster).or_default().push(*r);
+        by_cluster
+            .entry((r.position, r.cluster))
+            .or_default()
+            .push(*r);
     }
     let mut first: Groups = vec![Vec::new(); np];
     let mut intra: Groups = vec![Vec::new(); np];

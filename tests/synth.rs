@@ -1,0 +1,330 @@
+//! `pradar synth` (the statistical channel model): agreement with `simulate` on a single
+//! scatterer, energy-detector statistics, determinism, model-file round trip and errors.
+
+mod common;
+
+use common::{fixture, set, write_campaign};
+use geo::Coord;
+use pradar::campaign::manifest::SweepFormat;
+use pradar::campaign::modelfile::ModelConfig;
+use pradar::campaign::Campaign;
+use pradar::energy::EnergyMatrix;
+use pradar::model::{synth, synth_channel, ChannelModel, ModelCluster, ModelRay, SynthParams};
+use std::process::Command;
+
+fn pradar() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pradar"))
+}
+
+/// One scatterer at `at` with σ = `sigma`, one ray.
+fn single(at: Coord<f64>, sigma: f64) -> ChannelModel {
+    ChannelModel {
+        config: ModelConfig::table1_defaults(),
+        clusters: vec![ModelCluster {
+            centre: at,
+            arc_m: 0.0,
+            offset_m: 0.0,
+            sigma_m2: sigma,
+            rays: vec![ModelRay {
+                excess_ns: 0.0,
+                aoa_rad: 0.0,
+            }],
+            mean_depth_m: 0.0,
+        }],
+    }
+}
+
+#[test]
+fn synth_agrees_with_simulate_on_a_single_scatterer() {
+    let tmp = tempfile::tempdir().unwrap();
+    // the point-target fixture: 3 m at 20°, RRCS 0.3 m
+    let base = fixture("tests/point_target.toml");
+    let tx = base["scene"]["targets"][0]["x_m"].as_float().unwrap();
+    let ty = base["scene"]["targets"][0]["y_m"].as_float().unwrap();
+    let rrcs = base["scene"]["targets"][0]["rrcs_m"].as_float().unwrap();
+    let mut worst: f64 = 0.0;
+    for (n, one_bit) in [
+        (16, false),
+        (100, false),
+        (400, false),
+        (100, true),
+        (400, true),
+    ] {
+        let mut t = base.clone();
+        set(&mut t, "array.elements", n as i64);
+        set(&mut t, "array.one_bit", one_bit);
+        let dir = tmp.path().join(format!("n{n}_{one_bit}"));
+        let (_, sim) = common::chain(&dir, &t, SweepFormat::Parquet);
+        let c = Campaign::load(&dir.join("in/campaign.toml")).unwrap();
+        let out = dir.join("synth.parquet");
+        synth_channel(
+            &c,
+            &single(Coord { x: tx, y: ty }, rrcs * rrcs),
+            &out,
+            &SynthParams::default(),
+            &|_, _| {},
+        )
+        .unwrap();
+        let syn = EnergyMatrix::read(&out).unwrap();
+        assert_eq!(syn.bins, sim.bins);
+        // compare at the peak of the simulated matrix and in the directions around it
+        let (mut pd, mut pb, mut pe) = (0, 0, 0.0);
+        for d in 0..sim.directions() {
+            for (b, &e) in sim.profile(0, d).iter().enumerate() {
+                if e > pe {
+                    (pd, pb, pe) = (d, b, e);
+                }
+            }
+        }
+        let floor = sim.meta.noise_mean();
+        let mut line = format!("N={n} one_bit={one_bit}: peak dir {pd} bin {pb}");
+        for dd in [-2i64, -1, 0, 1, 2] {
+            let d = pd as i64 + dd;
+            if d < 0 || d >= sim.directions() as i64 {
+                continue;
+            }
+            let d = d as usize;
+            // energy around the echo (±3 bins) with the noise mean removed
+            let sum = |em: &EnergyMatrix| -> f64 {
+                em.profile(0, d)[pb - 3..=pb + 3]
+                    .iter()
+                    .map(|e| e - em.meta.noise_mean())
+                    .sum()
+            };
+            let (a, b) = (sum(&sim), sum(&syn));
+            if a < 1e3 * floor {
+                continue;
+            }
+            let db = 10.0 * (b / a).log10();
+            line += &format!("  d{dd:+}: {db:+.2} dB");
+            worst = worst.max(db.abs());
+        }
+        let peak_syn = syn.profile(0, pd)[pb];
+        let db_peak = 10.0 * (peak_syn / pe).log10();
+        line += &format!("  peak bin {db_peak:+.2} dB");
+        worst = worst.max(db_peak.abs());
+        // the noise floors agree too (synth's N0 from the [noise] floor, energy's estimated)
+        let nf = 10.0 * (syn.meta.noise_mean() / floor).log10();
+        line += &format!("  noise mean {nf:+.2} dB");
+        assert!(nf.abs() < 0.2, "{line}");
+        eprintln!("{line}");
+    }
+    eprintln!("worst |synth − simulate| = {worst:.2} dB");
+    assert!(worst < 1.0, "synth and simulate differ by {worst:.2} dB");
+}
+
+#[test]
+fn energy_detector_noise_has_the_detector_mean_and_variance() {
+    // no clusters at all: every bin is noise; with a strong one, the signal bins follow
+    // mean N0·TW + Es and variance (N0²TW + 2N0Es)/Np
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = fixture("tests/point_target.toml");
+    set(&mut t, "pulses", 4i64);
+    let mut poses = Vec::new();
+    for i in 0..40 {
+        let mut p = toml::Table::new();
+        p.insert("x_m".into(), (0.01 * i as f64).into());
+        p.insert("y_m".into(), 0.0.into());
+        p.insert("heading_deg".into(), 0.0.into());
+        poses.push(toml::Value::Table(p));
+    }
+    t.insert("poses".into(), toml::Value::Array(poses));
+    let path = write_campaign(tmp.path(), &t);
+    let c = Campaign::load(&path).unwrap();
+    let empty = ChannelModel {
+        config: ModelConfig::table1_defaults(),
+        clusters: vec![],
+    };
+    let out = tmp.path().join("noise.parquet");
+    synth_channel(&c, &empty, &out, &SynthParams::default(), &|_, _| {}).unwrap();
+    let em = EnergyMatrix::read(&out).unwrap();
+    let mu = em.meta.noise_mean();
+    let n0 = em.meta.n0;
+    let np = em.meta.pulses as f64;
+    let xs: Vec<f64> = (0..em.positions)
+        .flat_map(|p| (0..em.directions()).flat_map(move |d| (0..em.bins).map(move |b| (p, d, b))))
+        .map(|(p, d, b)| em.profile(p, d)[b])
+        .collect();
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let want_var = n0 * n0 * em.meta.tw / np;
+    eprintln!(
+        "noise-only: mean {:.4}× N0·TW, variance {:.4}× N0²TW/Np over {n} bins",
+        mean / mu,
+        var / want_var
+    );
+    assert!((mean / mu - 1.0).abs() < 0.01);
+    assert!((var / want_var - 1.0).abs() < 0.03);
+}
+
+#[test]
+fn synth_cli_is_deterministic_and_writes_truth() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = common::root();
+    let model = tmp.path().join("model.toml");
+    ModelConfig::table1_defaults().save(&model).unwrap();
+    let campaign = root.join("data/corridor/campaign.toml");
+    let mut outs = Vec::new();
+    for (i, threads) in ["1", "2"].iter().enumerate() {
+        let out = tmp.path().join(format!("e{i}.parquet"));
+        let st = pradar()
+            .args(["synth", "--quiet", "--model"])
+            .arg(&model)
+            .arg("--campaign")
+            .arg(&campaign)
+            .arg("--out")
+            .arg(&out)
+            .args(["--elements", "100"])
+            .env("RAYON_NUM_THREADS", threads)
+            .status()
+            .unwrap();
+        assert!(st.success());
+        outs.push(std::fs::read(&out).unwrap());
+        let truth = tmp.path().join(format!("e{i}_truth"));
+        assert!(truth.join("rays.parquet").is_file());
+        assert!(truth.join("clusters.csv").is_file());
+    }
+    assert!(
+        outs[0] == outs[1],
+        "same seed, 1 vs 2 threads: different bytes"
+    );
+    // the table is an energy table of the campaign (extract accepts it with --elements 100)
+    let em = EnergyMatrix::read(&tmp.path().join("e0.parquet")).unwrap();
+    assert_eq!(em.meta.array, "10x10 one_bit mechanical q=1");
+    assert!(em
+        .meta
+        .all
+        .iter()
+        .any(|(k, v)| k == "source" && v == "synth"));
+    // another seed gives another channel
+    let out = tmp.path().join("e_seed.parquet");
+    let st = pradar()
+        .args(["synth", "--quiet", "--seed", "7", "--model"])
+        .arg(&model)
+        .arg("--campaign")
+        .arg(&campaign)
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    assert!(std::fs::read(&out).unwrap() != outs[0]);
+}
+
+#[test]
+fn synth_rejects_bad_models_with_the_field_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = common::root();
+    let campaign = root.join("data/corridor/campaign.toml");
+    let good = toml::to_string(&ModelConfig::table1_defaults()).unwrap();
+    let cases = [
+        (
+            good.replace("value = 0.43", "value = -0.43"),
+            "intra_cluster_rate.value",
+        ),
+        (
+            good.replace("unit = \"deg\"", "unit = \"rad\""),
+            "intra_cluster_aoa.unit",
+        ),
+        (
+            good.replace("[perimeter_spacing]", "[perimeter_spacin]"),
+            "perimeter_spacing",
+        ),
+        (good[..good.len() / 2].to_string(), "model"),
+        ("value = nan".to_string(), "model"),
+    ];
+    for (i, (text, field)) in cases.iter().enumerate() {
+        let model = tmp.path().join(format!("bad{i}.toml"));
+        std::fs::write(&model, text).unwrap();
+        let out = tmp.path().join(format!("bad{i}.parquet"));
+        let o = pradar()
+            .args(["synth", "--quiet", "--model"])
+            .arg(&model)
+            .arg("--campaign")
+            .arg(&campaign)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "case {i}: {err}");
+        assert!(
+            err.starts_with("error:") && err.lines().count() == 1,
+            "case {i}: {err}"
+        );
+        assert!(err.contains(&format!("bad{i}.toml")), "case {i}: {err}");
+        if *field != "model" {
+            assert!(err.contains(field), "case {i}: {err} lacks {field}");
+        }
+        assert!(!out.exists(), "case {i}: output written");
+        assert!(!err.contains("panicked"));
+    }
+}
+
+#[test]
+fn synth_draw_follows_the_model_geometry() {
+    // many clusters along a long perimeter: spacing and offset means follow the model
+    let root = common::root();
+    let layout =
+        pradar::campaign::layout::Layout::load(&root.join("data/corridor/layout.geojson")).unwrap();
+    let mut m = ModelConfig::table1_defaults();
+    m.perimeter_spacing.value = 0.5;
+    m.perimeter_offset.value = 0.2;
+    let mut spacing = Vec::new();
+    let mut offsets = Vec::new();
+    let mut rays = 0usize;
+    let mut gaps = Vec::new();
+    let mut aoa = Vec::new();
+    for seed in 0..20 {
+        let ch = ChannelModel::draw(&layout, &m, seed).unwrap();
+        let mut arcs: Vec<f64> = ch.clusters.iter().map(|c| c.arc_m).collect();
+        arcs.sort_by(f64::total_cmp);
+        spacing.extend(arcs.windows(2).map(|w| w[1] - w[0]));
+        offsets.extend(ch.clusters.iter().map(|c| c.offset_m));
+        for c in &ch.clusters {
+            rays += c.rays.len();
+            gaps.extend(c.rays.windows(2).map(|w| w[1].excess_ns - w[0].excess_ns));
+            aoa.extend(c.rays[1..].iter().map(|r| r.aoa_rad.to_degrees()));
+        }
+        let n = ch.clusters.len();
+        assert!(n > 30, "seed {seed}: {n} clusters");
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let std_aoa = (aoa.iter().map(|a| a * a).sum::<f64>() / aoa.len() as f64).sqrt();
+    let clusters = offsets.len() as f64;
+    eprintln!(
+        "spacing mean {:.3} m (model 0.5, clusters in walls dropped), offset mean {:.3} m (model 0.2, capped 1.5 m), rays/cluster {:.2} (6), gap {:.3} ns (1/0.43 = 2.326), AoA std {std_aoa:.2}° (16.9)",
+        mean(&spacing),
+        mean(&offsets),
+        rays as f64 / clusters,
+        mean(&gaps)
+    );
+    assert!((mean(&offsets) - 0.2).abs() < 0.02);
+    assert!((rays as f64 / clusters - 6.0).abs() < 0.3);
+    assert!((mean(&gaps) - 1.0 / 0.43).abs() < 0.1);
+    assert!((std_aoa - 16.9).abs() < 1.0);
+    // some centres fall in obstacles and are dropped: spacing ≥ the model's, within 15 %
+    assert!(mean(&spacing) >= 0.49 && mean(&spacing) < 0.5 * 1.15);
+}
+
+#[test]
+fn synth_library_seed_changes_the_draw() {
+    let root = common::root();
+    let c = Campaign::load(&root.join("data/corridor/campaign.toml")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let m = ModelConfig::table1_defaults();
+    let a = synth(
+        &c,
+        &m,
+        &tmp.path().join("a.parquet"),
+        &SynthParams::default().seed(3),
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(a.clusters > 5 && a.rays_per_position > 5.0);
+    assert_eq!(
+        a.profiles,
+        c.manifest.positions() * c.manifest.directions.count()
+    );
+}
