@@ -15,6 +15,11 @@
 //! 4. reject the cell as a side-lobe replica if R ≤ 10^(guard/10) × (the largest energy that
 //!    the components already kept predict at the cell or ±1 bin) — model mismatch of a
 //!    strong component's footprint must not become new components;
+//!    A peak in the first or last beam of a mechanical scan is not bracketed in angle: its
+//!    angle is fitted (0.05° grid, up to 30° beyond the edge) to the energy ratios of the two
+//!    neighbouring beams under the two-way pattern; a component found beyond the scanned
+//!    sector (more than half a step outside) is subtracted but not reported — its echo comes
+//!    from behind the half-plane and its angle is not measured;
 //! 5. otherwise keep it and subtract its footprint A·W(θ_d − θ̂)·K(b − b̂), where
 //!    W(θ) = Σ_f w_f |F(θ,f)|⁴ / max_θ Σ_f w_f |F(θ,f)|⁴ is the two-way array pattern averaged
 //!    over the band with the window's weights (33 frequencies; mechanical steering: the
@@ -368,7 +373,38 @@ fn extract_position(
                 } else {
                     0.0
                 };
-                let theta = em.angles_rel_deg[d] + off_d * step;
+                let mut theta = em.angles_rel_deg[d] + off_d * step;
+                let mut outside = false;
+                // a peak in the first or last beam of a mechanical scan: the source may lie
+                // beyond the scanned sector (behind the device's half-plane), where the
+                // parabola cannot reach; fit its angle to the energies of the edge beams
+                if fp.steering == Steering::Mechanical && nd > 2 && (d == 0 || d == nd - 1) {
+                    let inward: i64 = if d == 0 { 1 } else { -1 };
+                    let obs = [lg(at(inward, 0)) - lg(e0), lg(at(2 * inward, 0)) - lg(e0)];
+                    let edge = em.angles_rel_deg[d];
+                    let mut best_err = f64::INFINITY;
+                    // from half a step inside the sector to 30° beyond its edge
+                    let n = (30.0 / 0.05) as i64;
+                    for i in -((0.5 * step.abs() / 0.05) as i64)..=n {
+                        let th = edge - inward as f64 * i as f64 * 0.05;
+                        let w0 = fp.w(th, d, edge);
+                        if w0 <= 0.0 {
+                            continue;
+                        }
+                        let mut err = 0.0;
+                        for (j, o) in obs.iter().enumerate() {
+                            let dj = (d as i64 + inward * (j as i64 + 1)) as usize;
+                            let m = db(fp.w(th, dj, em.angles_rel_deg[dj])) - db(w0);
+                            // below the floor the observation only bounds the ratio
+                            err += (o - m.max(o.min(lg(floor * 1e-3) - lg(e0)))).powi(2);
+                        }
+                        if err < best_err {
+                            best_err = err;
+                            theta = th;
+                        }
+                    }
+                    outside = (theta - edge) * (inward as f64) < -0.5 * step.abs();
+                }
                 let norm = fp.w(theta, d, em.angles_rel_deg[d]) * fp.k(-off_b);
                 let amp = if norm > 0.0 { best / norm } else { best };
                 let ws: Vec<f64> = em
@@ -388,7 +424,15 @@ fn extract_position(
                         predicted[i] += f;
                     }
                 }
-                out.push(make(d, b, amp, off_d, off_b));
+                if !outside {
+                    out.push(make(
+                        d,
+                        b,
+                        amp,
+                        (theta - em.angles_rel_deg[d]) / step,
+                        off_b,
+                    ));
+                }
             }
         }
     }
