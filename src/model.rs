@@ -5,7 +5,8 @@
 //! trajectory, directions, band, array, noise, processing; no `[sweeps]` needed) and a seed;
 //! gives an energy table in the energy-matrix schema (the same columns and metadata as
 //! `pradar energy`, plus `source = synth`) and its ground truth (`rays.parquet`,
-//! `clusters.csv`, same schemas as `simulate`'s `truth/`).
+//! `clusters.csv`, same schemas as `simulate`'s `truth/`, and `model.toml`: the model as
+//! read, written back unchanged).
 //!
 //! The model, drawn once per run from the seed (so every pose sees the same clusters):
 //! * **clusters along the perimeter** ([`perimeter_walk`], shared with the simulator's
@@ -579,6 +580,7 @@ pub fn synth_channel(
         })
         .collect();
     write_truth_clusters(&truth_dir, &truth_clusters)?;
+    channel.config.save(&truth_dir.join("model.toml"))?;
     let mut meta = energy::table_metadata(m, &proc, n0, noise_mean);
     meta.push(("source".into(), "synth".into()));
     meta.push(("seed".into(), seed.to_string()));

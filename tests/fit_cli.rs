@@ -89,6 +89,23 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
     let again = tmp.path().join("again.toml");
     model.save(&again).unwrap();
     assert_eq!(std::fs::read(&m0).unwrap(), std::fs::read(&again).unwrap());
+    // `synth` reads the fitted model and writes it back unchanged beside its truth
+    let syn = tmp.path().join("synth.parquet");
+    let (code, err) = pradar(&[
+        "synth",
+        "--model",
+        s(&m0),
+        "--campaign",
+        s(&stripped),
+        "--out",
+        s(&syn),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read(&m0).unwrap(),
+        std::fs::read(tmp.path().join("synth_truth/model.toml")).unwrap(),
+        "synth changed the model on its way through"
+    );
     eprintln!("{}", String::from_utf8_lossy(&outs[0].1));
 }
 
