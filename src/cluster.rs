@@ -920,4 +920,32 @@ mod tests {
         assert!(silhouette(&x, &bad, 2) < 0.1);
         assert!(calinski_harabasz(&x, &good, 2) > 1e4 * calinski_harabasz(&x, &bad, 2).max(1e-9));
     }
+
+    #[test]
+    fn likelihood_criteria_choose_one_and_two_blobs() {
+        // deterministic blob: delays 10..20 ns, angles spread ±10° around a centre
+        let blob = |t0: f64, a0: f64| -> Vec<[f64; 2]> {
+            (0..12)
+                .map(|i| [t0 + i as f64 * 0.8, a0 + ((i * 7) % 12) as f64 * 1.7 - 9.0])
+                .collect()
+        };
+        let one = blob(10.0, 0.0);
+        let halves: Vec<usize> = (0..12).map(|i| usize::from(i >= 6)).collect();
+        let mut two = blob(10.0, -60.0);
+        two.extend(blob(12.0, 60.0));
+        let split: Vec<usize> = (0..24).map(|i| usize::from(i >= 12)).collect();
+        let p = ClusterParams::default();
+        for c in [
+            Criterion::ChannelBic,
+            Criterion::GaussBic,
+            Criterion::CrossValidated,
+        ] {
+            let l1 = likelihood_criterion(&one, &[0; 12], c, &p);
+            let l2 = likelihood_criterion(&one, &halves, c, &p);
+            assert!(l1 < l2, "{c:?}: one blob, K=1 {l1} vs K=2 {l2}");
+            let l1 = likelihood_criterion(&two, &[0; 24], c, &p);
+            let l2 = likelihood_criterion(&two, &split, c, &p);
+            assert!(l2 < l1, "{c:?}: two blobs, K=2 {l2} vs K=1 {l1}");
+        }
+    }
 }
