@@ -45,6 +45,9 @@ enum KCriterion {
     Silhouette,
     Ch,
     Gap,
+    ChannelBic,
+    GaussBic,
+    Cv,
 }
 
 #[derive(Subcommand)]
@@ -403,6 +406,9 @@ fn run(cli: Cli) -> Result<()> {
                     KCriterion::Silhouette => pradar::cluster::Criterion::Silhouette,
                     KCriterion::Ch => pradar::cluster::Criterion::CalinskiHarabasz,
                     KCriterion::Gap => pradar::cluster::Criterion::Gap,
+                    KCriterion::ChannelBic => pradar::cluster::Criterion::ChannelBic,
+                    KCriterion::GaussBic => pradar::cluster::Criterion::GaussBic,
+                    KCriterion::Cv => pradar::cluster::Criterion::CrossValidated,
                 });
             let headings: Vec<f64> = {
                 let np = m.iter().map(|x| x.position + 1).max().unwrap_or(0);
