@@ -16,8 +16,8 @@ use pradar::campaign::layout::GridSpec;
 use pradar::campaign::manifest::Campaign;
 use pradar::energy::{EnergyMatrix, EnergyMeta, EnergyProcessor};
 use pradar::mapping::ekf::{
-    ekf_run, truncate_kernel, DenseEkf, EkfParams, EkfVariant, Linearized, NoiseModel,
-    Observation, RrcsFilter, TiledEkf,
+    ekf_run, truncate_kernel, DenseEkf, EkfParams, EkfVariant, Linearized, NoiseModel, Observation,
+    RrcsFilter, TiledEkf,
 };
 use pradar::mapping::grid::{GridParams, ObservationModel};
 use rand::{Rng, SeedableRng};
@@ -159,7 +159,6 @@ fn floor_energy(c: &Campaign) -> EnergyMatrix {
     }
 }
 
-
 fn peak_mb() -> f64 {
     let s = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
     s.lines()
@@ -175,11 +174,14 @@ fn write_npy(path: &Path, shape: &[usize], data: &[f64]) {
         1 => format!("({},)", shape[0]),
         _ => format!(
             "({})",
-            shape.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")
+            shape
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     };
-    let mut header =
-        format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape_s}, }}");
+    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape_s}, }}");
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
     }
@@ -223,9 +225,15 @@ fn main() {
         ..Default::default()
     };
     let min_bin = 2 + (c.manifest.processing.gate_ns / em.meta.bin_width_ns).ceil() as usize;
-    let model =
-        ObservationModel::new(spec, gp, &c.manifest, em.bins, em.meta.bin_width_ns, min_bin)
-            .unwrap();
+    let model = ObservationModel::new(
+        spec,
+        gp,
+        &c.manifest,
+        em.bins,
+        em.meta.bin_width_ns,
+        min_bin,
+    )
+    .unwrap();
     let kernel = pradar::mapping::job::window_kernel(&c).unwrap();
     let n = spec.len();
     let base = peak_mb();

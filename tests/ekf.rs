@@ -3,6 +3,8 @@
 //! corridor run, scalable vs dense, and the corridor map against the all-free and a random
 //! map. Every figure asserted is printed.
 
+#![allow(clippy::needless_range_loop)] // the textbook EKF is written with indices on purpose
+
 mod common;
 
 use common::*;
