@@ -32,6 +32,8 @@ enum MapMethod {
     Og,
     /// Boresight-only baseline.
     OgBoresight,
+    /// EKF over the RRCS per cell.
+    Ekf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -126,6 +128,15 @@ enum Cmd {
         /// Prior occupancy probability.
         #[arg(long, default_value_t = 0.5)]
         prior: f64,
+        /// EKF implementation (`--method ekf`): dense (exact) or scalable (tiled).
+        #[arg(long, default_value = "scalable")]
+        ekf: String,
+        /// EKF prior mean of the RRCS μ0, m.
+        #[arg(long, default_value_t = 0.01)]
+        mu0: f64,
+        /// EKF prior standard deviation σ0, m.
+        #[arg(long, default_value_t = 0.1)]
+        sigma0: f64,
     },
     /// Extract MPCs (2-D CLEAN, or the local-maximum baseline) from an energy table.
     Extract {
@@ -305,6 +316,9 @@ fn run(cli: Cli) -> Result<()> {
             cell_m,
             pfa,
             prior,
+            ekf,
+            mu0,
+            sigma0,
         } => {
             use pradar::mapping::{MapOptions, MapRun, Method};
             let mut runs = Vec::new();
@@ -321,6 +335,7 @@ fn run(cli: Cli) -> Result<()> {
                 method: match method {
                     MapMethod::Og => Method::Og,
                     MapMethod::OgBoresight => Method::OgBoresight,
+                    MapMethod::Ekf => Method::Ekf,
                 },
                 runs,
                 out: out.clone(),
@@ -332,6 +347,12 @@ fn run(cli: Cli) -> Result<()> {
                 og: pradar::mapping::OgParams {
                     pfa,
                     prior,
+                    ..Default::default()
+                },
+                ekf: pradar::mapping::EkfParams {
+                    variant: pradar::mapping::EkfVariant::parse(&ekf)?,
+                    mu0,
+                    sigma0,
                     ..Default::default()
                 },
             };

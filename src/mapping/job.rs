@@ -85,6 +85,8 @@ pub struct MapOptions {
     pub grid: GridParams,
     /// Occupancy-grid parameters.
     pub og: OgParams,
+    /// EKF parameters (method `ekf`).
+    pub ekf: crate::mapping::ekf::EkfParams,
 }
 
 /// A loaded, checked run ready to map.
@@ -197,19 +199,23 @@ pub struct MetricsPair {
 
 /// Score a log-odds map (binary at p > 0.5) against the reference.
 pub fn score(map: &LogOddsMap, reference: &ReferenceMap, observable: &[bool]) -> MetricsPair {
+    score_binary(&map.binary(), reference, observable)
+}
+
+/// Score a binary map (true = occupied) against the reference.
+pub fn score_binary(bin: &[bool], reference: &ReferenceMap, observable: &[bool]) -> MetricsPair {
     let (rows, cols) = (reference.spec.rows, reference.spec.cols);
     let refo: Vec<bool> = reference
         .cells
         .iter()
         .map(|c| *c == CellClass::Occupied)
         .collect();
-    let bin = map.binary();
     let free = vec![false; bin.len()];
     let all = vec![true; bin.len()];
     MetricsPair {
-        observable: evaluate(&bin, &refo, observable, rows, cols),
+        observable: evaluate(bin, &refo, observable, rows, cols),
         observable_all_free: evaluate(&free, &refo, observable, rows, cols),
-        whole: evaluate(&bin, &refo, &all, rows, cols),
+        whole: evaluate(bin, &refo, &all, rows, cols),
         whole_all_free: evaluate(&free, &refo, &all, rows, cols),
     }
 }
@@ -263,6 +269,9 @@ pub struct MapReport {
     pub runs: Vec<RunSummary>,
     /// Figures of the fused map of the first n runs (n = 1..R; one row for a single run).
     pub fusion: Vec<FusionRow>,
+    /// EKF parameters and work statistics (method `ekf` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ekf: Option<crate::mapping::ekf::EkfReport>,
 }
 
 /// Per-run summary.
@@ -284,6 +293,9 @@ pub struct RunSummary {
 pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
     opts.grid.check()?;
     opts.og.check()?;
+    if opts.method == Method::Ekf {
+        return crate::mapping::ekf::run_map_ekf(opts, progress);
+    }
     if opts.runs.is_empty() {
         return Err(Error::param(
             "--run",
@@ -365,6 +377,7 @@ pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> R
         metrics,
         runs,
         fusion,
+        ekf: None,
     };
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::param("metrics", e.to_string()))?;
@@ -422,6 +435,7 @@ pub fn report_section(
             elements: None,
             grid: GridParams::default(),
             og: OgParams::default(),
+            ekf: Default::default(),
         };
         let r = run_map(&opts, &|_, _| {})?;
         if i == 0 {

@@ -73,6 +73,9 @@ pub enum Method {
     Og,
     /// Boresight-only baseline.
     OgBoresight,
+    /// EKF over the RRCS per cell ([`crate::mapping::ekf`]; not an inverse sensor model:
+    /// [`og_map`] refuses it, [`crate::mapping::run_map`] dispatches it).
+    Ekf,
 }
 
 impl Method {
@@ -81,16 +84,18 @@ impl Method {
         match self {
             Method::Og => "og",
             Method::OgBoresight => "og-boresight",
+            Method::Ekf => "ekf",
         }
     }
-    /// Parse a name (`og`, `og-boresight`).
+    /// Parse a name (`og`, `og-boresight`, `ekf`).
     pub fn parse(s: &str) -> Result<Method> {
         match s {
             "og" => Ok(Method::Og),
             "og-boresight" => Ok(Method::OgBoresight),
+            "ekf" => Ok(Method::Ekf),
             other => Err(Error::param(
                 "method",
-                format!("unknown method `{other}` (og|og-boresight)"),
+                format!("unknown method `{other}` (og|og-boresight|ekf)"),
             )),
         }
     }
@@ -510,6 +515,12 @@ pub fn og_map_stats(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(LogOddsMap, OgStats)> {
     params.check()?;
+    if method == Method::Ekf {
+        return Err(Error::param(
+            "method",
+            "ekf is not an occupancy-grid model (use mapping::ekf)",
+        ));
+    }
     let np = model.poses.len();
     let nd = model.directions();
     if em.positions != np || em.directions() != nd {
@@ -675,7 +686,7 @@ mod tests {
 
     #[test]
     fn method_names_round_trip() {
-        for m in [Method::Og, Method::OgBoresight] {
+        for m in [Method::Og, Method::OgBoresight, Method::Ekf] {
             assert_eq!(Method::parse(m.name()).unwrap(), m);
         }
         assert!(Method::parse("ekf2").is_err());
