@@ -410,7 +410,8 @@ pub fn write_reference(out: &Path, reference: &ReferenceMap) -> Result<()> {
     )
 }
 
-/// The `reproduce` report section: both occupancy maps (`og`, `og-boresight`) of one run,
+/// The `reproduce` report section: the occupancy maps (`og`, `og-boresight`) and the EKF
+/// RRCS map (`ekf`, scalable filter) of one run,
 /// written under `report_dir/<sub>/<method>/`, shown beside the reference map with their
 /// figures and the all-free map's.
 pub fn report_section(
@@ -423,7 +424,10 @@ pub fn report_section(
     let mut rows = String::new();
     let mut imgs = String::new();
     let mut all_free: Option<MetricsPair> = None;
-    for (i, method) in [Method::Og, Method::OgBoresight].into_iter().enumerate() {
+    for (i, method) in [Method::Og, Method::OgBoresight, Method::Ekf]
+        .into_iter()
+        .enumerate()
+    {
         let name = method.name();
         let opts = MapOptions {
             method,
@@ -466,10 +470,10 @@ pub fn report_section(
         rows.push_str(&metric_row("all-free map", &free, ""));
     }
     let html = format!(
-        "<p>Occupancy grids (0.1 m cells; binary map: p &gt; 0.5). Observable region: cells inside the −3 dB main lobe of some (pose, direction) within the usable bins, not outside the perimeter; whole map: every cell, outside cells counted as free. ψ in cells (lower is better).</p>\n<div>{imgs}</div>\n<table>\n<tr><th>map</th><th>ψ obs.</th><th>F1 obs.</th><th>F1 (1 cell) obs.</th><th>wrong cells obs.</th><th>ψ whole</th><th>F1 whole</th><th>F1 (1 cell) whole</th><th>wrong cells whole</th><th>metrics</th></tr>\n{rows}</table>\n"
+        "<p>Occupancy grids (0.1 m cells; binary map: p &gt; 0.5) and the EKF map over RRCS (scalable filter; binary map: mean − 2·std &gt; μ0). Observable region: cells inside the −3 dB main lobe of some (pose, direction) within the usable bins, not outside the perimeter; whole map: every cell, outside cells counted as free. ψ in cells (lower is better).</p>\n<div>{imgs}</div>\n<table>\n<tr><th>map</th><th>ψ obs.</th><th>F1 obs.</th><th>F1 (1 cell) obs.</th><th>wrong cells obs.</th><th>ψ whole</th><th>F1 whole</th><th>F1 (1 cell) whole</th><th>wrong cells whole</th><th>metrics</th></tr>\n{rows}</table>\n"
     );
     Ok(crate::report::Section {
-        title: "Occupancy-grid maps (side-lobe aware vs boresight)".into(),
+        title: "Maps: occupancy grid (side-lobe aware vs boresight) and EKF".into(),
         html,
     })
 }
