@@ -1205,29 +1205,13 @@ pub fn run_map_ekf(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<crate::mapping::job::MapReport> {
     use crate::mapping::job::{
-        load_run, observable_region, score_binary, window_kernel, write_reference, FusionRow,
-        LoadedRun, MapReport, RunSummary,
+        load_runs, observable_region, score_binary, window_kernel, write_reference, FusionRow,
+        MapReport, RunSummary,
     };
     use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
     let params = opts.ekf;
     params.check()?;
-    if opts.runs.is_empty() {
-        return Err(Error::param(
-            "--run",
-            "give --campaign and --energy, or at least one --run campaign.toml=energy.parquet",
-        ));
-    }
-    let mut loaded: Vec<LoadedRun> = Vec::new();
-    for r in &opts.runs {
-        let spec = loaded.first().map(|l| l.model.spec);
-        loaded.push(load_run(r, opts.elements, &opts.grid, &opts.og, spec)?);
-    }
-    let reference = loaded[0]
-        .layout
-        .rasterize(opts.grid.cell_m, opts.grid.margin_m);
-    if reference.spec != loaded[0].model.spec {
-        return Err(Error::param("cell_m", "reference grid mismatch"));
-    }
+    let (loaded, reference) = load_runs(opts)?;
     let spec = reference.spec;
     let models: Vec<&ObservationModel> = loaded.iter().map(|l| &l.model).collect();
     let region = observable_region(&models, &reference);

@@ -289,13 +289,9 @@ pub struct RunSummary {
     pub metrics: MetricsPair,
 }
 
-/// Run `pradar map`; `progress(done, total)` counts poses over all runs.
-pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
-    opts.grid.check()?;
-    opts.og.check()?;
-    if opts.method == Method::Ekf {
-        return crate::mapping::ekf::run_map_ekf(opts, progress);
-    }
+/// Load and check every run of `opts` on one grid, with the reference map rasterised from
+/// the first run's layout on the same grid.
+pub fn load_runs(opts: &MapOptions) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
     if opts.runs.is_empty() {
         return Err(Error::param(
             "--run",
@@ -313,6 +309,17 @@ pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> R
     if reference.spec != loaded[0].model.spec {
         return Err(Error::param("cell_m", "reference grid mismatch"));
     }
+    Ok((loaded, reference))
+}
+
+/// Run `pradar map`; `progress(done, total)` counts poses over all runs.
+pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
+    opts.grid.check()?;
+    opts.og.check()?;
+    if opts.method == Method::Ekf {
+        return crate::mapping::ekf::run_map_ekf(opts, progress);
+    }
+    let (loaded, reference) = load_runs(opts)?;
     let total: usize = loaded.iter().map(|l| l.model.poses.len()).sum();
     let mut done = 0;
     let mut maps = Vec::new();
