@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pradar::campaign::manifest::{Campaign, SweepFormat};
+use pradar::pipeline::experiment::ExperimentParams;
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -137,6 +138,15 @@ enum Cmd {
         /// EKF prior standard deviation σ0, m.
         #[arg(long, default_value_t = 0.1)]
         sigma0: f64,
+        /// Pose noise given to the mapper: position standard deviation per axis, m.
+        #[arg(long, default_value_t = 0.0)]
+        pose_noise_m: f64,
+        /// Pose noise given to the mapper: heading standard deviation, degrees.
+        #[arg(long, default_value_t = 0.0)]
+        pose_noise_deg: f64,
+        /// Seed of the pose-noise draws.
+        #[arg(long, default_value_t = 1)]
+        pose_seed: u64,
     },
     /// Extract MPCs (2-D CLEAN, or the local-maximum baseline) from an energy table.
     Extract {
@@ -209,6 +219,32 @@ enum Cmd {
         /// Override [array] elements.
         #[arg(long)]
         elements: Option<usize>,
+        /// Skip the mapping experiments.
+        #[arg(long)]
+        skip_experiments: bool,
+        /// Model-data seeds of the experiments (comma-separated).
+        #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+        seeds: Vec<u64>,
+    },
+    /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
+    Experiment {
+        /// fig5 | fig6 | prior-sensitivity | pose-noise | all.
+        name: String,
+        /// Output folder (DIR/NAME/ per experiment, DIR/maps/, DIR/index.html).
+        #[arg(long)]
+        out: PathBuf,
+        /// Campaign manifest (default: the built-in corridor, simulated).
+        #[arg(long)]
+        campaign: Option<PathBuf>,
+        /// Energy table of the campaign's sweeps (default: computed, simulating if needed).
+        #[arg(long)]
+        energy: Option<PathBuf>,
+        /// Model file for model data (default: fitted from the campaign's energy table).
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Model-data seeds (comma-separated).
+        #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+        seeds: Vec<u64>,
     },
 }
 
@@ -224,6 +260,17 @@ fn bar(quiet: bool, label: &str, total: usize) -> ProgressBar {
     );
     pb.set_prefix(label.to_string());
     pb
+}
+
+/// One stage's bar of the multi-stage jobs, cleared when the stage completes.
+fn stage_bar(quiet: bool, label: &str, total: usize) -> Box<dyn Fn(usize, usize)> {
+    let pb = bar(quiet, label, total);
+    Box::new(move |d, t| {
+        pb.set_position(d as u64);
+        if d == t {
+            pb.finish_and_clear();
+        }
+    })
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -319,6 +366,9 @@ fn run(cli: Cli) -> Result<()> {
             ekf,
             mu0,
             sigma0,
+            pose_noise_m,
+            pose_noise_deg,
+            pose_seed,
         } => {
             use pradar::mapping::{MapOptions, MapRun, Method};
             let mut runs = Vec::new();
@@ -354,6 +404,11 @@ fn run(cli: Cli) -> Result<()> {
                     mu0,
                     sigma0,
                     ..Default::default()
+                },
+                pose_noise: pradar::mapping::job::PoseNoise {
+                    position_m: pose_noise_m,
+                    heading_deg: pose_noise_deg,
+                    seed: pose_seed,
                 },
             };
             let pb = bar(quiet, "map", 0);
@@ -482,24 +537,52 @@ fn run(cli: Cli) -> Result<()> {
             out,
             campaign,
             elements,
+            skip_experiments,
+            seeds,
         } => {
             let opts = pradar::pipeline::ReproduceOptions {
                 out,
                 campaign,
                 elements,
+                experiments: !skip_experiments,
+                experiment_params: ExperimentParams::default().seeds(seeds),
             };
-            let progress = |label: &str, total: usize| -> Box<dyn Fn(usize, usize)> {
-                let pb = bar(quiet, label, total);
-                Box::new(move |d, t| {
-                    pb.set_position(d as u64);
-                    if d == t {
-                        pb.finish_and_clear();
-                    }
-                })
-            };
+            let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
             let index = pradar::pipeline::reproduce(&opts, &progress)?;
             if !quiet {
                 println!("report: {}", index.display());
+            }
+        }
+        Cmd::Experiment {
+            name,
+            out,
+            campaign,
+            energy,
+            model,
+            seeds,
+        } => {
+            use pradar::pipeline::experiment::{run_experiments, Experiment, InputOptions};
+            let which = if name == "all" {
+                Experiment::ALL.to_vec()
+            } else {
+                vec![Experiment::parse(&name)?]
+            };
+            let inputs = InputOptions {
+                campaign,
+                energy,
+                model,
+            };
+            let params = ExperimentParams::default().seeds(seeds);
+            let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
+            let results = run_experiments(&which, &inputs, &params, &out, &progress)?;
+            if !quiet {
+                for r in &results {
+                    println!("{}:", r.name);
+                    for (k, v) in &r.findings {
+                        println!("  {k}: {v}");
+                    }
+                }
+                println!("report: {}", out.join("index.html").display());
             }
         }
     }

@@ -407,3 +407,176 @@ fn line_path(
         style,
     ))
 }
+
+/// One tile of a map panel: a title and one RGB colour per grid cell (row-major, row 0 =
+/// lowest y, as the map files).
+#[derive(Debug, Clone)]
+pub struct MapTile {
+    /// Title drawn above the tile.
+    pub title: String,
+    /// Cell colours.
+    pub cells: Vec<RGBColor>,
+}
+
+/// Colour of a binary map cell scored against the reference: occupied in both black, free in
+/// both white, false occupied red, missed occupied blue, outside the perimeter (predicted
+/// free) light grey.
+pub fn scored_colour(map: bool, reference: crate::campaign::layout::CellClass) -> RGBColor {
+    use crate::campaign::layout::CellClass;
+    match (map, reference) {
+        (true, CellClass::Occupied) => RGBColor(0, 0, 0),
+        (false, CellClass::Occupied) => RGBColor(40, 90, 230),
+        (true, _) => RGBColor(220, 30, 30),
+        (false, CellClass::Free) => RGBColor(255, 255, 255),
+        (false, CellClass::Outside) => RGBColor(215, 215, 215),
+    }
+}
+
+/// Maps side by side: `tiles` on a grid of `columns`, each `rows` × `cols` cells drawn
+/// `scale` pixels per cell, titled. Written atomically as PNG.
+pub fn map_panel(
+    path: &Path,
+    rows: usize,
+    cols: usize,
+    tiles: &[MapTile],
+    columns: usize,
+) -> Result<()> {
+    register_font();
+    crate::io::ensure_parent(path)?;
+    if tiles.is_empty() || columns == 0 || rows == 0 || cols == 0 {
+        return Err(plot_err(path, "empty map panel"));
+    }
+    if let Some(t) = tiles.iter().find(|t| t.cells.len() != rows * cols) {
+        return Err(plot_err(
+            path,
+            format!(
+                "tile `{}` has {} cells, grid {rows} x {cols}",
+                t.title,
+                t.cells.len()
+            ),
+        ));
+    }
+    let tmp = crate::io::temp_path(path).with_extension("png");
+    let scale = (420 / cols).clamp(1, 6) as i32;
+    let (tw, th) = (cols as i32 * scale, rows as i32 * scale);
+    let (pad, head) = (10, 24);
+    let ncol = columns.min(tiles.len()) as i32;
+    let nrow = tiles.len().div_ceil(columns) as i32;
+    let w = (ncol * (tw + pad) + pad) as u32;
+    let h = (nrow * (th + head + pad) + pad) as u32;
+    {
+        let root = BitMapBackend::new(&tmp, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        for (k, t) in tiles.iter().enumerate() {
+            let (gx, gy) = ((k % columns) as i32, (k / columns) as i32);
+            let x0 = pad + gx * (tw + pad);
+            let y0 = pad + gy * (th + head + pad) + head;
+            root.draw(&Text::new(
+                t.title.clone(),
+                (x0, y0 - head + 4),
+                ("sans-serif", 14).into_font().color(&BLACK),
+            ))
+            .map_err(|e| plot_err(path, e))?;
+            for r in 0..rows {
+                let y = y0 + (rows - 1 - r) as i32 * scale;
+                for c in 0..cols {
+                    let x = x0 + c as i32 * scale;
+                    root.draw(&Rectangle::new(
+                        [(x, y), (x + scale, y + scale)],
+                        t.cells[r * cols + c].filled(),
+                    ))
+                    .map_err(|e| plot_err(path, e))?;
+                }
+            }
+            root.draw(&Rectangle::new(
+                [(x0 - 1, y0 - 1), (x0 + tw, y0 + th)],
+                BLACK.stroke_width(1),
+            ))
+            .map_err(|e| plot_err(path, e))?;
+        }
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// One chart of [`line_plots`]: named series of (x, y) points.
+#[derive(Debug, Clone)]
+pub struct LineChart {
+    /// Caption.
+    pub title: String,
+    /// x-axis label.
+    pub x_label: String,
+    /// y-axis label.
+    pub y_label: String,
+    /// (name, points) per series.
+    pub series: Vec<(String, Vec<(f64, f64)>)>,
+}
+
+/// Line charts side by side (one PNG, 480 × 380 pixels per chart), points marked, legend
+/// per chart. Written atomically.
+pub fn line_plots(path: &Path, charts: &[LineChart]) -> Result<()> {
+    register_font();
+    crate::io::ensure_parent(path)?;
+    if charts.is_empty() {
+        return Err(plot_err(path, "no chart"));
+    }
+    let tmp = crate::io::temp_path(path).with_extension("png");
+    {
+        let root = BitMapBackend::new(&tmp, (480 * charts.len() as u32, 380)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        let areas = root.split_evenly((1, charts.len()));
+        for (area, ch) in areas.iter().zip(charts) {
+            let pts = ch.series.iter().flat_map(|s| s.1.iter());
+            let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+            for &(x, y) in pts.filter(|p| p.0.is_finite() && p.1.is_finite()) {
+                x0 = x0.min(x);
+                x1 = x1.max(x);
+                y0 = y0.min(y);
+                y1 = y1.max(y);
+            }
+            if x0 > x1 {
+                (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+            }
+            let (dx, dy) = ((x1 - x0).max(1e-9) * 0.05, (y1 - y0).max(1e-9) * 0.1);
+            let mut chart = ChartBuilder::on(area)
+                .caption(&ch.title, ("sans-serif", 15))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(55)
+                .build_cartesian_2d((x0 - dx)..(x1 + dx), (y0 - dy)..(y1 + dy))
+                .map_err(|e| plot_err(path, e))?;
+            chart
+                .configure_mesh()
+                .x_desc(ch.x_label.as_str())
+                .y_desc(ch.y_label.as_str())
+                .label_style(("sans-serif", 12))
+                .draw()
+                .map_err(|e| plot_err(path, e))?;
+            for (i, (name, s)) in ch.series.iter().enumerate() {
+                let col = cluster_colour(i);
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        s.clone(),
+                        col.stroke_width(2),
+                    )))
+                    .map_err(|e| plot_err(path, e))?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], col.stroke_width(2))
+                    });
+                chart
+                    .draw_series(s.iter().map(|&p| Circle::new(p, 4, col.filled())))
+                    .map_err(|e| plot_err(path, e))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 12))
+                .draw()
+                .map_err(|e| plot_err(path, e))?;
+        }
+        root.present().map_err(|e| plot_err(path, e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}

@@ -31,7 +31,14 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
     set(&mut t, "processing.noise_from_ns", 50.0);
     let m = write_campaign(&tmp.path().join("in"), &t);
     let rep = tmp.path().join("rep");
-    let (code, err) = pradar(&["reproduce", "--out", s(&rep), "--campaign", s(&m)]);
+    let (code, err) = pradar(&[
+        "reproduce",
+        "--out",
+        s(&rep),
+        "--campaign",
+        s(&m),
+        "--skip-experiments",
+    ]);
     assert_eq!(code, 0, "{err}");
     // the report carries Table 1 and a histogram/CDF plot per fitted quantity
     let html = std::fs::read_to_string(rep.join("index.html")).unwrap();

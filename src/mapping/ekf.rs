@@ -1205,16 +1205,15 @@ pub fn run_map_ekf(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<crate::mapping::job::MapReport> {
     use crate::mapping::job::{
-        load_runs, observable_region, score_binary, window_kernel, write_reference, FusionRow,
-        MapReport, RunSummary,
+        load_runs, runs_region, score_binary, window_kernel, write_reference, FusionRow, MapReport,
+        RunSummary,
     };
     use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
     let params = opts.ekf;
     params.check()?;
     let (loaded, reference) = load_runs(opts)?;
     let spec = reference.spec;
-    let models: Vec<&ObservationModel> = loaded.iter().map(|l| &l.model).collect();
-    let region = observable_region(&models, &reference);
+    let region = runs_region(&loaded, &reference);
     let mut kernels = Vec::new();
     let mut noises = Vec::new();
     for l in &loaded {
@@ -1341,6 +1340,8 @@ pub fn run_map_ekf(
             stats,
             covariance_bytes: cov_bytes,
         }),
+        pose_noise: opts.pose_noise,
+        binary: bin,
     };
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::param("metrics", e.to_string()))?;

@@ -27,7 +27,7 @@
 //!   (`--elements` overrides the manifest's).
 
 use crate::campaign::layout::{CellClass, GridSpec, Layout, ReferenceMap};
-use crate::campaign::manifest::Campaign;
+use crate::campaign::manifest::{Campaign, Pose};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridParams, ObservationModel};
@@ -87,6 +87,63 @@ pub struct MapOptions {
     pub og: OgParams,
     /// EKF parameters (method `ekf`).
     pub ekf: crate::mapping::ekf::EkfParams,
+    /// Pose noise given to the mapper (none by default).
+    pub pose_noise: PoseNoise,
+}
+
+/// Pose noise of the mapper: the energy was recorded at the manifest's poses, the mapper is
+/// given x̃ = x + N(0, σ_p²), ỹ = y + N(0, σ_p²), h̃ = h + N(0, σ_h²), drawn independently
+/// per pose (no drift) from a ChaCha stream keyed by (`seed`, run index). The observable
+/// region and the reference stay those of the true poses, so maps with and without noise are
+/// scored on the same cells.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct PoseNoise {
+    /// Position standard deviation per axis, m.
+    pub position_m: f64,
+    /// Heading standard deviation, degrees.
+    pub heading_deg: f64,
+    /// Seed of the draws.
+    pub seed: u64,
+}
+
+impl PoseNoise {
+    /// Validate (finite, ≥ 0).
+    pub fn check(&self) -> Result<()> {
+        if !(self.position_m.is_finite() && self.position_m >= 0.0) {
+            return Err(Error::param("pose_noise.position_m", "must be >= 0"));
+        }
+        if !(self.heading_deg.is_finite() && self.heading_deg >= 0.0) {
+            return Err(Error::param("pose_noise.heading_deg", "must be >= 0"));
+        }
+        Ok(())
+    }
+    /// Whether it changes any pose.
+    pub fn is_none(&self) -> bool {
+        self.position_m == 0.0 && self.heading_deg == 0.0
+    }
+    /// The poses the mapper believes for run `run` (the true poses when there is no noise).
+    pub fn apply(&self, poses: &[Pose], run: usize) -> Vec<Pose> {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        if self.is_none() {
+            return poses.to_vec();
+        }
+        let key = self.seed ^ (run as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(key);
+        poses
+            .iter()
+            .map(|p| {
+                let dx: f64 = StandardNormal.sample(&mut rng);
+                let dy: f64 = StandardNormal.sample(&mut rng);
+                let dh: f64 = StandardNormal.sample(&mut rng);
+                Pose {
+                    x_m: p.x_m + self.position_m * dx,
+                    y_m: p.y_m + self.position_m * dy,
+                    heading_deg: p.heading_deg + self.heading_deg * dh,
+                }
+            })
+            .collect()
+    }
 }
 
 /// A loaded, checked run ready to map.
@@ -104,6 +161,9 @@ pub struct LoadedRun {
     pub model: ObservationModel,
     /// The run's detector.
     pub detector: Detector,
+    /// The poses the data were recorded at (the manifest's; `model.poses` holds the poses
+    /// the mapper believes, which differ under [`PoseNoise`]).
+    pub true_poses: Vec<Pose>,
 }
 
 /// First usable bin of an energy table (see the module docs).
@@ -175,6 +235,7 @@ pub fn load_run(
         min_bin(&energy),
     )?;
     Ok(LoadedRun {
+        true_poses: c.manifest.poses.clone(),
         campaign: c,
         layout,
         energy,
@@ -239,6 +300,20 @@ pub fn observable_region(runs: &[&ObservationModel], reference: &ReferenceMap) -
     region
 }
 
+/// Observable region of loaded runs, from the poses their data were recorded at.
+pub fn runs_region(loaded: &[LoadedRun], reference: &ReferenceMap) -> Vec<bool> {
+    let models: Vec<ObservationModel> = loaded
+        .iter()
+        .map(|l| {
+            let mut m = l.model.clone();
+            m.poses = l.true_poses.clone();
+            m
+        })
+        .collect();
+    let refs: Vec<&ObservationModel> = models.iter().collect();
+    observable_region(&refs, reference)
+}
+
 /// One row of the fusion table.
 #[derive(Debug, Clone, Serialize)]
 pub struct FusionRow {
@@ -272,6 +347,11 @@ pub struct MapReport {
     /// EKF parameters and work statistics (method `ekf` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ekf: Option<crate::mapping::ekf::EkfReport>,
+    /// Pose noise given to the mapper.
+    pub pose_noise: PoseNoise,
+    /// The (fused) binary map, row-major from the lowest y (not in metrics.json).
+    #[serde(skip)]
+    pub binary: Vec<bool>,
 }
 
 /// Per-run summary.
@@ -298,10 +378,13 @@ pub fn load_runs(opts: &MapOptions) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
             "give --campaign and --energy, or at least one --run campaign.toml=energy.parquet",
         ));
     }
+    opts.pose_noise.check()?;
     let mut loaded: Vec<LoadedRun> = Vec::new();
-    for r in &opts.runs {
+    for (i, r) in opts.runs.iter().enumerate() {
         let spec = loaded.first().map(|l| l.model.spec);
-        loaded.push(load_run(r, opts.elements, &opts.grid, &opts.og, spec)?);
+        let mut l = load_run(r, opts.elements, &opts.grid, &opts.og, spec)?;
+        l.model.poses = opts.pose_noise.apply(&l.true_poses, i);
+        loaded.push(l);
     }
     let reference = loaded[0]
         .layout
@@ -338,8 +421,7 @@ pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> R
         maps.push(m);
         stats.push(s);
     }
-    let models: Vec<&ObservationModel> = loaded.iter().map(|l| &l.model).collect();
-    let region = observable_region(&models, &reference);
+    let region = runs_region(&loaded, &reference);
     let fused = fuse(&maps)?;
     let metrics = score(&fused, &reference, &region);
     let mut runs = Vec::new();
@@ -385,6 +467,8 @@ pub fn run_map(opts: &MapOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> R
         runs,
         fusion,
         ekf: None,
+        pose_noise: opts.pose_noise,
+        binary: fused.binary(),
     };
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::param("metrics", e.to_string()))?;
@@ -447,6 +531,7 @@ pub fn report_section(
             grid: GridParams::default(),
             og: OgParams::default(),
             ekf: Default::default(),
+            pose_noise: PoseNoise::default(),
         };
         let r = run_map(&opts, &|_, _| {})?;
         if i == 0 {
@@ -504,4 +589,64 @@ fn metric_row(name: &str, m: &MetricsPair, link: &str) -> String {
         w.f1_1,
         w.wrong_cell_rate
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(n: usize) -> Vec<Pose> {
+        (0..n)
+            .map(|i| Pose {
+                x_m: i as f64 * 0.4,
+                y_m: -0.3,
+                heading_deg: 10.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn no_pose_noise_keeps_the_poses() {
+        let p = line(5);
+        assert_eq!(PoseNoise::default().apply(&p, 0), p);
+    }
+
+    #[test]
+    fn pose_noise_has_the_stated_spread_and_is_seeded() {
+        let p = line(20_000);
+        let n = PoseNoise {
+            position_m: 0.05,
+            heading_deg: 2.0,
+            seed: 7,
+        };
+        let a = n.apply(&p, 0);
+        assert_eq!(a, n.apply(&p, 0), "same seed, same draws");
+        assert_ne!(a, n.apply(&p, 1), "another run, other draws");
+        // mean within 4 standard errors of 0, sample std returned
+        let sd = |f: &dyn Fn(&Pose, &Pose) -> f64, sigma: f64| {
+            let v: Vec<f64> = a.iter().zip(&p).map(|(x, y)| f(x, y)).collect();
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            assert!(m.abs() < 4.0 * sigma / (v.len() as f64).sqrt(), "mean {m}");
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+        };
+        let sx = sd(&|x, y| x.x_m - y.x_m, 0.05);
+        let sy = sd(&|x, y| x.y_m - y.y_m, 0.05);
+        let sh = sd(&|x, y| x.heading_deg - y.heading_deg, 2.0);
+        // 20,000 draws: the sample std is within 2 % of σ (≈ 4 standard errors)
+        assert!((sx / 0.05 - 1.0).abs() < 0.02, "x {sx}");
+        assert!((sy / 0.05 - 1.0).abs() < 0.02, "y {sy}");
+        assert!((sh / 2.0 - 1.0).abs() < 0.02, "heading {sh}");
+        assert!(PoseNoise {
+            position_m: -1.0,
+            ..n
+        }
+        .check()
+        .is_err());
+        assert!(PoseNoise {
+            heading_deg: f64::NAN,
+            ..n
+        }
+        .check()
+        .is_err());
+    }
 }

@@ -1,6 +1,8 @@
 //! The main job (`pradar reproduce`): simulate the built-in corridor into a work folder,
-//! compute its energy matrices and write the report with per-position heat maps, the
-//! campaign summary and stage timings. Later stages add their sections here.
+//! compute its energy matrices, extract and cluster MPCs, fit Table 1 (also on the corridor
+//! without clutter), map it (OG, boresight OG, EKF), run the mapping experiments
+//! ([`experiment`]) and write the report: campaign summary, per-position heat maps, MPC
+//! clusters, Table 1, maps, every experiment's table and panel, and stage timings.
 
 use crate::campaign::manifest::{Campaign, SweepFormat};
 use crate::campaign::simulate::simulate;
@@ -11,10 +13,12 @@ use crate::{cluster, mpc};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub mod experiment;
+
 /// The built-in corridor manifest.
-pub const CORRIDOR_MANIFEST: &str = include_str!("../data/corridor/campaign.toml");
+pub const CORRIDOR_MANIFEST: &str = include_str!("../../data/corridor/campaign.toml");
 /// The built-in corridor layout.
-pub const CORRIDOR_LAYOUT: &str = include_str!("../data/corridor/layout.geojson");
+pub const CORRIDOR_LAYOUT: &str = include_str!("../../data/corridor/layout.geojson");
 
 /// Options of `reproduce`.
 #[derive(Debug, Clone)]
@@ -25,6 +29,10 @@ pub struct ReproduceOptions {
     pub campaign: Option<PathBuf>,
     /// `--elements` override.
     pub elements: Option<usize>,
+    /// Run the mapping experiments ([`experiment`]) into `out/experiments` (default true).
+    pub experiments: bool,
+    /// Their parameters.
+    pub experiment_params: experiment::ExperimentParams,
 }
 
 /// Progress callback factory: (stage label, total steps) → per-step callback.
@@ -65,23 +73,15 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let er = energy::run(&sc, &energy_path, &*cb)?;
     timings.push(("energy".into(), t.elapsed().as_secs_f64()));
     let em = EnergyMatrix::read(&energy_path)?;
-    // MPC extraction and clustering
+    // MPC extraction, clustering and the fit
+    let Analysis {
+        mpcs,
+        clustering,
+        fit: fitted,
+        timings: chain_timings,
+    } = analyse(&sc, &em, &work, true)?;
+    timings.extend(chain_timings);
     let t = Instant::now();
-    let mpcs = mpc::extract(&em, &sc, &mpc::ExtractParams::default())?;
-    mpc::write_mpcs(
-        &work.join("mpcs.parquet"),
-        &mpcs,
-        vec![("schema_version".into(), "1".into())],
-    )?;
-    timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
-    let t = Instant::now();
-    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
-    let clustering = cluster::cluster(&mpcs, &headings, &cluster::ClusterParams::default())?;
-    cluster::write(&work.join("clusters.parquet"), &clustering)?;
-    timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
-    let t = Instant::now();
-    let fitted =
-        crate::fit::channel::fit_channel(&work.join("clusters.parquet"), &sc, &Default::default());
     let truth =
         crate::fit::channel::fit_truth(&sim_dir.join("truth"), &sc, &Default::default()).ok();
     let table1_html = match &fitted {
@@ -99,7 +99,10 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
         }
         Err(e) => format!("<p>fit failed: {}</p>", report::html_escape(&e.to_string())),
     };
-    timings.push(("fit (Table 1)".into(), t.elapsed().as_secs_f64()));
+    timings.push((
+        "fit report (truth, plots)".into(),
+        t.elapsed().as_secs_f64(),
+    ));
     // Table 1 of the same corridor with the clutter section removed (geometry only)
     let t = Instant::now();
     let geometry_html = match geometry_only_table(&c, &work.join("geometry"), out, progress) {
@@ -227,7 +230,44 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     }
     let t = Instant::now();
     let maps = crate::mapping::job::report_section(&sim.manifest, &energy_path, out, "maps")?;
-    timings.push(("OG maps".into(), t.elapsed().as_secs_f64()));
+    timings.push((
+        "maps (OG, OG boresight, EKF)".into(),
+        t.elapsed().as_secs_f64(),
+    ));
+    let mut experiment_sections = Vec::new();
+    if opts.experiments {
+        let t = Instant::now();
+        match &fitted {
+            Ok(_) => {
+                let inputs = experiment::ExperimentInputs {
+                    campaign: sim.manifest.clone(),
+                    energy: energy_path.clone(),
+                    model: out.join("fitted_model.toml"),
+                };
+                let mut lab = experiment::Lab::new(
+                    inputs,
+                    opts.experiment_params.clone(),
+                    &out.join("experiments"),
+                    progress,
+                )?;
+                for e in experiment::Experiment::ALL {
+                    let r = lab.run(e)?;
+                    experiment_sections.push(experiment::Lab::section(&r, "experiments/"));
+                }
+            }
+            Err(e) => experiment_sections.push(Section {
+                title: "Experiments".into(),
+                html: format!(
+                    "<p>not run: the fit gave no model ({})</p>",
+                    report::html_escape(&e.to_string())
+                ),
+            }),
+        }
+        timings.push((
+            "experiments (fig5, fig6, prior-sensitivity, pose-noise)".into(),
+            t.elapsed().as_secs_f64(),
+        ));
+    }
     let ks: Vec<String> = clustering
         .positions
         .iter()
@@ -291,9 +331,57 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
         },
     ];
     sections.insert(sections.len() - 1, maps);
+    for e in experiment_sections {
+        sections.insert(sections.len() - 1, e);
+    }
     let index = out.join("index.html");
     report::write_index(&index, &format!("pradar report: {}", m.name), &sections)?;
     Ok(index)
+}
+
+/// What the analysis chain (CLEAN → K-means → fit) gave for one energy table.
+pub struct Analysis {
+    /// Extracted MPCs.
+    pub mpcs: Vec<mpc::Mpc>,
+    /// Their clustering.
+    pub clustering: cluster::Clustering,
+    /// The channel fit (Table 1, model file), or why it failed (too few clusters, say).
+    pub fit: Result<crate::fit::channel::ChannelFit>,
+    /// Stage timings, s.
+    pub timings: Vec<(String, f64)>,
+}
+
+/// Run CLEAN (default parameters), K-means (silhouette rule) and the channel fit (default
+/// bootstrap) on an energy table of campaign `sc`, writing `work/clusters.parquet` and
+/// `work/clusters_summary.parquet` (and `work/mpcs.parquet` when `keep_mpcs`). Extraction or
+/// clustering errors are returned; a failed fit is kept in [`Analysis::fit`].
+pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -> Result<Analysis> {
+    let mut timings = Vec::new();
+    let t = Instant::now();
+    let mpcs = mpc::extract(em, sc, &mpc::ExtractParams::default())?;
+    if keep_mpcs {
+        mpc::write_mpcs(
+            &work.join("mpcs.parquet"),
+            &mpcs,
+            vec![("schema_version".into(), "1".into())],
+        )?;
+    }
+    timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
+    let clustering = cluster::cluster(&mpcs, &headings, &cluster::ClusterParams::default())?;
+    let cp = work.join("clusters.parquet");
+    cluster::write(&cp, &clustering)?;
+    timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());
+    timings.push(("fit (Table 1)".into(), t.elapsed().as_secs_f64()));
+    Ok(Analysis {
+        mpcs,
+        clustering,
+        fit,
+        timings,
+    })
 }
 
 /// Table 1 as HTML rows (ours, interval, family, KS p, AIC, paper, truth).
@@ -351,12 +439,8 @@ fn geometry_only_table(c: &Campaign, dir: &Path, out: &Path, progress: Progress)
     let cb = progress("energy (geometry only)", np);
     energy::run(&sc, &e, &*cb)?;
     let em = EnergyMatrix::read(&e)?;
-    let mpcs = mpc::extract(&em, &sc, &mpc::ExtractParams::default())?;
-    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
-    let clustering = cluster::cluster(&mpcs, &headings, &cluster::ClusterParams::default())?;
-    let cp = dir.join("clusters.parquet");
-    cluster::write(&cp, &clustering)?;
-    let f = crate::fit::channel::fit_channel(&cp, &sc, &Default::default())?;
+    let a = analyse(&sc, &em, dir, false)?;
+    let (mpcs, clustering, f) = (a.mpcs, a.clustering, a.fit?);
     crate::fit::channel::write_table1(&out.join("table1_geometry.md"), &f, None)?;
     let mut h = table1_html_rows(&f, None);
     h.push_str(&format!(
