@@ -341,7 +341,18 @@ fn reproduce_writes_the_report() {
     t.insert("poses".into(), poses.into());
     let m = write_campaign(&tmp.path().join("in"), &t);
     let out = tmp.path().join("rep");
-    let o = run(&["reproduce", "--out", s(&out), "--campaign", s(&m)], None);
+    let o = run(
+        &[
+            "reproduce",
+            "--out",
+            s(&out),
+            "--campaign",
+            s(&m),
+            "--seeds",
+            "1",
+        ],
+        None,
+    );
     assert_eq!(o.code, 0, "{}", o.stderr);
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     for p in 0..3 {
@@ -351,6 +362,13 @@ fn reproduce_writes_the_report() {
         assert_eq!(&bytes[1..4], b"PNG");
     }
     assert!(html.contains("Stage timings") && html.contains("simulate"));
+    // the experiments' sections, each with its panel and table
+    for e in ["fig5", "fig6", "prior-sensitivity", "pose-noise"] {
+        let png = format!("experiments/{e}/{e}.png");
+        assert!(html.contains(&png), "{e} section missing");
+        assert_eq!(&std::fs::read(out.join(&png)).unwrap()[1..4], b"PNG");
+        assert!(out.join(format!("experiments/{e}/{e}.md")).is_file());
+    }
 }
 
 #[test]
