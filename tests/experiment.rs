@@ -1,6 +1,9 @@
 //! `pradar experiment`: the paper's mapping experiments end to end on the built-in corridor
 //! (fig6 at full size, the others with one seed), their files, and bad input.
 
+mod common;
+
+use common::assert_one_line_error;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -56,6 +59,20 @@ fn run_with_inputs(name: &str, out: &Path, extra: &[&str]) -> Value {
     let o = pradar(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     json(&out.join(name).join(format!("{name}.json")))
+}
+
+/// The experiment's findings (printed), as (what, value) pairs.
+fn findings(v: &Value) -> Vec<(String, String)> {
+    let out: Vec<(String, String)> = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| (p[0].as_str().unwrap().into(), p[1].as_str().unwrap().into()))
+        .collect();
+    for (k, val) in &out {
+        println!("{k}: {val}");
+    }
+    out
 }
 
 fn cases(v: &Value) -> &Vec<Value> {
@@ -114,14 +131,7 @@ fn fig6_maps_both_sizes_with_both_mappers_on_three_seeds() {
     assert_eq!(&panel[1..4], b"PNG");
     let csv = std::fs::read_to_string(out.join("fig6/fig6.csv")).unwrap();
     assert_eq!(csv.lines().count(), 17);
-    for (k, val) in v["findings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| (&p[0], &p[1]))
-    {
-        println!("{}: {}", k.as_str().unwrap(), val.as_str().unwrap());
-    }
+    findings(&v);
 }
 
 #[test]
@@ -158,14 +168,8 @@ fn prior_sensitivity_changes_the_priors_by_forty_percent() {
         occ(base),
         occ(hi)
     );
-    for (k, val) in v["findings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| (&p[0], &p[1]))
-    {
-        println!("{}: {}", k.as_str().unwrap(), val.as_str().unwrap());
-        assert!(!val.as_str().unwrap().contains("NaN"));
+    for (_, val) in findings(&v) {
+        assert!(!val.contains("NaN"), "{val}");
     }
     let plot = std::fs::read(
         tmp.path()
@@ -239,18 +243,6 @@ fn fig5_puts_sweeps_and_model_data_side_by_side() {
     assert_eq!(&panel[1..4], b"PNG");
     let html = std::fs::read_to_string(tmp.path().join("index.html")).unwrap();
     assert!(html.contains("fig5/fig5.png") && html.contains("maps/sweeps_n400_ekf/ekf_mean.png"));
-}
-
-fn assert_one_line_error(o: &Output, must_name: &str) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
-    assert!(!err.contains("panicked"), "panic: {err}");
-    let lines: Vec<&str> = err.trim().lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected: {err}");
-    assert!(
-        lines[0].starts_with("error: ") && lines[0].contains(must_name),
-        "{err}"
-    );
 }
 
 #[test]

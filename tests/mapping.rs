@@ -535,20 +535,6 @@ fn two_trajectories_fused_beat_either_alone() {
 
 // ---------------------------------------------------------------- bad input
 
-fn assert_one_line_error(o: &std::process::Output, must_name: &str) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    eprintln!("{}", err.trim());
-    assert!(!o.status.success());
-    assert!(!err.contains("panicked"), "panic: {err}");
-    let lines: Vec<&str> = err.trim().lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected: {err}");
-    assert!(lines[0].starts_with("error: "));
-    assert!(
-        lines[0].contains(must_name),
-        "should name {must_name}: {err}"
-    );
-}
-
 #[test]
 fn bad_input_gives_one_clear_error() {
     let tmp = tempfile::tempdir().unwrap();

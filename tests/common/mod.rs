@@ -68,3 +68,18 @@ pub fn chain(
     pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
     (sc, pradar::energy::EnergyMatrix::read(&e).unwrap())
 }
+
+/// A CLI failure: non-zero exit, no panic, exactly one `error: ` line naming `must_name`.
+pub fn assert_one_line_error(o: &std::process::Output, must_name: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    eprintln!("{}", err.trim());
+    assert!(!o.status.success());
+    assert!(!err.contains("panicked"), "panic: {err}");
+    let lines: Vec<&str> = err.trim().lines().collect();
+    assert_eq!(lines.len(), 1, "one line expected: {err}");
+    assert!(lines[0].starts_with("error: "));
+    assert!(
+        lines[0].contains(must_name),
+        "should name {must_name}: {err}"
+    );
+}
