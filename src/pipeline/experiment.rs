@@ -414,9 +414,6 @@ pub struct ExperimentResult {
     /// [`Lab::section`]).
     #[serde(skip)]
     pub html: String,
-    /// The table as Markdown.
-    #[serde(skip)]
-    pub markdown: String,
 }
 
 /// Runs experiments, sharing model data and maps between them.
@@ -605,16 +602,14 @@ impl<'a> Lab<'a> {
     pub fn run(&mut self, e: Experiment) -> Result<ExperimentResult> {
         let dir = self.out.join(e.name());
         std::fs::create_dir_all(&dir).map_err(|err| Error::io(&dir, err))?;
-        let mut r = match e {
+        let r = match e {
             Experiment::Fig5 => self.fig5()?,
             Experiment::Fig6 => self.fig6()?,
             Experiment::PriorSensitivity => self.prior_sensitivity()?,
             Experiment::PoseNoise => self.pose_noise()?,
         };
-        r.name = e.name().to_string();
         let name = e.name();
         let (md, csv) = case_tables(&r.cases, &r.findings);
-        r.markdown = md.clone();
         crate::io::write_bytes(&dir.join(format!("{name}.md")), md.as_bytes())?;
         crate::io::write_bytes(&dir.join(format!("{name}.csv")), csv.as_bytes())?;
         let json = serde_json::to_string_pretty(&r)
@@ -1145,7 +1140,6 @@ impl<'a> Lab<'a> {
             cases,
             findings,
             html,
-            markdown: String::new(),
         }
     }
 
