@@ -45,8 +45,15 @@
 //!   rank-r downdate, r = min(m, na):
 //!   - m ≤ na: Uᵀ = H_A·Y (sparse rows of H times rows of P), S = Uᵀ[:, A]·H_Aᵀ + R,
 //!     S = L·Lᵀ (Cholesky), Wᵀ = L⁻¹Uᵀ, x += Wᵀᵀ·L⁻¹ν, P −= W·Wᵀ;
-//!   - m > na: S = H_A·P_AA·H_Aᵀ + R, V = L⁻¹H_A, M = VᵀV (= H_Aᵀ S⁻¹ H_A), x += Yᵀ·Vᵀ·L⁻¹ν,
-//!     P −= Yᵀ·(M·Y).
+//!   - m > na: M = H_Aᵀ·S⁻¹·H_A (na × na) without forming the m × m matrix S, by the
+//!     push-through identity H_Aᵀ(H_A P_AA H_Aᵀ + R)⁻¹H_A = G(I + P_AA G)⁻¹,
+//!     G = H_Aᵀ R⁻¹ H_A (R diagonal). In a symmetric, well-conditioned form: P_AA = L·Lᵀ,
+//!     C = I + Lᵀ·G·L (eigenvalues ≥ 1), M = L⁻ᵀ·(I − C⁻¹)·L⁻¹, and the gain applied to
+//!     ν is Yᵀ·L⁻ᵀ·C⁻¹·Lᵀ·H_Aᵀ R⁻¹ ν; then P −= Yᵀ·(M·Y). Cost O(nnz + na³) instead of
+//!     O(m³ + m²·na) (a 451-bin observation over 90 cells: 4–6 ms per update against
+//!     16–18 ms through S at 1,024 cells, `scripts/bench-ekf`). If P_AA or C is not
+//!     numerically positive definite the update goes through S instead:
+//!     S = H_A·P_AA·H_Aᵀ + R, V = L⁻¹H_A, M = VᵀV, x += Yᵀ·Vᵀ·L⁻¹ν, P −= Yᵀ·(M·Y).
 //!
 //!   All bins of the observation are processed together (one batch per (pose, direction)).
 //!   The downdate is computed on the upper triangle in blocks of 64 rows (matrix products of
@@ -411,16 +418,26 @@ pub fn new_filter(params: &EkfParams, rows: usize, cols: usize) -> Result<Box<dy
 /// In-place lower Cholesky factor of the symmetric m × m matrix `a` (row-major; the upper
 /// triangle is zeroed).
 pub fn cholesky(a: &mut [f64], m: usize) -> Result<()> {
+    if cholesky_in_place(a, m) {
+        Ok(())
+    } else {
+        Err(Error::param(
+            "ekf",
+            "innovation covariance S is not positive definite (numerical breakdown)",
+        ))
+    }
+}
+
+/// Cholesky factorisation in place (lower triangle, upper zeroed); false when the matrix is
+/// not numerically positive definite (then `a` is partly overwritten).
+fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
     for j in 0..m {
         let mut d = a[j * m + j];
         for k in 0..j {
             d -= a[j * m + k] * a[j * m + k];
         }
         if !(d.is_finite() && d > 0.0) {
-            return Err(Error::param(
-                "ekf",
-                "innovation covariance S is not positive definite (numerical breakdown)",
-            ));
+            return false;
         }
         let d = d.sqrt();
         a[j * m + j] = d;
@@ -438,7 +455,7 @@ pub fn cholesky(a: &mut [f64], m: usize) -> Result<()> {
             head[j * m + k] = 0.0;
         }
     }
-    Ok(())
+    true
 }
 
 /// Solve L·X = B in place for B (m × w, row-major), L lower m × m; columns in parallel
@@ -506,6 +523,49 @@ fn backward_solve_vec(l: &[f64], m: usize, v: &mut [f64]) {
         }
         v[i] = s / l[i * m + i];
     }
+}
+
+/// L⁻¹ of a lower-triangular m × m factor (row-major).
+fn lower_inverse(l: &[f64], m: usize) -> Vec<f64> {
+    let mut inv = vec![0.0; m * m];
+    for a in 0..m {
+        inv[a * m + a] = 1.0;
+    }
+    forward_solve(l, m, &mut inv, m);
+    inv
+}
+
+/// A⁻¹ = L⁻ᵀ·L⁻¹ from the Cholesky factor L of A (m × m, row-major).
+fn inverse_from_cholesky(l: &[f64], m: usize) -> Vec<f64> {
+    let linv = lower_inverse(l, m);
+    let li = ArrayView2::from_shape((m, m), &linv).expect("shape");
+    let mut out = ndarray::Array2::<f64>::zeros((m, m));
+    general_mat_mul(1.0, &li.t(), &li, 0.0, &mut out);
+    out.into_raw_vec_and_offset().0
+}
+
+/// M·Y for M (r × r) and Y (r × n), row-major; columns in parallel blocks of 256.
+fn mat_times_rows(mm: &[f64], r: usize, y: &[f64], n: usize) -> Vec<f64> {
+    let mut z = vec![0.0; r * n];
+    let yv = ArrayView2::from_shape((r, n), y).expect("shape");
+    let mv = ArrayView2::from_shape((r, r), mm).expect("shape");
+    let cols: Vec<(usize, Vec<f64>)> = (0..n.div_ceil(256))
+        .into_par_iter()
+        .map(|c| {
+            let c0 = c * 256;
+            let cw = 256.min(n - c0);
+            let mut out = ndarray::Array2::<f64>::zeros((r, cw));
+            general_mat_mul(1.0, &mv, &yv.slice(s![.., c0..c0 + cw]), 0.0, &mut out);
+            (c0, out.into_raw_vec_and_offset().0)
+        })
+        .collect();
+    for (c0, blk) in cols {
+        let cw = blk.len() / r.max(1);
+        for a in 0..r {
+            z[a * n + c0..a * n + c0 + cw].copy_from_slice(&blk[a * cw..(a + 1) * cw]);
+        }
+    }
+    z
 }
 
 const BLOCK: usize = 64;
@@ -651,6 +711,100 @@ impl DenseEkf {
         s
     }
 
+    /// The m > na update without S (see the module docs): with Y = P[A, :],
+    /// P_AA = L·Lᵀ, G = H_Aᵀ·R⁻¹·H_A, b = H_Aᵀ·R⁻¹·ν, Q = Lᵀ·G·L and
+    /// C = I + Q = L_C·L_Cᵀ:
+    ///   x += Yᵀ·L⁻ᵀ·C⁻¹·Lᵀ·b,   P −= Yᵀ·M·Y with M = L⁻ᵀ·(I − C⁻¹)·L⁻¹,
+    /// which equals the S form by the push-through identity
+    /// H_Aᵀ·S⁻¹·H_A = G·(I + P_AA·G)⁻¹ = L⁻ᵀ·Q·(I + Q)⁻¹·L⁻¹. Returns false, leaving the
+    /// state untouched, when P_AA or C is not numerically positive definite or some R_k ≤ 0.
+    fn update_push_through(&mut self, obs: &Observation, lin: &Linearized, act: &Active) -> bool {
+        let n = self.n;
+        let m = obs.rows();
+        let na = act.cells.len();
+        if lin.r[..m].iter().any(|r| !(*r > 0.0 && r.is_finite())) {
+            return false;
+        }
+        let mut yt = vec![0.0; na * n];
+        yt.par_chunks_mut(n).enumerate().for_each(|(a, row)| {
+            let c = act.cells[a] as usize;
+            row.copy_from_slice(&self.p[c * n..(c + 1) * n]);
+        });
+        let mut l = vec![0.0; na * na];
+        for a in 0..na {
+            for b in 0..na {
+                l[a * na + b] = yt[a * n + act.cells[b] as usize];
+            }
+        }
+        symmetrise_add_r(&mut l, na, &vec![0.0; na]);
+        if !cholesky_in_place(&mut l, na) {
+            return false;
+        }
+        // G and b from the sparse rows of H_A
+        let mut g = vec![0.0; na * na];
+        let mut bvec = vec![0.0; na];
+        for j in 0..m {
+            let (e0, e1) = (obs.ptr[j], obs.ptr[j + 1]);
+            let ir = 1.0 / lin.r[j];
+            for e in e0..e1 {
+                let a = act.local[e] as usize;
+                let ha = lin.hval[e] * ir;
+                bvec[a] += ha * lin.nu[j];
+                for f in e0..e1 {
+                    g[a * na + act.local[f] as usize] += ha * lin.hval[f];
+                }
+            }
+        }
+        // Q = Lᵀ·G·L, C = I + Q
+        let lv = ArrayView2::from_shape((na, na), &l).expect("shape");
+        let gv = ArrayView2::from_shape((na, na), &g).expect("shape");
+        let mut gl = ndarray::Array2::<f64>::zeros((na, na));
+        general_mat_mul(1.0, &gv, &lv, 0.0, &mut gl);
+        let mut c = ndarray::Array2::<f64>::eye(na);
+        general_mat_mul(1.0, &lv.t(), &gl, 1.0, &mut c);
+        let mut c = c.into_raw_vec_and_offset().0;
+        symmetrise_add_r(&mut c, na, &vec![0.0; na]);
+        if !cholesky_in_place(&mut c, na) {
+            return false;
+        }
+        // C⁻¹ = L_C⁻ᵀ·L_C⁻¹ and L⁻¹
+        let cinv = inverse_from_cholesky(&c, na);
+        let linv = lower_inverse(&l, na);
+        // w = L⁻ᵀ·C⁻¹·Lᵀ·b, dx = Yᵀ·w
+        let ltb: Vec<f64> = (0..na)
+            .map(|a| (a..na).map(|k| l[k * na + a] * bvec[k]).sum())
+            .collect();
+        let u: Vec<f64> = (0..na)
+            .map(|a| (0..na).map(|k| cinv[a * na + k] * ltb[k]).sum())
+            .collect();
+        let w: Vec<f64> = (0..na)
+            .map(|a| (a..na).map(|k| linv[k * na + a] * u[k]).sum())
+            .collect();
+        let dx: Vec<f64> = (0..n)
+            .into_par_iter()
+            .map(|i| (0..na).map(|a| yt[a * n + i] * w[a]).sum())
+            .collect();
+        for (x, d) in self.x.iter_mut().zip(dx) {
+            *x += d;
+        }
+        // M = L⁻ᵀ·(I − C⁻¹)·L⁻¹ (= H_Aᵀ·S⁻¹·H_A), Z = M·Y, P −= Yᵀ·Z
+        let mut t = ndarray::Array2::<f64>::eye(na);
+        {
+            let ci = ArrayView2::from_shape((na, na), &cinv).expect("shape");
+            t -= &ci;
+        }
+        let li = ArrayView2::from_shape((na, na), &linv).expect("shape");
+        let mut tl = ndarray::Array2::<f64>::zeros((na, na));
+        general_mat_mul(1.0, &t, &li, 0.0, &mut tl);
+        let mut mm = ndarray::Array2::<f64>::zeros((na, na));
+        general_mat_mul(1.0, &li.t(), &tl, 0.0, &mut mm);
+        let mut mm = mm.into_raw_vec_and_offset().0;
+        symmetrise_add_r(&mut mm, na, &vec![0.0; na]);
+        let z = mat_times_rows(&mm, na, &yt, n);
+        sym_downdate(&mut self.p, n, &yt, &z, na);
+        true
+    }
+
     /// The Kalman gain K = P·Hᵀ·S⁻¹ (n × m, row-major) of an observation at the current
     /// state, without updating (for checks).
     pub fn gain(&self, obs: &Observation, lin: &Linearized) -> Result<Vec<f64>> {
@@ -725,8 +879,8 @@ impl RrcsFilter for DenseEkf {
                 *x += d;
             }
             sym_downdate(&mut self.p, n, &wt, &wt, m);
-        } else {
-            // rank-na form
+        } else if !self.update_push_through(obs, lin, &act) {
+            // rank-na form through S (P_AA not numerically positive definite)
             let mut y = vec![0.0; na * n];
             y.par_chunks_mut(n).enumerate().for_each(|(a, row)| {
                 let c = act.cells[a] as usize;
@@ -781,28 +935,8 @@ impl RrcsFilter for DenseEkf {
                 let mut mv = ArrayViewMut2::from_shape((na, na), &mut mm).expect("shape");
                 general_mat_mul(1.0, &vv.t(), &vv, 0.0, &mut mv);
             }
-            // Z = M Y (na × n), columns in parallel blocks
-            let mut z = vec![0.0; na * n];
-            {
-                let yv = ArrayView2::from_shape((na, n), &y).expect("shape");
-                let mv = ArrayView2::from_shape((na, na), &mm).expect("shape");
-                let cols: Vec<(usize, Vec<f64>)> = (0..n.div_ceil(256))
-                    .into_par_iter()
-                    .map(|c| {
-                        let c0 = c * 256;
-                        let cw = 256.min(n - c0);
-                        let mut out = ndarray::Array2::<f64>::zeros((na, cw));
-                        general_mat_mul(1.0, &mv, &yv.slice(s![.., c0..c0 + cw]), 0.0, &mut out);
-                        (c0, out.into_raw_vec_and_offset().0)
-                    })
-                    .collect();
-                for (c0, blk) in cols {
-                    let cw = blk.len() / na.max(1);
-                    for a in 0..na {
-                        z[a * n + c0..a * n + c0 + cw].copy_from_slice(&blk[a * cw..(a + 1) * cw]);
-                    }
-                }
-            }
+            // Z = M Y (na × n)
+            let z = mat_times_rows(&mm, na, &y, n);
             let dx: Vec<f64> = (0..n)
                 .into_par_iter()
                 .map(|i| (0..na).map(|a| y[a * n + i] * g[a]).sum())
