@@ -983,11 +983,17 @@ pub struct TiledEkf {
     tile_cells: Vec<Vec<u32>>,
     /// Covariance of each tile (|T| × |T| row-major).
     tile_p: Vec<Vec<f64>>,
-    /// Scratch: per entry (tile, local, entry index) for the current row.
-    groups: Vec<(u32, u16, u32)>,
+    /// Scratch: offset of each tile's g vector in `gbuf` for the current row (u32::MAX if
+    /// the row does not touch it).
+    slot: Vec<u32>,
     /// Scratch: g vectors of the touched tiles, concatenated.
     gbuf: Vec<f64>,
-    touched: Vec<u64>,
+    /// Scratch: tiles the current row touches, in order of first touch.
+    touched: Vec<u32>,
+    /// Tiles whose means changed since the last `project_positive` (`None`: all cells).
+    dirty: Option<Vec<u32>>,
+    /// Membership flags of `dirty`.
+    dirty_mark: Vec<bool>,
 }
 
 impl TiledEkf {
@@ -1028,8 +1034,10 @@ impl TiledEkf {
             cell_tile,
             cell_local,
             tile_cells,
+            slot: vec![u32::MAX; tr * tc],
+            dirty: None,
+            dirty_mark: vec![false; tr * tc],
             tile_p,
-            groups: Vec::new(),
             gbuf: Vec::new(),
             touched: Vec::new(),
         })
@@ -1076,53 +1084,58 @@ impl RrcsFilter for TiledEkf {
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()> {
         for j in 0..obs.rows() {
             let (e0, e1) = (obs.ptr[j], obs.ptr[j + 1]);
-            self.groups.clear();
+            // g_T = P_T h_T for each touched tile (tiles in order of first touch)
+            self.gbuf.clear();
+            self.touched.clear();
             let mut nu = lin.nu[j];
             for e in e0..e1 {
                 let c = obs.cell[e] as usize;
-                self.groups
-                    .push((self.cell_tile[c], self.cell_local[c], e as u32));
-                nu -= lin.hval[e] * (self.x[c] - lin.x0[e]);
+                let h = lin.hval[e];
+                nu -= h * (self.x[c] - lin.x0[e]);
+                let t = self.cell_tile[c] as usize;
+                let k = self.tile_cells[t].len();
+                let off = if self.slot[t] == u32::MAX {
+                    let off = self.gbuf.len();
+                    self.gbuf.resize(off + k, 0.0);
+                    self.slot[t] = off as u32;
+                    self.touched.push(t as u32);
+                    off
+                } else {
+                    self.slot[t] as usize
+                };
+                let l = self.cell_local[c] as usize;
+                let p = &self.tile_p[t][l * k..(l + 1) * k];
+                for (gi, pv) in self.gbuf[off..off + k].iter_mut().zip(p) {
+                    *gi += h * pv;
+                }
             }
-            self.groups.sort_unstable();
-            // g_T = P_T h_T for each touched tile; s = Σ h_T·g_T + R
-            self.gbuf.clear();
-            self.touched.clear();
+            // s = Σ_T h_T·g_T + R
             let mut s = lin.r[j];
-            let mut g0 = 0;
-            while g0 < self.groups.len() {
-                let t = self.groups[g0].0;
-                let mut g1 = g0;
-                while g1 < self.groups.len() && self.groups[g1].0 == t {
-                    g1 += 1;
-                }
-                let p = &self.tile_p[t as usize];
-                let k = self.tile_cells[t as usize].len();
-                let off = self.gbuf.len();
-                self.gbuf.resize(off + k, 0.0);
-                let gv = &mut self.gbuf[off..off + k];
-                for &(_, l, e) in &self.groups[g0..g1] {
-                    let h = lin.hval[e as usize];
-                    for (gi, pv) in gv.iter_mut().zip(&p[l as usize * k..(l as usize + 1) * k]) {
-                        *gi += h * pv;
-                    }
-                }
-                for &(_, l, e) in &self.groups[g0..g1] {
-                    s += lin.hval[e as usize] * gv[l as usize];
-                }
-                self.touched.push(((t as u64) << 32) | off as u64);
-                g0 = g1;
+            for e in e0..e1 {
+                let c = obs.cell[e] as usize;
+                let off = self.slot[self.cell_tile[c] as usize] as usize;
+                s += lin.hval[e] * self.gbuf[off + self.cell_local[c] as usize];
             }
             if !(s.is_finite() && s > 0.0) {
+                for &t in &self.touched {
+                    self.slot[t as usize] = u32::MAX;
+                }
                 return Err(Error::param(
                     "ekf",
                     "innovation variance is not positive (numerical breakdown)",
                 ));
             }
             let inv = 1.0 / s;
-            for &tt in &self.touched {
-                let t = (tt >> 32) as usize;
-                let off = (tt & 0xffff_ffff) as usize;
+            for &t in &self.touched {
+                let t = t as usize;
+                let off = self.slot[t] as usize;
+                self.slot[t] = u32::MAX;
+                if let Some(d) = self.dirty.as_mut() {
+                    if !self.dirty_mark[t] {
+                        self.dirty_mark[t] = true;
+                        d.push(t as u32);
+                    }
+                }
                 let cells = &self.tile_cells[t];
                 let k = cells.len();
                 let gv = &self.gbuf[off..off + k];
@@ -1142,8 +1155,21 @@ impl RrcsFilter for TiledEkf {
     }
 
     fn project_positive(&mut self, x_min: f64) -> usize {
+        // only the cells of tiles updated since the last call can violate the bounds
+        let cells: Vec<u32> = match self.dirty.replace(Vec::new()) {
+            None => (0..self.x.len() as u32).collect(),
+            Some(tiles) => {
+                let mut cs = Vec::new();
+                for t in tiles {
+                    self.dirty_mark[t as usize] = false;
+                    cs.extend_from_slice(&self.tile_cells[t as usize]);
+                }
+                cs
+            }
+        };
         let mut flipped = 0;
-        for i in 0..self.x.len() {
+        for i in cells {
+            let i = i as usize;
             if self.x[i] < 0.0 {
                 self.x[i] = -self.x[i];
                 let t = self.cell_tile[i] as usize;
@@ -1211,7 +1237,9 @@ pub fn ekf_run(
     let t0 = Instant::now();
     let mut st = EkfStats::default();
     let np = model.poses.len();
-    for p in 0..np {
+    // the observations of pose p are built (in parallel over directions) while those of
+    // pose p − 1 are applied, in order, on the calling thread
+    let build = |p: usize| -> (Vec<Observation>, f64) {
         let tb = Instant::now();
         let geom = model.pose_geometry(p);
         let obs: Vec<Observation> = (0..model.directions())
@@ -1226,17 +1254,31 @@ pub fn ekf_run(
                 },
             )
             .collect();
-        st.build_seconds += tb.elapsed().as_secs_f64();
-        let tu = Instant::now();
-        for o in &obs {
-            let lin = Linearized::new(o, filter.mean(), noise);
-            filter.update(o, &lin)?;
-            st.reflected += filter.project_positive(params.x_min()) as u64;
-            st.updates += 1;
-            st.rows += o.rows() as u64;
-            st.entries += o.cell.len() as u64;
-        }
-        st.update_seconds += tu.elapsed().as_secs_f64();
+        (obs, tb.elapsed().as_secs_f64())
+    };
+    let mut current = if np > 0 { Some(build(0)) } else { None };
+    for p in 0..np {
+        let (obs, build_s) = current.take().expect("built");
+        st.build_seconds += build_s;
+        let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
+            let tu = Instant::now();
+            for o in &obs {
+                let lin = Linearized::new(o, filter.mean(), noise);
+                filter.update(o, &lin)?;
+                st.reflected += filter.project_positive(params.x_min()) as u64;
+                st.updates += 1;
+                st.rows += o.rows() as u64;
+                st.entries += o.cell.len() as u64;
+            }
+            st.update_seconds += tu.elapsed().as_secs_f64();
+            Ok(())
+        };
+        let (applied, next) = rayon::join(
+            || apply(&mut *filter, &mut st),
+            || (p + 1 < np).then(|| build(p + 1)),
+        );
+        applied?;
+        current = next;
         progress(p + 1, np);
     }
     st.seconds = t0.elapsed().as_secs_f64();
