@@ -165,6 +165,9 @@ enum Cmd {
         /// Keep components above the floor plus this margin, dB.
         #[arg(long, default_value_t = 13.0)]
         margin_db: f64,
+        /// Stop at components this far below the position's strongest, dB.
+        #[arg(long, default_value_t = pradar::mpc::ExtractParams::default().dynamic_range_db)]
+        dynamic_range_db: f64,
     },
     /// Cluster MPCs per position with K-means (writes <out> and <stem>_summary.parquet).
     Cluster {
@@ -437,6 +440,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             method,
             margin_db,
+            dynamic_range_db,
         } => {
             let c = Campaign::load(&campaign)?;
             let em = pradar::energy::EnergyMatrix::read(&energy)?;
@@ -445,7 +449,8 @@ fn run(cli: Cli) -> Result<()> {
                     ExtractMethod::Clean => pradar::mpc::Method::Clean,
                     ExtractMethod::Peaks => pradar::mpc::Method::Peaks,
                 })
-                .margin_db(margin_db);
+                .margin_db(margin_db)
+                .dynamic_range_db(dynamic_range_db);
             let mpcs = pradar::mpc::extract(&em, &c, &params)?;
             let meta = vec![
                 ("schema_version".to_string(), "1".to_string()),
@@ -455,6 +460,7 @@ fn run(cli: Cli) -> Result<()> {
                 ),
                 ("floor".into(), format!("{:.17e}", em.meta.noise_mean())),
                 ("margin_db".into(), margin_db.to_string()),
+                ("dynamic_range_db".into(), dynamic_range_db.to_string()),
                 ("positions".into(), em.positions.to_string()),
             ];
             pradar::mpc::write_mpcs(&out, &mpcs, meta)?;

@@ -115,6 +115,11 @@ impl ExtractParams {
         self.method = m;
         self
     }
+    /// Builder: dynamic range.
+    pub fn dynamic_range_db(mut self, v: f64) -> Self {
+        self.dynamic_range_db = v;
+        self
+    }
     /// Builder: margin.
     pub fn margin_db(mut self, v: f64) -> Self {
         self.margin_db = v;
