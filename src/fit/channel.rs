@@ -245,7 +245,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     let mut arcs: Groups = vec![Vec::new(); np];
     let mut members: Groups = vec![Vec::new(); np];
     let mut cl_power: Vec<Vec<(f64, f64)>> = vec![Vec::new(); np];
-    let mut ray_decay: Vec<(f64, f64)> = Vec::new();
+    let mut ray_decay: Vec<Vec<(f64, f64)>> = vec![Vec::new(); np];
     let mut sigma: Groups = vec![Vec::new(); np];
     let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
     let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
@@ -289,7 +289,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             .expect("non-empty");
         for r in rs {
             if !std::ptr::eq(r, first_ray) {
-                ray_decay.push((
+                ray_decay[pos].push((
                     r.delay_ns - first_ray.delay_ns,
                     r.power_db - first_ray.power_db,
                 ));
@@ -438,20 +438,31 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         }
     };
     let gamma_small = {
-        let v = decay(&ray_decay).ok_or_else(|| {
+        let all: Vec<(f64, f64)> = ray_decay.iter().flatten().copied().collect();
+        let v = decay(&all).ok_or_else(|| {
             Error::param(
                 "ray_decay",
-                format!("no decaying trend in {} ray powers", ray_decay.len()),
+                format!("no decaying trend in {} ray powers", all.len()),
             )
         })?;
+        let enc: Groups = ray_decay
+            .iter()
+            .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
+            .collect();
+        let iv = bootstrap_groups(
+            &enc,
+            |s| decay(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
+            p.bootstrap,
+            p.seed ^ 9,
+        );
         Quantity {
             value: v,
             unit: "ns".into(),
             family: "exponential".into(),
-            interval: None,
+            interval: iv,
             ks: None,
             ks_p: None,
-            n: Some(ray_decay.len()),
+            n: Some(all.len()),
         }
     };
     let mean_q = |g: &Groups, unit: &str, family: &str, seed: u64| -> Result<Quantity> {

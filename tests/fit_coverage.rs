@@ -1,0 +1,151 @@
+//! Issue 4: coverage of the 95 % position-bootstrap intervals over 50 seeded repetitions of
+//! one model set. Each repetition draws a new channel with `synth` (seed 1..=50) over the
+//! same 60 poses in the hall and applies the fit's estimators to synth's own truth (the true
+//! clusters and rays, as `pradar fit --truth` does): this measures the interval machinery
+//! and the estimators' bias on data that follow the model, without extraction or clustering
+//! (the chain's closed loop is `scripts/closed-loop`).
+
+use pradar::campaign::manifest::Campaign;
+use pradar::campaign::modelfile::{ModelConfig, Quantity};
+use pradar::fit::channel::{fit_truth, FitParams};
+use pradar::model::{synth, SynthParams};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn hall_campaign(dir: &std::path::Path) -> Campaign {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::copy(
+        root.join("data/tests/hall.geojson"),
+        dir.join("hall.geojson"),
+    )
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut t = String::from(
+        r#"schema_version = 1
+name = "hall"
+layout = "hall.geojson"
+seed = 77
+[band]
+start_hz = 57.5e9
+stop_hz = 63.5e9
+points = 801
+[array]
+elements = 400
+[directions]
+start_deg = -90.0
+stop_deg = 90.0
+step_deg = 90.0
+[noise]
+floor_dbm = -100.0
+[processing]
+coupling = "gate"
+gate_ns = 3.0
+max_delay_ns = 80.0
+noise_from_ns = 100.0
+"#,
+    );
+    for _ in 0..60 {
+        t.push_str(&format!(
+            "[[poses]]\nx_m = {:.3}\ny_m = {:.3}\nheading_deg = {:.1}\n",
+            rng.gen_range(-5.5..5.5),
+            rng.gen_range(-2.5..2.5),
+            rng.gen_range(-180.0..180.0)
+        ));
+    }
+    let path = dir.join("campaign.toml");
+    std::fs::write(&path, t).unwrap();
+    Campaign::load(&path).unwrap()
+}
+
+fn model_set() -> ModelConfig {
+    let mut m = ModelConfig::table1_defaults();
+    m.intra_cluster_rate = Quantity::new(0.43, "1/ns", "exponential");
+    m.intra_cluster_aoa = Quantity::new(16.9, "deg", "laplacian");
+    m.perimeter_offset = Quantity::new(0.4, "m", "exponential");
+    m.perimeter_spacing = Quantity::new(8.0, "m", "exponential");
+    m.cluster_decay = Quantity::new(15.0, "ns", "exponential");
+    m.ray_decay = Quantity::new(4.0, "ns", "exponential");
+    m.rays_per_cluster = Quantity::new(5.0, "count", "poisson");
+    m
+}
+
+type Pick = fn(&ModelConfig) -> &Quantity;
+
+/// Not met: on synth's own truth the position-bootstrap intervals cover the true values in
+/// 8–74 % of the draws. The positions of one campaign see the same few clusters (their rays
+/// are drawn once per cluster), so resampling whole positions (DESIGN §2) measures the spread
+/// over positions in one environment, not over environments; the estimates vary between
+/// channel draws several times more than the bootstrap says (printed). Run with `--ignored`.
+#[test]
+#[ignore = "unmet: position-bootstrap intervals are too narrow for a new channel draw (see the doc comment)"]
+fn bootstrap_intervals_cover_the_true_values_in_88_percent_of_50_repetitions() {
+    let tmp = tempfile::tempdir().unwrap();
+    let c = hall_campaign(tmp.path());
+    let truth = model_set();
+    let picks: [(&str, Pick); 6] = [
+        ("λ (1/ns)", |m| &m.intra_cluster_rate),
+        ("AoA std (deg)", |m| &m.intra_cluster_aoa),
+        ("d_p (m)", |m| &m.perimeter_offset),
+        ("d_c (m)", |m| &m.perimeter_spacing),
+        ("Γ (ns)", |m| &m.cluster_decay),
+        ("γ (ns)", |m| &m.ray_decay),
+    ];
+    let reps = 50;
+    let mut covered = [0usize; 6];
+    let mut sums = [0.0f64; 6];
+    let mut widths = [0.0f64; 6];
+    let mut fitted = [0usize; 6];
+    let mut estimates: Vec<Vec<f64>> = vec![Vec::new(); 6];
+    for r in 0..reps {
+        let out = tmp.path().join(format!("e{r}.parquet"));
+        let tdir = tmp.path().join(format!("t{r}"));
+        let params = SynthParams::default().seed(r as u64 + 1).truth_dir(&tdir);
+        synth(&c, &truth, &out, &params, &|_, _| {}).unwrap();
+        let fit = fit_truth(
+            &tdir,
+            &c,
+            &FitParams {
+                bootstrap: 200,
+                seed: 1,
+            },
+        )
+        .unwrap();
+        for (k, (_, pick)) in picks.iter().enumerate() {
+            let q = pick(&fit.model);
+            let want = pick(&truth).value;
+            if let Some([lo, hi]) = q.interval {
+                fitted[k] += 1;
+                sums[k] += q.value;
+                estimates[k].push(q.value);
+                widths[k] += hi - lo;
+                if lo <= want && want <= hi {
+                    covered[k] += 1;
+                }
+            }
+        }
+        std::fs::remove_file(&out).unwrap();
+    }
+    let mut worst = 1.0f64;
+    eprintln!(
+        "quantity       | true   | mean estimate | spread over draws / bootstrap spread | coverage"
+    );
+    for (k, (name, pick)) in picks.iter().enumerate() {
+        let cov = covered[k] as f64 / reps as f64;
+        worst = worst.min(cov);
+        // the standard deviation of the estimates over the 50 channel draws against the mean
+        // bootstrap standard deviation (95 % width / 3.92)
+        let e = &estimates[k];
+        let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
+        let sd = (e.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (e.len().max(2) - 1) as f64)
+            .sqrt();
+        let boot_sd = widths[k] / fitted[k].max(1) as f64 / 3.92;
+        eprintln!(
+            "{name:14} | {:6.3} | {mean:13.3} | {sd:.3} / {boot_sd:.3} = {:.1} | {}/{reps} ({cov:.2}), {} with an interval",
+            pick(&truth).value,
+            sd / boot_sd,
+            covered[k],
+            fitted[k]
+        );
+    }
+    assert!(worst >= 0.88, "worst coverage {worst:.2} < 0.88");
+}
