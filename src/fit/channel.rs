@@ -401,20 +401,13 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         )?,
     );
     // decays, rays per cluster, σ: estimates with position-bootstrap intervals
-    let gamma_big = {
-        let pairs: Vec<Vec<(f64, f64)>> = cl_power
-            .iter()
-            .map(|v| {
-                let t0 = v.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
-                let p0 = v.iter().find(|x| x.0 == t0).map(|x| x.1).unwrap_or(0.0);
-                v.iter().map(|x| (x.0 - t0, x.1 - p0)).collect()
-            })
-            .collect();
+    // a power-decay constant from (excess delay, relative power dB) pairs per position
+    let decay_q = |pairs: &[Vec<(f64, f64)>], name: &str, what: &str, seed: u64| {
         let all: Vec<(f64, f64)> = pairs.iter().flatten().copied().collect();
         let v = decay(&all).ok_or_else(|| {
             Error::param(
-                "cluster_decay",
-                format!("no decaying trend in {} cluster powers", all.len()),
+                name,
+                format!("no decaying trend in {} {what} powers", all.len()),
             )
         })?;
         let enc: Groups = pairs
@@ -425,9 +418,9 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             &enc,
             |s| decay(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
             p.bootstrap,
-            p.seed ^ 6,
+            p.seed ^ seed,
         );
-        Quantity {
+        Ok::<Quantity, Error>(Quantity {
             value: v,
             unit: "ns".into(),
             family: "exponential".into(),
@@ -435,36 +428,18 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             ks: None,
             ks_p: None,
             n: Some(all.len()),
-        }
+        })
     };
-    let gamma_small = {
-        let all: Vec<(f64, f64)> = ray_decay.iter().flatten().copied().collect();
-        let v = decay(&all).ok_or_else(|| {
-            Error::param(
-                "ray_decay",
-                format!("no decaying trend in {} ray powers", all.len()),
-            )
-        })?;
-        let enc: Groups = ray_decay
-            .iter()
-            .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
-            .collect();
-        let iv = bootstrap_groups(
-            &enc,
-            |s| decay(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
-            p.bootstrap,
-            p.seed ^ 9,
-        );
-        Quantity {
-            value: v,
-            unit: "ns".into(),
-            family: "exponential".into(),
-            interval: iv,
-            ks: None,
-            ks_p: None,
-            n: Some(all.len()),
-        }
-    };
+    let cluster_pairs: Vec<Vec<(f64, f64)>> = cl_power
+        .iter()
+        .map(|v| {
+            let t0 = v.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
+            let p0 = v.iter().find(|x| x.0 == t0).map(|x| x.1).unwrap_or(0.0);
+            v.iter().map(|x| (x.0 - t0, x.1 - p0)).collect()
+        })
+        .collect();
+    let gamma_big = decay_q(&cluster_pairs, "cluster_decay", "cluster", 6)?;
+    let gamma_small = decay_q(&ray_decay, "ray_decay", "ray", 9)?;
     let mean_q = |g: &Groups, unit: &str, family: &str, seed: u64| -> Result<Quantity> {
         let x = flat(g);
         if x.is_empty() {
