@@ -184,7 +184,7 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Criterion choosing K.
-        #[arg(long, value_enum, default_value = "silhouette")]
+        #[arg(long, value_enum, default_value = "cv")]
         criterion: KCriterion,
     },
     /// Fit the channel model (Table 1) from clustered MPCs.

@@ -337,7 +337,7 @@ fn reproduce_writes_the_report() {
     set(&mut t, "band.points", 401i64);
     set(&mut t, "processing.max_delay_ns", 45.0);
     set(&mut t, "processing.noise_from_ns", 50.0);
-    let poses = t["poses"].as_array().unwrap()[..3].to_vec();
+    let poses = t["poses"].as_array().unwrap()[..6].to_vec();
     t.insert("poses".into(), poses.into());
     let m = write_campaign(&tmp.path().join("in"), &t);
     let out = tmp.path().join("rep");
@@ -365,7 +365,16 @@ fn reproduce_writes_the_report() {
     // the experiments' sections, each with its panel and table
     for e in ["fig5", "fig6", "prior-sensitivity", "pose-noise"] {
         let png = format!("experiments/{e}/{e}.png");
-        assert!(html.contains(&png), "{e} section missing");
+        assert!(
+            html.contains(&png),
+            "{e} section missing: {}",
+            html.split("failed")
+                .nth(1)
+                .unwrap_or("")
+                .chars()
+                .take(300)
+                .collect::<String>()
+        );
         assert_eq!(&std::fs::read(out.join(&png)).unwrap()[1..4], b"PNG");
         assert!(out.join(format!("experiments/{e}/{e}.md")).is_file());
     }
