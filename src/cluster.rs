@@ -30,9 +30,9 @@
 //!     ln L = Σ_i ln Σ_k π_k f_k(τ_i, θ_i); p = 5K − 1. The smallest wins, K = 1 included.
 //!   - `GaussBic`: the same BIC with a diagonal Gaussian component (means, variances) — the
 //!     X-means criterion (Pelleg & Moore 2000) with per-cluster diagonal covariances.
-//!   - `CrossValidated` (default): leave-one-out predictive log-likelihood (Smyth 2000) of a mixture
-//!     with a Gaussian delay × Laplacian angle component: each MPC is scored by the mixture
-//!     fitted to K's partition without it (Σ_i ln Σ_k π_k^{(−i)} f_k^{(−i)}(τ_i, θ_i);
+//!   - `CrossValidated` (default): leave-one-out predictive log-likelihood (Smyth 2000) of a
+//!     mixture with a Gaussian delay × Laplacian angle component: each MPC is scored by the
+//!     mixture fitted to K's partition without it (Σ_i ln Σ_k π_k^{(−i)} f_k^{(−i)}(τ_i, θ_i);
 //!     a cluster left with fewer than 2 members drops out); the largest wins, K = 1
 //!     included. No penalty term: the held-out MPC pays for over-fitting itself.
 //! * Likelihoods are evaluated in the original units (ns, degrees): rescaling a feature
@@ -45,9 +45,10 @@
 //!   0.62 (gap), 0.50 (ChannelBic: the per-cluster exponential location and scales of
 //!   clusters of ~6 MPCs are so flexible that BIC's ½ ln n per parameter under-penalises
 //!   splits), 0.65 (GaussBic), 0.70 (CrossValidated: finds every single cluster, merges
-//!   four clusters into two). None reaches the 0.8. Even the true partition beats K-means' two-cluster partition under the
-//!   cross-validated likelihood at only half of the 3–4-cluster positions: with ~6 MPCs
-//!   per cluster, 16.9° AoA spread and ≥ 40° between centres, the data hardly identify K.
+//!   four clusters into two). None reaches the 0.8. Even the true partition beats
+//!   K-means' two-cluster partition under the cross-validated likelihood at only half of
+//!   the 3–4-cluster positions: with ~6 MPCs per cluster, 16.9° AoA spread and ≥ 40°
+//!   between centres, the data hardly identify K.
 //! * Default: `CrossValidated`. On the scene above it ties the silhouette (0.70 vs 0.72),
 //!   and on the chain's own data it is clearly better. In `scripts/closed-loop` (synth →
 //!   CLEAN → cluster at λ 1.0/0.43/0.2 per ns, AoA 8/16.9/30°; MPCs matched to synth's true

@@ -388,7 +388,8 @@ fn extract_position(
                 } else {
                     0.0
                 };
-                let mut theta = em.angles_rel_deg[d] + off_d * step;
+                let theta_parabola = em.angles_rel_deg[d] + off_d * step;
+                let mut theta = theta_parabola;
                 let mut outside = false;
                 // a peak near either end of a mechanical scan: the source may lie beyond the
                 // scanned sector (behind the device's half-plane), where the parabola cannot
@@ -417,6 +418,8 @@ fn extract_position(
                         .collect();
                     let edge = em.angles_rel_deg[edge_d as usize];
                     let start = em.angles_rel_deg[d] + inward as f64 * 0.5 * step.abs();
+                    // below the floor an observation only bounds the ratio
+                    let floor_rel = lg(floor * 1e-3) - lg(e0);
                     let mut best_err = f64::INFINITY;
                     // from half a step inward of the peak's beam to 30° beyond the edge
                     let span = (start - (edge - inward as f64 * 30.0)).abs();
@@ -429,8 +432,7 @@ fn extract_position(
                         let mut err = 0.0;
                         for (&dj, o) in beams.iter().zip(&obs) {
                             let m = db(fp.w(th, dj, em.angles_rel_deg[dj])) - db(w0);
-                            // below the floor the observation only bounds the ratio
-                            err += (o - m.max(o.min(lg(floor * 1e-3) - lg(e0)))).powi(2);
+                            err += (o - m.max(o.min(floor_rel))).powi(2);
                         }
                         if err < best_err {
                             best_err = err;
@@ -440,7 +442,7 @@ fn extract_position(
                     outside = (theta - edge) * (inward as f64) < -0.5 * step.abs();
                     if !outside && d as i64 != edge_d {
                         // inside the sector the parabola through the peak's beams stands
-                        theta = em.angles_rel_deg[d] + off_d * step;
+                        theta = theta_parabola;
                     }
                 }
                 let norm = fp.w(theta, d, em.angles_rel_deg[d]) * fp.k(-off_b);

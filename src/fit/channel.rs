@@ -13,11 +13,13 @@
 //! * λ: gaps between the sorted ray delays inside each cluster, shifted-exponential MLE;
 //! * AoA: ray angle minus the cluster's reference (strongest) ray angle, that ray left out;
 //!   Laplacian MLE, reported as std = √2·b (scale b beside it in the interval column note);
-//! * d_p: distance of each cluster centroid to the closest perimeter edge (the centroid in
-//!   polar coordinates about the pose: mean member range c·τ/2 along the circular mean of
-//!   the members' bearings — the Cartesian mean of echoes spread in angle at one range lies
-//!   inside their arc; with it synth's own truth gave d_p 0.70 m for a true 0.40 m) (projection onto the layout perimeter); d_c: spacings of the centroids'
-//!   arc-length coordinates in circular order per position, the largest (unobserved) gap
+//! * d_p: distance of each cluster centroid to the closest perimeter edge (projection onto
+//!   the layout perimeter). The centroid is taken in polar coordinates about the pose: the
+//!   mean member range c·τ/2 along the circular mean of the members' bearings, because the
+//!   Cartesian mean of echoes spread in angle at one range lies inside their arc. On synth's
+//!   own truth (true 0.40 m) d_p is 0.70 m with the Cartesian and 0.66 m with the polar
+//!   mean; most of the bias is position error folded by the distance to the wall.
+//!   d_c: spacings of the centroids' arc-length coordinates in circular order per position, the largest (unobserved) gap
 //!   dropped; reported in m and as ns one-way (m/c) and round-trip (2m/c);
 //! * Γ, γ: least-squares slope of power (dB) against delay, clusters' total power against
 //!   their first arrival relative to the position's first cluster (Γ), rays' power relative

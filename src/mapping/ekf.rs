@@ -711,32 +711,33 @@ impl DenseEkf {
         s
     }
 
-    /// The m > na update without S (see the module docs): with Y = P[A, :],
+    /// The m > na update without S (see the module docs): with `y` = Y = P[A, :],
     /// P_AA = L·Lᵀ, G = H_Aᵀ·R⁻¹·H_A, b = H_Aᵀ·R⁻¹·ν, Q = Lᵀ·G·L and
     /// C = I + Q = L_C·L_Cᵀ:
     ///   x += Yᵀ·L⁻ᵀ·C⁻¹·Lᵀ·b,   P −= Yᵀ·M·Y with M = L⁻ᵀ·(I − C⁻¹)·L⁻¹,
     /// which equals the S form by the push-through identity
     /// H_Aᵀ·S⁻¹·H_A = G·(I + P_AA·G)⁻¹ = L⁻ᵀ·Q·(I + Q)⁻¹·L⁻¹. Returns false, leaving the
     /// state untouched, when P_AA or C is not numerically positive definite or some R_k ≤ 0.
-    fn update_push_through(&mut self, obs: &Observation, lin: &Linearized, act: &Active) -> bool {
+    fn update_push_through(
+        &mut self,
+        obs: &Observation,
+        lin: &Linearized,
+        act: &Active,
+        y: &[f64],
+    ) -> bool {
         let n = self.n;
         let m = obs.rows();
         let na = act.cells.len();
         if lin.r[..m].iter().any(|r| !(*r > 0.0 && r.is_finite())) {
             return false;
         }
-        let mut yt = vec![0.0; na * n];
-        yt.par_chunks_mut(n).enumerate().for_each(|(a, row)| {
-            let c = act.cells[a] as usize;
-            row.copy_from_slice(&self.p[c * n..(c + 1) * n]);
-        });
         let mut l = vec![0.0; na * na];
         for a in 0..na {
             for b in 0..na {
-                l[a * na + b] = yt[a * n + act.cells[b] as usize];
+                l[a * na + b] = y[a * n + act.cells[b] as usize];
             }
         }
-        symmetrise_add_r(&mut l, na, &vec![0.0; na]);
+        symmetrise(&mut l, na);
         if !cholesky_in_place(&mut l, na) {
             return false;
         }
@@ -763,7 +764,7 @@ impl DenseEkf {
         let mut c = ndarray::Array2::<f64>::eye(na);
         general_mat_mul(1.0, &lv.t(), &gl, 1.0, &mut c);
         let mut c = c.into_raw_vec_and_offset().0;
-        symmetrise_add_r(&mut c, na, &vec![0.0; na]);
+        symmetrise(&mut c, na);
         if !cholesky_in_place(&mut c, na) {
             return false;
         }
@@ -782,7 +783,7 @@ impl DenseEkf {
             .collect();
         let dx: Vec<f64> = (0..n)
             .into_par_iter()
-            .map(|i| (0..na).map(|a| yt[a * n + i] * w[a]).sum())
+            .map(|i| (0..na).map(|a| y[a * n + i] * w[a]).sum())
             .collect();
         for (x, d) in self.x.iter_mut().zip(dx) {
             *x += d;
@@ -799,9 +800,9 @@ impl DenseEkf {
         let mut mm = ndarray::Array2::<f64>::zeros((na, na));
         general_mat_mul(1.0, &li.t(), &tl, 0.0, &mut mm);
         let mut mm = mm.into_raw_vec_and_offset().0;
-        symmetrise_add_r(&mut mm, na, &vec![0.0; na]);
-        let z = mat_times_rows(&mm, na, &yt, n);
-        sym_downdate(&mut self.p, n, &yt, &z, na);
+        symmetrise(&mut mm, na);
+        let z = mat_times_rows(&mm, na, y, n);
+        sym_downdate(&mut self.p, n, y, &z, na);
         true
     }
 
@@ -827,13 +828,21 @@ impl DenseEkf {
     }
 }
 
-fn symmetrise_add_r(s: &mut [f64], m: usize, r: &[f64]) {
+/// Replace the m × m matrix `s` by (s + sᵀ)/2.
+fn symmetrise(s: &mut [f64], m: usize) {
     for i in 0..m {
         for j in 0..i {
             let v = 0.5 * (s[i * m + j] + s[j * m + i]);
             s[i * m + j] = v;
             s[j * m + i] = v;
         }
+    }
+}
+
+/// Symmetrise `s` and add the diagonal `r`.
+fn symmetrise_add_r(s: &mut [f64], m: usize, r: &[f64]) {
+    symmetrise(s, m);
+    for i in 0..m {
         s[i * m + i] += r[i];
     }
 }
@@ -879,13 +888,17 @@ impl RrcsFilter for DenseEkf {
                 *x += d;
             }
             sym_downdate(&mut self.p, n, &wt, &wt, m);
-        } else if !self.update_push_through(obs, lin, &act) {
-            // rank-na form through S (P_AA not numerically positive definite)
+        } else {
+            // rank-na form: Y = P[A, :]
             let mut y = vec![0.0; na * n];
             y.par_chunks_mut(n).enumerate().for_each(|(a, row)| {
                 let c = act.cells[a] as usize;
                 row.copy_from_slice(&self.p[c * n..(c + 1) * n]);
             });
+            if self.update_push_through(obs, lin, &act, &y) {
+                return Ok(());
+            }
+            // through S (P_AA or C not numerically positive definite)
             // T = H_A · P_AA (m × na)
             let mut t = vec![0.0; m * na];
             t.par_chunks_mut(na).enumerate().for_each(|(j, row)| {
