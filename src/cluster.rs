@@ -130,6 +130,8 @@ pub struct ClusterParams {
     pub delay_res_ns: f64,
     /// Angle resolution, degrees: floor of the angle scales in the likelihood criteria.
     pub angle_res_deg: f64,
+    /// Concentration α of the cross-validated criterion's "new cluster" term (0: none).
+    pub new_cluster_weight: f64,
 }
 
 impl Default for ClusterParams {
@@ -144,6 +146,7 @@ impl Default for ClusterParams {
             adaptive_scaling: true,
             delay_res_ns: 1.0 / 6.0,
             angle_res_deg: 5.0,
+            new_cluster_weight: 1.0,
         }
     }
 }
@@ -180,6 +183,9 @@ impl ClusterParams {
         }
         if !(self.angle_res_deg > 0.0 && self.angle_res_deg.is_finite()) {
             return Err(Error::param("angle_res_deg", "must be positive"));
+        }
+        if !(self.new_cluster_weight >= 0.0 && self.new_cluster_weight.is_finite()) {
+            return Err(Error::param("new_cluster_weight", "must be >= 0"));
         }
         Ok(())
     }
@@ -564,6 +570,16 @@ pub fn likelihood_criterion(
         .map(|m| fit_component(raw, m, fam, res))
         .collect();
     if criterion == Criterion::CrossValidated {
+        // the "new cluster" density g: uniform over the position's delay span (at least
+        // 1 ns) × the half-plane, entered with the Chinese-restaurant weight α/(n − 1 + α)
+        let (lo, hi) = raw
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p[0]), b.max(p[0]))
+            });
+        let alpha = params.new_cluster_weight;
+        let norm = (n - 1) as f64 + alpha;
+        let ln_new = (alpha / norm).ln() - ((hi - lo).max(1.0) * 180.0).ln();
         let mut total = 0.0;
         for (i, p) in raw.iter().enumerate() {
             let own: Vec<usize> = members[labels[i]]
@@ -576,12 +592,16 @@ pub fn likelihood_criterion(
             } else {
                 None
             };
-            let l = log_sum_exp((0..k).filter_map(|c| {
-                let comp = if c == labels[i] { held } else { comps[c] };
-                comp.map(|q| (q.members / (n - 1).max(1) as f64).ln() + log_density(&q, p, fam))
-            }));
+            let l = log_sum_exp(
+                (0..k)
+                    .filter_map(|c| {
+                        let comp = if c == labels[i] { held } else { comps[c] };
+                        comp.map(|q| (q.members / norm).ln() + log_density(&q, p, fam))
+                    })
+                    .chain((alpha > 0.0).then_some(ln_new)),
+            );
             // an MPC no component explains (its own cluster too small, no other cluster
-            // reaching it): ln 1e-300, so such partitions lose
+            // reaching it, no new-cluster term): ln 1e-300, so such partitions lose
             total += if l.is_finite() { l } else { (1e-300f64).ln() };
         }
         return -2.0 * total;
