@@ -621,6 +621,10 @@ pub fn likelihood_criterion(
     -2.0 * ll + (5 * kk - 1) as f64 * (n as f64).ln()
 }
 
+/// Starting weights of the delay z-score against the angle z-score for the likelihood
+/// criteria's candidate partitions (the best of them per K is kept).
+const DELAY_WEIGHTS: &[f64] = &[1.0, 0.5, 2.0];
+
 /// Cluster the MPCs of one position.
 pub fn cluster_position(
     mpcs: &[&Mpc],
@@ -672,10 +676,11 @@ pub fn cluster_position(
         lik.push((1, v));
         best = Some((-v, 1, ones, f64::INFINITY));
     }
-    for k in 2..=kmax {
+    // K-means from z-scores with the delay axis weighted by w, then adaptive rescaling
+    let partition = |k: usize, w: f64| -> Result<(Vec<usize>, Vec<[f64; 2]>)> {
         let seed = pos_seed ^ k as u64;
-        let mut labels = kmeans_labels(&x, k, seed, params.n_runs)?;
-        let mut xs = x.clone();
+        let mut xs: Vec<[f64; 2]> = x.iter().map(|p| [p[0] * w, p[1]]).collect();
+        let mut labels = kmeans_labels(&xs, k, seed, params.n_runs)?;
         if params.adaptive_scaling {
             for _ in 0..3 {
                 let kk = labels.iter().max().map(|m| m + 1).unwrap_or(1);
@@ -684,11 +689,30 @@ pub fn cluster_position(
                 labels = kmeans_labels(&xs, k, seed, params.n_runs)?;
             }
         }
+        Ok((labels, xs))
+    };
+    for k in 2..=kmax {
+        let (labels, xs, score) = if like {
+            // the likelihood compares partitions in the original units: keep the best of
+            // the starting weights
+            let mut bestk: Option<(Vec<usize>, Vec<[f64; 2]>, f64)> = None;
+            for &w in DELAY_WEIGHTS {
+                let (l, xs) = partition(k, w)?;
+                let v = likelihood_criterion(&raw, &l, params.criterion, params);
+                if bestk.as_ref().map(|b| v < b.2).unwrap_or(true) {
+                    bestk = Some((l, xs, v));
+                }
+            }
+            let (l, xs, v) = bestk.expect("at least one weight");
+            lik.push((k, v));
+            (l, xs, -v)
+        } else {
+            let (l, xs) = partition(k, 1.0)?;
+            (l, xs, 0.0)
+        };
         let kk = labels.iter().max().map(|m| m + 1).unwrap_or(0);
         let score = if like {
-            let v = likelihood_criterion(&raw, &labels, params.criterion, params);
-            lik.push((k, v));
-            -v
+            score
         } else {
             let s = silhouette(&xs, &labels, kk);
             let c = calinski_harabasz(&xs, &labels, kk);
