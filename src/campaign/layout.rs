@@ -300,6 +300,11 @@ impl Layout {
         r
     }
 
+    /// True if `p` lies inside the perimeter polygon (obstacles not considered).
+    pub fn inside_perimeter(&self, p: Coord<f64>) -> bool {
+        self.perimeter.contains(&Point::from(p))
+    }
+
     /// True if `p` is in free space (inside the perimeter, outside every obstacle).
     pub fn is_free(&self, p: Coord<f64>) -> bool {
         let pt = Point::from(p);
