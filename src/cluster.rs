@@ -32,33 +32,37 @@
 //!     X-means criterion (Pelleg & Moore 2000) with per-cluster diagonal covariances.
 //!   - `CrossValidated` (default): leave-one-out predictive log-likelihood (Smyth 2000) of a
 //!     mixture with a Gaussian delay × Laplacian angle component: each MPC is scored by the
-//!     mixture fitted to K's partition without it (Σ_i ln Σ_k π_k^{(−i)} f_k^{(−i)}(τ_i, θ_i);
-//!     a cluster left with fewer than 2 members drops out); the largest wins, K = 1
-//!     included. No penalty term: the held-out MPC pays for over-fitting itself.
+//!     mixture fitted to K's partition without it, plus a "new cluster" term as in the
+//!     Chinese-restaurant predictive, ln[Σ_k n_k^{(−i)}/(n − 1 + α)·f_k^{(−i)}(τ_i, θ_i) +
+//!     α/(n − 1 + α)·g], g uniform over the position's delay span (at least 1 ns) × 180°,
+//!     α = `new_cluster_weight` (1, the usual default, not tuned). A cluster left with fewer
+//!     than 2 members drops out and its MPC is scored by the others and g. The largest
+//!     total wins, K = 1 included. No penalty term: the held-out MPC pays for over-fitting
+//!     itself. Without g, a cluster of one or two MPCs (a single echo, a far object) scored
+//!     ln 1e-300, so every partition that isolated it lost to merging it.
+//! * Candidate partitions of the likelihood criteria: for each K, K-means from the
+//!   z-scores with the delay axis weighted by 1, 0.5, 0.25 and 2 (then the adaptive
+//!   rescaling); the partition with the best criterion value is K's candidate. Clusters that
+//!   overlap in delay and are separated in angle are found from the lower weights.
 //! * Likelihoods are evaluated in the original units (ns, degrees): rescaling a feature
 //!   adds the same constant for every K, so only the partitions depend on the scaling.
 //!   Scales (exponential mean, Laplacian b, Gaussian sd) are floored at the measurement
 //!   resolution (`delay_res_ns`, default 1/B = 1/6 GHz; `angle_res_deg`, default the 5°
 //!   direction step) so that a singleton or a tight pair has a finite likelihood.
 //! * Measured (tests/cluster.rs: 60 positions, 1–4 clusters drawn with the Table 1 rates,
-//!   overlapping in delay): K within ±1 of the truth at 0.72 (silhouette), 0.28 (CH),
-//!   0.62 (gap), 0.50 (ChannelBic: the per-cluster exponential location and scales of
-//!   clusters of ~6 MPCs are so flexible that BIC's ½ ln n per parameter under-penalises
-//!   splits), 0.65 (GaussBic), 0.70 (CrossValidated: finds every single cluster, merges
-//!   four clusters into two). None reaches the 0.8. Even the true partition beats
-//!   K-means' two-cluster partition under the cross-validated likelihood at only half of
-//!   the 3–4-cluster positions: with ~6 MPCs per cluster, 16.9° AoA spread and ≥ 40°
-//!   between centres, the data hardly identify K.
-//! * Default: `CrossValidated`. On the scene above it ties the silhouette (0.70 vs 0.72),
-//!   and on the chain's own data it is clearly better. In `scripts/closed-loop` (synth →
-//!   CLEAN → cluster at λ 1.0/0.43/0.2 per ns, AoA 8/16.9/30°; MPCs matched to synth's true
-//!   rays), K is within ±1 of the true clusters at 0.76/0.75/1.00 of positions, against
-//!   0.56/0.55/0.75 for the silhouette, with an ARI of 0.76/0.58/0.84 against 0.57/0.59/0.78.
-//!   On the built-in corridor, the fit from its clusters is nearer to the simulator truth
-//!   (same estimators) for 6 of the 7 Table 1 quantities: Λ 0.181 vs 0.093 per ns (truth
-//!   0.251), AoA std 15.7° vs 27.9° (truth 19.5°), d_c 3.07 vs 5.89 m (truth 1.99 m). The
-//!   silhouette rule never chooses K = 1 and merges hierarchically nested groups: one far
-//!   group, such as the echoes of a back wall, wins K = 2.
+//!   overlapping in delay, seed 7): K within ±1 of the truth at 0.90 (CrossValidated, ARI
+//!   0.733; 0.87–0.95 over seeds 1–5 and 11), 0.72 (silhouette), 0.28 (CH), 0.62 (gap),
+//!   0.62 (ChannelBic: the per-cluster exponential location and scales of clusters of ~6
+//!   MPCs are so flexible that BIC's ½ ln n per parameter under-penalises splits), 0.70
+//!   (GaussBic). Step by step, the cross-validated criterion went from 0.70 to 0.77 with
+//!   the new-cluster term and to 0.90 with the four starting weights.
+//! * Default: `CrossValidated`. In `scripts/closed-loop` (synth → CLEAN → cluster at λ
+//!   1.0/0.43/0.2 per ns, AoA 8/16.9/30°; MPCs matched to synth's true rays), K is within ±1
+//!   of the true clusters at 0.90/0.92/1.00 of positions, ARI 0.91/0.69/0.92. Before the
+//!   two changes it was 0.81/0.73/1.00 and ARI 0.78/0.60/0.86; for the silhouette it is
+//!   0.56/0.55/0.75 and 0.57/0.59/0.78. The silhouette rule never chooses K = 1 and merges
+//!   hierarchically nested groups: one far group, such as the echoes of a back wall, wins
+//!   K = 2.
 //! * Summary per cluster: members, centroid delay and angles (member means), first arrival
 //!   (smallest delay), reference ray (strongest member) delay and angle, total power
 //!   (10·log10 Σ 10^{p/10}), centroid x/y in the global frame (member mean).
@@ -623,7 +627,7 @@ pub fn likelihood_criterion(
 
 /// Starting weights of the delay z-score against the angle z-score for the likelihood
 /// criteria's candidate partitions (the best of them per K is kept).
-const DELAY_WEIGHTS: &[f64] = &[1.0, 0.5, 2.0];
+const DELAY_WEIGHTS: &[f64] = &[1.0, 0.5, 0.25, 2.0];
 
 /// Cluster the MPCs of one position.
 pub fn cluster_position(

@@ -118,22 +118,30 @@ fn k_recovered_on_table1_clusters() {
         eprintln!("  true K -> chosen K counts (K = 0..8): {:?}", &conf[1..]);
         k1_exact.push(conf[1][1] as f64 / conf[1].iter().sum::<usize>() as f64);
     }
-    // The issue asks for >= 0.8 with the default criterion (cv). No criterion reaches it on
-    // this scene (silhouette 0.72, likelihood criteria 0.50-0.70: see the module docs of
-    // `cluster`); guard against regressions of what is achieved today.
+    // The issue's target, with the default criterion (cv): K within ±1 at >= 80 % of the
+    // positions; the silhouette (0.72) is kept as a regression guard.
     assert!(fracs[0] >= 0.7, "silhouette: K within ±1 at {}", fracs[0]);
-    let default = cluster(&mpcs, &[0.0; 60], &ClusterParams::default()).unwrap();
-    let within_default = k_true
-        .iter()
-        .zip(&default.positions)
-        .filter(|(t, pc)| (pc.k as i64 - **t as i64).abs() <= 1)
-        .count() as f64
-        / k_true.len() as f64;
-    assert_eq!(within_default, fracs[5], "the default is the cv criterion");
+    let within = |seed: u64| {
+        let (mpcs, _, k_true) = table1_scene(60, seed);
+        let c = cluster(&mpcs, &[0.0; 60], &ClusterParams::default()).unwrap();
+        k_true
+            .iter()
+            .zip(&c.positions)
+            .filter(|(t, pc)| (pc.k as i64 - **t as i64).abs() <= 1)
+            .count() as f64
+            / k_true.len() as f64
+    };
+    assert_eq!(within(7), fracs[5], "the default is the cv criterion");
     // The likelihood criteria decide K = 1 themselves: the cross-validated likelihood
     // finds the single clusters (the silhouette rule never does).
     assert!(k1_exact[5] >= 0.8, "cv: K = 1 found at {}", k1_exact[5]);
-    assert!(fracs[5] >= 0.7, "cv: K within ±1 at {}", fracs[5]);
+    assert!(fracs[5] >= 0.8, "cv: K within ±1 at {}", fracs[5]);
+    // and not by luck of one draw: two more scenes
+    for seed in [1, 2] {
+        let w = within(seed);
+        eprintln!("cv, scene seed {seed}: K within ±1 at {w:.2}");
+        assert!(w >= 0.8, "cv, scene seed {seed}: K within ±1 at {w}");
+    }
 }
 
 #[test]
