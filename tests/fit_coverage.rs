@@ -1,6 +1,7 @@
 //! Issue 4: coverage of the 95 % position-bootstrap intervals over 50 seeded repetitions of
 //! one model set. Each repetition draws a new channel with `synth` (seed 1..=50) over the
-//! same 60 poses in the hall and applies the fit's estimators to synth's own truth (the true
+//! same 60 poses, a walk down a 120 m × 12 m hall (synth draws about 30 clusters there;
+//! the 16 m × 10 m hall held 2–7, so one draw's environment was far from the model), and applies the fit's estimators to synth's own truth (the true
 //! clusters and rays, as `pradar fit --truth` does): this measures the interval machinery
 //! and the estimators' bias on data that follow the model, without extraction or clustering
 //! (the chain's closed loop is `scripts/closed-loop`).
@@ -15,7 +16,7 @@ use rand_chacha::ChaCha8Rng;
 fn hall_campaign(dir: &std::path::Path) -> Campaign {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     std::fs::copy(
-        root.join("data/tests/hall.geojson"),
+        root.join("data/tests/long_hall.geojson"),
         dir.join("hall.geojson"),
     )
     .unwrap();
@@ -44,12 +45,20 @@ max_delay_ns = 80.0
 noise_from_ns = 100.0
 "#,
     );
-    for _ in 0..60 {
+    // a walk down the hall: poses in order of x (neighbours see the same clusters)
+    let mut poses: Vec<[f64; 3]> = (0..60)
+        .map(|_| {
+            [
+                rng.gen_range(-57.0..57.0),
+                rng.gen_range(-3.5..3.5),
+                rng.gen_range(-180.0..180.0),
+            ]
+        })
+        .collect();
+    poses.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    for [x, y, h] in poses {
         t.push_str(&format!(
-            "[[poses]]\nx_m = {:.3}\ny_m = {:.3}\nheading_deg = {:.1}\n",
-            rng.gen_range(-5.5..5.5),
-            rng.gen_range(-2.5..2.5),
-            rng.gen_range(-180.0..180.0)
+            "[[poses]]\nx_m = {x:.3}\ny_m = {y:.3}\nheading_deg = {h:.1}\n"
         ));
     }
     let path = dir.join("campaign.toml");
@@ -71,13 +80,16 @@ fn model_set() -> ModelConfig {
 
 type Pick = fn(&ModelConfig) -> &Quantity;
 
-/// Not met: on synth's own truth the position-bootstrap intervals cover the true values in
-/// 8–74 % of the draws. The positions of one campaign see the same few clusters (their rays
-/// are drawn once per cluster), so resampling whole positions (DESIGN §2) measures the spread
-/// over positions in one environment, not over environments; the estimates vary between
-/// channel draws several times more than the bootstrap says (printed). Run with `--ignored`.
+/// Not met. On synth's own truth the block-bootstrap intervals (see `fit::channel`) cover the
+/// true values in 74 % (λ), 72 % (AoA std), 16 % (d_p), 64 % (d_c), 88 % (Γ) and 92 % (γ)
+/// of the draws. History: in the small hall with the ordinary position bootstrap it was
+/// 18/16/10/12/74/100 %, the estimates varying 4–10× more between draws than the bootstrap
+/// said; the long hall brought that to 2.6–3.0×, the moving blocks to 1.0–1.6×. The rest:
+/// estimator bias on truth (d_p reads 0.60 m for 0.40 m, d_c 7.1 m for 8 m, AoA 16.0° for
+/// 16.9°; clusters straddling the edges of the observed sector and of the delay window) and
+/// the few blocks (5 of 12 positions) of one campaign. Run with `--ignored`.
 #[test]
-#[ignore = "unmet: position-bootstrap intervals are too narrow for a new channel draw (see the doc comment)"]
+#[ignore = "unmet: estimator bias on truth (d_p above all) and bootstrap intervals 1.0-1.6x too narrow (see the doc comment)"]
 fn bootstrap_intervals_cover_the_true_values_in_88_percent_of_50_repetitions() {
     let tmp = tempfile::tempdir().unwrap();
     let c = hall_campaign(tmp.path());

@@ -123,6 +123,7 @@ fn quantity(
     value: impl Fn(&crate::fit::Fitted) -> f64 + Copy,
     p: &FitParams,
     seed_off: u64,
+    block: usize,
 ) -> Result<FittedQuantity> {
     let x = flat(groups);
     let f = fit(family, &x)
@@ -139,6 +140,7 @@ fn quantity(
         |s| fit(family, s).ok().map(|f| value(&f)),
         p.bootstrap,
         p.seed ^ seed_off,
+        block,
     );
     let (ks, ks_p) = ks_bootstrap(&f, &x, p.bootstrap.min(500), p.seed ^ seed_off ^ 0xB5);
     let mut aic: Vec<(String, f64)> = candidates
@@ -263,6 +265,32 @@ fn cluster_location(
         x: pose.x_m + range * th.cos(),
         y: pose.y_m + range * th.sin(),
     }
+}
+
+/// Block length of the position bootstrap: consecutive positions of a walk see the same
+/// clusters (a cluster's rays are one object's), so whole positions are resampled in
+/// circular blocks of consecutive positions. L = the mean, over positions, of the run of
+/// positions from it onward (itself included) that stay within twice the detection range
+/// r = c·max_delay/2 of it (two poses 2r apart can both see a cluster between them), at
+/// most a third of the positions (at least 1). Poses in random order give L ≈ 1, the
+/// ordinary bootstrap of positions.
+fn bootstrap_block(m: &crate::campaign::manifest::Manifest) -> usize {
+    let r_max = m.processing.max_delay_ns * 1e-9 * C0 / 2.0;
+    let n = m.poses.len();
+    if n == 0 {
+        return 1;
+    }
+    let runs: usize = (0..n)
+        .map(|i| {
+            let a = &m.poses[i];
+            m.poses[i..]
+                .iter()
+                .take_while(|b| (b.x_m - a.x_m).hypot(b.y_m - a.y_m) <= 2.0 * r_max)
+                .count()
+        })
+        .sum();
+    let mean = (runs as f64 / n as f64).round() as usize;
+    mean.clamp(1, (n / 3).max(1))
 }
 
 /// Arc-length step (m) at which the perimeter's visibility from a pose is sampled.
@@ -451,6 +479,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     // per position: (observed perimeter length, clusters projected into it)
     let mut exposure: Groups = vec![Vec::new(); np];
     let perim = layout.perimeter_length();
+    let block = bootstrap_block(m);
     for pos in 0..np {
         let mut f = first[pos].clone();
         f.sort_by(f64::total_cmp);
@@ -481,6 +510,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             rate,
             p,
             1,
+            block,
         )?,
     );
     details.insert(
@@ -494,6 +524,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             rate,
             p,
             2,
+            block,
         )?,
     );
     details.insert(
@@ -507,6 +538,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             |f| 2f64.sqrt() * f.params[1],
             p,
             3,
+            block,
         )?,
     );
     let mean_of = |f: &crate::fit::Fitted| match f.family {
@@ -524,6 +556,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             mean_of,
             p,
             4,
+            block,
         )?,
     );
     // d_c: families, KS and samples from the complete gaps; the value and its interval
@@ -537,6 +570,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         mean_of,
         p,
         5,
+        block,
     )?;
     let per_cluster = |s: &[f64]| {
         let (l, k) = s
@@ -547,7 +581,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     let all_exposure: Vec<f64> = exposure.iter().flatten().copied().collect();
     spacing.q.value = per_cluster(&all_exposure)
         .ok_or_else(|| Error::param("perimeter_spacing", "no cluster on the observed perimeter"))?;
-    spacing.q.interval = bootstrap_groups(&exposure, per_cluster, p.bootstrap, p.seed ^ 5);
+    spacing.q.interval = bootstrap_groups(&exposure, per_cluster, p.bootstrap, p.seed ^ 5, block);
     details.insert("perimeter_spacing".to_string(), spacing);
     // decays, rays per cluster, σ: estimates with position-bootstrap intervals
     // a power-decay constant from (excess delay, relative power dB) pairs per position
@@ -572,6 +606,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             |s| decay(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
             p.bootstrap,
             p.seed ^ seed,
+            block,
         );
         Ok::<Quantity, Error>(Quantity {
             value: v,
@@ -603,7 +638,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             value: mean(&x).expect("non-empty"),
             unit: unit.into(),
             family: family.into(),
-            interval: bootstrap_groups(g, mean, p.bootstrap, p.seed ^ seed),
+            interval: bootstrap_groups(g, mean, p.bootstrap, p.seed ^ seed, block),
             ks: None,
             ks_p: None,
             n: Some(x.len()),

@@ -337,24 +337,34 @@ pub fn ks_bootstrap(fitted: &Fitted, x: &[f64], b: usize, seed: u64) -> (f64, f6
 
 /// Percentile bootstrap interval (level 0.95) of `stat` over `b` resamples of whole groups
 /// (positions), seeded; `None` when fewer than 2 groups or the statistic fails on most
-/// resamples.
+/// resamples. Groups are drawn in circular blocks of `block` consecutive groups (the
+/// moving-block bootstrap of Künsch 1989, for dependent neighbours), until as many groups
+/// as the data have are drawn; `block` = 1 is the ordinary bootstrap of groups.
 pub fn bootstrap_groups(
     groups: &[Vec<f64>],
     stat: impl Fn(&[f64]) -> Option<f64>,
     b: usize,
     seed: u64,
+    block: usize,
 ) -> Option<[f64; 2]> {
     use rand::Rng;
-    if groups.len() < 2 {
+    let n = groups.len();
+    if n < 2 {
         return None;
     }
+    let block = block.clamp(1, n);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut vals = Vec::with_capacity(b);
     let mut pooled = Vec::new();
     for _ in 0..b {
         pooled.clear();
-        for _ in 0..groups.len() {
-            pooled.extend_from_slice(&groups[rng.gen_range(0..groups.len())]);
+        let mut drawn = 0;
+        while drawn < n {
+            let start = rng.gen_range(0..n);
+            for j in 0..block.min(n - drawn) {
+                pooled.extend_from_slice(&groups[(start + j) % n]);
+            }
+            drawn += block;
         }
         if let Some(v) = stat(&pooled) {
             if v.is_finite() {
