@@ -39,8 +39,10 @@
 //!     α = `new_cluster_weight` (1, the usual default, not tuned). A cluster left with fewer
 //!     than 2 members drops out and its MPC is scored by the others and g. The largest
 //!     total wins, K = 1 included. No penalty term: the held-out MPC pays for over-fitting
-//!     itself. Without g, a cluster of one or two MPCs (a single echo, a far object) scored
-//!     ln 1e-300, so every partition that isolated it lost to merging it.
+//!     itself. Without g, the MPC of a cluster of one or two (a single echo, a far object)
+//!     was scored by the distant other clusters alone, far below any cluster's density, so
+//!     every partition that isolated it lost to merging it. g assumes the half-plane
+//!     (180°), the DESIGN scan: `cluster` does not read the campaign's sector.
 //! * Candidate partitions of the likelihood criteria: for each K, K-means from the
 //!   z-scores with the delay axis weighted by 1, 0.5, 0.25 and 2 (then the adaptive
 //!   rescaling); the partition with the best criterion value is K's candidate. Clusters that
@@ -423,43 +425,32 @@ fn gap_k(x: &[[f64; 2]], kmax: usize, params: &ClusterParams, seed: u64) -> Resu
 
 /// K-means labels for K clusters (linfa, k-means++, seeded).
 pub fn kmeans_labels(x: &[[f64; 2]], k: usize, seed: u64, n_runs: usize) -> Result<Vec<usize>> {
-    let flat: Vec<f64> = x.iter().flat_map(|p| [p[0], p[1]]).collect();
-    let arr = Array2::from_shape_vec((x.len(), 2), flat)
-        .map_err(|e| Error::param("mpcs", e.to_string()))?;
-    let ds = DatasetBase::from(arr);
-    let rng = ChaCha8Rng::seed_from_u64(seed);
-    let model = KMeans::params_with_rng(k, rng)
-        .n_runs(n_runs)
-        .init_method(KMeansInit::KMeansPlusPlus)
-        .tolerance(1e-8)
-        .max_n_iterations(300)
-        .fit(&ds)
-        .map_err(|e| Error::param("kmeans", e.to_string()))?;
-    let labels = model.predict(&ds);
-    // relabel in order of first appearance so labels do not depend on centroid order
-    let mut map = BTreeMap::new();
-    Ok(labels
-        .iter()
-        .map(|&l| {
-            let next = map.len();
-            *map.entry(l).or_insert(next)
-        })
-        .collect())
+    run_kmeans(x, k, seed, n_runs, KMeansInit::KMeansPlusPlus)
 }
 
 /// K-means from given starting centroids (one run): the warm start of a refit in a new
 /// metric. Labels in order of first appearance.
 fn kmeans_from(x: &[[f64; 2]], init: &[[f64; 2]]) -> Result<Vec<usize>> {
-    let flat: Vec<f64> = x.iter().flat_map(|p| [p[0], p[1]]).collect();
-    let arr = Array2::from_shape_vec((x.len(), 2), flat)
+    let c0 = Array2::from_shape_vec((init.len(), 2), init.concat())
         .map_err(|e| Error::param("mpcs", e.to_string()))?;
-    let c0: Vec<f64> = init.iter().flat_map(|p| [p[0], p[1]]).collect();
-    let c0 = Array2::from_shape_vec((init.len(), 2), c0)
+    run_kmeans(x, init.len(), 0, 1, KMeansInit::Precomputed(c0))
+}
+
+/// linfa K-means on 2-D points; labels relabelled in order of first appearance, so they do
+/// not depend on the centroids' order.
+fn run_kmeans(
+    x: &[[f64; 2]],
+    k: usize,
+    seed: u64,
+    n_runs: usize,
+    init: KMeansInit<f64>,
+) -> Result<Vec<usize>> {
+    let arr = Array2::from_shape_vec((x.len(), 2), x.concat())
         .map_err(|e| Error::param("mpcs", e.to_string()))?;
     let ds = DatasetBase::from(arr);
-    let model = KMeans::params_with_rng(init.len(), ChaCha8Rng::seed_from_u64(0))
-        .n_runs(1)
-        .init_method(KMeansInit::Precomputed(c0))
+    let model = KMeans::params_with_rng(k, ChaCha8Rng::seed_from_u64(seed))
+        .n_runs(n_runs)
+        .init_method(init)
         .tolerance(1e-8)
         .max_n_iterations(300)
         .fit(&ds)
@@ -637,8 +628,8 @@ pub fn likelihood_criterion(
                     })
                     .chain((alpha > 0.0).then_some(ln_new)),
             );
-            // an MPC no component explains (its own cluster too small, no other cluster
-            // reaching it, no new-cluster term): ln 1e-300, so such partitions lose
+            // an MPC with no component at all (its own cluster too small and no other
+            // cluster, with no new-cluster term): ln 1e-300, so such partitions lose
             total += if l.is_finite() { l } else { (1e-300f64).ln() };
         }
         return -2.0 * total;

@@ -13,10 +13,11 @@
 //! * λ: gaps between the sorted ray delays inside each cluster, shifted-exponential MLE;
 //! * AoA: ray angle minus the cluster's reference (strongest) ray angle, that ray left out;
 //!   Laplacian MLE, reported as std = √2·b (scale b beside it in the interval column note);
-//! * Perimeter statistics use only clusters located in the interior of what the pose
-//!   observes (`Interior`: the scanned sector less 20° at each edge, the detection range
-//!   c·max_delay/2 less 1.5 m): a cluster straddling the sector edge or the end of the delay
-//!   window is seen in part, and its location is off.
+//! * Perimeter statistics look at the interior of what the pose observes (`Interior`: the
+//!   scanned sector less 20° at each edge, the detection range c·max_delay/2 less 1.5 m): a
+//!   cluster straddling the sector edge or the end of the delay window is seen in part, and
+//!   its location is off. d_p uses the clusters located in it; d_c the clusters whose
+//!   projections fall on the perimeter observed in it.
 //! * d_p: distance of each cluster's location to the closest perimeter edge (projection
 //!   onto the layout perimeter). The location is the members' mean range c·τ/2 along the
 //!   reference (strongest) ray's bearing (see `cluster_location`). A location beyond the
@@ -41,7 +42,7 @@
 //!     Without the interior it read 0.38/0.57/1.00 m on truth. In the 16 m × 10 m hall, the
 //!     members' mean bearing and the folded distance read 0.44/0.42/0.80 m on truth (realised
 //!     offsets 0.42/0.17/0.25 m).
-//!   - d_c on truth reads 7.1/7.5/8.3 m; the chain reads 7.6/9.5/14.9 m (clustering merges
+//!   - d_c on truth reads 7.1/7.3/7.8 m; the chain reads 6.9/9.2/14.7 m (clustering merges
 //!     clusters, so fewer are counted). The largest-gap rule read 14.8/21.7/34.9 m (chain).
 //!   - 30° of AoA spread still carries clusters from outside the sector deep into it (set 3).
 //! * Γ, γ: decay = −10·log10(e)/slope of power (dB) against delay.
@@ -280,8 +281,9 @@ fn cluster_location(
 /// circular blocks of consecutive positions. L = the mean, over positions, of the run of
 /// positions from it onward (itself included) that stay within twice the detection range
 /// r = c·max_delay/2 of it (two poses 2r apart can both see a cluster between them), at
-/// most a third of the positions (at least 1). Poses in random order give L ≈ 1, the
-/// ordinary bootstrap of positions.
+/// most a third of the positions (at least 1). Poses in random order in a space much larger
+/// than 2r give L ≈ 1, the ordinary bootstrap of positions; in a room smaller than 2r every
+/// pose is within reach of every other and L is a third of the positions.
 fn bootstrap_block(m: &crate::campaign::manifest::Manifest) -> usize {
     let r_max = m.processing.max_delay_ns * 1e-9 * C0 / 2.0;
     let n = m.poses.len();
@@ -338,10 +340,10 @@ const OBSERVED_STEP_M: f64 = 0.1;
 
 /// The stretches of the perimeter observed from `pose`: maximal runs of arc-length samples
 /// (every `step_m`) that lie in the [`Interior`] of the scan (sector and range) and in line
-/// of sight. Each
-/// stretch is (start, end) in arc length with end ≥ start; a run through the perimeter's
-/// origin ends beyond the perimeter length (so it stays one stretch); the whole perimeter
-/// seen is (0, P).
+/// of sight. Each stretch is (start, end) in arc length with end ≥ start. The scan starts at
+/// an unseen sample, so both ends of a run may lie in [P, 2P) (a run through the origin
+/// ends beyond it and stays one stretch); callers unwrap the arcs into [start, start + P).
+/// The whole perimeter seen is (0, P).
 fn observed_stretches(
     layout: &Layout,
     pose: &crate::campaign::manifest::Pose,
@@ -401,6 +403,10 @@ fn stretch_spacings(arcs: &[f64], stretches: &[(f64, f64)], total: f64) -> (Vec<
         length += b - a;
         inside.sort_by(f64::total_cmp);
         gaps.extend(inside.windows(2).map(|w| w[1] - w[0]).filter(|g| *g > 1e-6));
+        // the whole perimeter seen: the gap through the origin is complete too
+        if b - a >= total && inside.len() >= 2 {
+            gaps.push(inside[0] + total - inside[inside.len() - 1]);
+        }
         count += inside.len();
     }
     (gaps, length, count)
@@ -481,8 +487,10 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         let n = rs.len() as f64;
         let centroid = cluster_location(&m.poses[pos], rs, strongest);
         let range = rs.iter().map(|r| r.delay_ns * 1e-9 * C0 / 2.0).sum::<f64>() / n;
+        let (s, dist) = layout.project_to_perimeter(centroid);
+        // d_c: every cluster's projection; the observed stretches decide which count
+        arcs[pos].push(s);
         if region.contains(strongest.angle_rel_deg, range) {
-            let (s, dist) = layout.project_to_perimeter(centroid);
             // a centroid estimated beyond the perimeter is a noisy estimate of a cluster at
             // the wall (nothing is seen through it): its offset is 0, not the folded distance
             let dist = if layout.inside_perimeter(centroid) {
@@ -491,7 +499,6 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
                 0.0
             };
             dp[pos].push(dist.max(1e-3));
-            arcs[pos].push(s);
         }
         members[pos].push(n);
         let total = 10.0
@@ -850,7 +857,7 @@ mod tests {
 
     #[test]
     fn lad_decay_ignores_one_sided_contamination() {
-        // rays on a 4 ns decay, plus a merged second cluster whose rays sit 12 dB above it
+        // rays on a 4 ns decay, plus a merged second cluster whose rays sit 7.7 dB above it
         let k = 10.0 * std::f64::consts::LOG10_E;
         let mut pairs: Vec<(f64, f64)> = (1..=40)
             .map(|i| (i as f64 * 0.5, -k * i as f64 * 0.5 / 4.0))

@@ -338,8 +338,10 @@ pub fn ks_bootstrap(fitted: &Fitted, x: &[f64], b: usize, seed: u64) -> (f64, f6
 /// Percentile bootstrap interval (level 0.95) of `stat` over `b` resamples of whole groups
 /// (positions), seeded; `None` when fewer than 2 groups or the statistic fails on most
 /// resamples. Groups are drawn in circular blocks of `block` consecutive groups (the
-/// moving-block bootstrap of Künsch 1989, for dependent neighbours), until as many groups
-/// as the data have are drawn; `block` = 1 is the ordinary bootstrap of groups.
+/// moving-block bootstrap of Künsch 1989 in the circular form of Politis & Romano 1992, for
+/// dependent neighbours), until as many groups as the data have are drawn; `block` = 1 is
+/// the ordinary bootstrap of groups. A block of all the groups only rotates them (a
+/// zero-width interval): callers keep it well below the group count.
 pub fn bootstrap_groups(
     groups: &[Vec<f64>],
     stat: impl Fn(&[f64]) -> Option<f64>,
