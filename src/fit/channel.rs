@@ -856,6 +856,82 @@ mod tests {
     use super::*;
 
     #[test]
+    fn censored_spacing_recovers_the_mean_where_complete_gaps_do_not() {
+        use rand::{Rng, SeedableRng};
+        // clusters at exponential spacings (mean 5 m) along a 5 km perimeter, observed
+        // through 300 windows of 12 m: the complete gaps are short-biased, Σ L / Σ k is not
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let total = 5000.0;
+        let mut arcs = Vec::new();
+        let mut s = 0.0;
+        loop {
+            s += -5.0 * (1.0 - rng.gen::<f64>()).ln();
+            if s >= total {
+                break;
+            }
+            arcs.push(s);
+        }
+        let stretches: Vec<(f64, f64)> = (0..300)
+            .map(|i| (i as f64 * 16.0, i as f64 * 16.0 + 12.0))
+            .collect();
+        let (gaps, l, k) = stretch_spacings(&arcs, &stretches, total);
+        let censored = l / k as f64;
+        let complete = gaps.iter().sum::<f64>() / gaps.len() as f64;
+        assert!(
+            (censored - 5.0).abs() < 0.5,
+            "censored mean spacing {censored}"
+        );
+        assert!(complete < 4.2, "complete gaps are short-biased: {complete}");
+        // a stretch through the origin, and the whole perimeter (its wrap gap complete)
+        let (g, l, k) = stretch_spacings(&[9.0, 2.0], &[(7.0, 15.0)], 10.0);
+        assert_eq!((g.len(), l, k), (1, 8.0, 2));
+        assert!((g[0] - 3.0).abs() < 1e-12);
+        let (mut g, l, k) = stretch_spacings(&[1.0, 4.0], &[(0.0, 10.0)], 10.0);
+        g.sort_by(f64::total_cmp);
+        assert_eq!((g, l, k), (vec![3.0, 7.0], 10.0, 2));
+    }
+
+    #[test]
+    fn observed_perimeter_of_a_pose_in_the_hall() {
+        // 16 m × 10 m hall, pose at the centre facing +x, half-plane scan, 12 m range: the
+        // interior (±70°, 10.5 m) sees the right wall (10 m) and x ≥ 5/tan 70° of the top
+        // and bottom walls (2 × 6.18 m), as one stretch
+        let dir = tempfile::tempdir().unwrap();
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        std::fs::copy(
+            root.join("data/tests/hall.geojson"),
+            dir.path().join("hall.geojson"),
+        )
+        .unwrap();
+        let toml = "schema_version = 1\nname = \"hall\"\nlayout = \"hall.geojson\"\nseed = 1\n\
+                    [band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n\
+                    [array]\nelements = 16\n\
+                    [directions]\nstart_deg = -90.0\nstop_deg = 90.0\nstep_deg = 2.0\n\
+                    [noise]\nfloor_dbm = -100.0\n\
+                    [processing]\nmax_delay_ns = 80.0\n\
+                    [[poses]]\nx_m = 0.0\ny_m = 0.0\nheading_deg = 0.0\n";
+        std::fs::write(dir.path().join("campaign.toml"), toml).unwrap();
+        let c = Campaign::load(&dir.path().join("campaign.toml")).unwrap();
+        let layout = Layout::load(&c.layout_path()).unwrap();
+        let st = observed_stretches(&layout, &c.manifest.poses[0], &c.manifest, 0.1);
+        assert_eq!(st.len(), 1, "{st:?}");
+        let want = 10.0 + 2.0 * (8.0 - 5.0 / 70f64.to_radians().tan());
+        let got = st[0].1 - st[0].0;
+        assert!((got - want).abs() < 0.3, "observed {got} m, want {want} m");
+        // facing the right wall from 1 m: the ±70° interior sees 2·tan 70° of it, and none
+        // of the side walls
+        let mut m = c.manifest.clone();
+        m.poses[0].x_m = 7.0;
+        let st = observed_stretches(&layout, &m.poses[0], &m, 0.1);
+        let got: f64 = st.iter().map(|s| s.1 - s.0).sum();
+        let want = 2.0 * 70f64.to_radians().tan();
+        assert!(
+            (got - want).abs() < 0.3,
+            "observed {got} m from 1 m off the wall, want {want}"
+        );
+    }
+
+    #[test]
     fn lad_decay_ignores_one_sided_contamination() {
         // rays on a 4 ns decay, plus a merged second cluster whose rays sit 7.7 dB above it
         let k = 10.0 * std::f64::consts::LOG10_E;
