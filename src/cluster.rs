@@ -728,38 +728,36 @@ pub fn cluster_position(
         Ok((labels, xs))
     };
     for k in 2..=kmax {
-        let (labels, xs, score) = if like {
+        let (labels, score) = if like {
             // the likelihood compares partitions in the original units: keep the best of
             // the starting weights
-            let mut bestk: Option<(Vec<usize>, Vec<[f64; 2]>, f64)> = None;
+            let mut bestk: Option<(Vec<usize>, f64)> = None;
             for &w in DELAY_WEIGHTS {
-                let (l, xs) = partition(k, w)?;
+                let (l, _) = partition(k, w)?;
                 let v = likelihood_criterion(&raw, &l, params.criterion, params);
-                if bestk.as_ref().map(|b| v < b.2).unwrap_or(true) {
-                    bestk = Some((l, xs, v));
+                if bestk.as_ref().map(|b| v < b.1).unwrap_or(true) {
+                    bestk = Some((l, v));
                 }
             }
-            let (l, xs, v) = bestk.expect("at least one weight");
+            let (l, v) = bestk.expect("at least one weight");
             lik.push((k, v));
-            (l, xs, -v)
+            (l, -v)
         } else {
+            // silhouette and CH are measured in K's own metric
             let (l, xs) = partition(k, 1.0)?;
-            (l, xs, 0.0)
-        };
-        let kk = labels.iter().max().map(|m| m + 1).unwrap_or(0);
-        let score = if like {
-            score
-        } else {
-            let s = silhouette(&xs, &labels, kk);
-            let c = calinski_harabasz(&xs, &labels, kk);
+            let kk = l.iter().max().map(|m| m + 1).unwrap_or(0);
+            let s = silhouette(&xs, &l, kk);
+            let c = calinski_harabasz(&xs, &l, kk);
             sil.push((k, s));
             chs.push((k, c));
-            if params.criterion == Criterion::Silhouette {
+            let score = if params.criterion == Criterion::Silhouette {
                 s
             } else {
                 c
-            }
+            };
+            (l, score)
         };
+        let kk = labels.iter().max().map(|m| m + 1).unwrap_or(0);
         let s = sil.last().map(|v| v.1).unwrap_or(f64::INFINITY);
         if best.as_ref().map(|b| score > b.0).unwrap_or(true) {
             best = Some((score, kk, labels, s));

@@ -253,6 +253,11 @@ fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
         .collect()
 }
 
+/// One-way range (m) of a round-trip delay (ns): c·τ/2.
+fn range_m(delay_ns: f64) -> f64 {
+    delay_ns * 1e-9 * C0 / 2.0
+}
+
 /// A cluster's location seen from `pose`: the members' mean range (c·τ/2) along the bearing
 /// of its reference (strongest) ray. The reference ray defines the cluster's direction (the
 /// AoA offsets are measured from it), and the mean range is the members' mean depth. The
@@ -262,13 +267,12 @@ fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
 /// bearing put the centroid a median 0.27/0.68/0.77 m from the true centre
 /// (`scripts/closed-loop`'s three sets); the reference bearing puts it on the true centre
 /// whenever every member is seen.
+/// `range` is the members' mean range (m).
 fn cluster_location(
     pose: &crate::campaign::manifest::Pose,
-    rs: &[Ray],
+    range: f64,
     reference: &Ray,
 ) -> Coord<f64> {
-    let n = rs.len() as f64;
-    let range = rs.iter().map(|r| r.delay_ns * 1e-9 * C0 / 2.0).sum::<f64>() / n;
     let th = (pose.heading_deg + reference.angle_rel_deg).to_radians();
     Coord {
         x: pose.x_m + range * th.cos(),
@@ -285,7 +289,7 @@ fn cluster_location(
 /// than 2r give L ≈ 1, the ordinary bootstrap of positions; in a room smaller than 2r every
 /// pose is within reach of every other and L is a third of the positions.
 fn bootstrap_block(m: &crate::campaign::manifest::Manifest) -> usize {
-    let r_max = m.processing.max_delay_ns * 1e-9 * C0 / 2.0;
+    let r_max = range_m(m.processing.max_delay_ns);
     let n = m.poses.len();
     if n == 0 {
         return 1;
@@ -321,7 +325,7 @@ impl Interior {
     fn of(m: &crate::campaign::manifest::Manifest) -> Interior {
         let (lo, hi) = (m.directions.start_deg, m.directions.stop_deg);
         let g = 20f64.min((hi - lo) / 4.0);
-        let r_max = m.processing.max_delay_ns * 1e-9 * C0 / 2.0;
+        let r_max = range_m(m.processing.max_delay_ns);
         Interior {
             lo_deg: lo + g,
             hi_deg: hi - g,
@@ -347,13 +351,12 @@ const OBSERVED_STEP_M: f64 = 0.1;
 fn observed_stretches(
     layout: &Layout,
     pose: &crate::campaign::manifest::Pose,
-    m: &crate::campaign::manifest::Manifest,
+    region: &Interior,
     step_m: f64,
 ) -> Vec<(f64, f64)> {
     let total = layout.perimeter_length();
     let n = (total / step_m).ceil().max(1.0) as usize;
     let ds = total / n as f64;
-    let region = Interior::of(m);
     let from = Coord {
         x: pose.x_m,
         y: pose.y_m,
@@ -389,8 +392,9 @@ fn observed_stretches(
 /// falling in each stretch, sorted; the gaps between neighbours in one stretch are complete
 /// (returned as samples); the stretch ends cut the gaps beyond its first and last cluster
 /// (censored). Returns (complete gaps, Σ stretch length, clusters in the stretches). An
-/// empty stretch is exposure without an arrival. For spacings that are exponential, Σ L / Σ k is the censored MLE of
-/// the mean spacing: each stretch is an exposure of length L holding k arrivals.
+/// empty stretch is exposure without an arrival. For spacings that are exponential,
+/// Σ L / Σ k is the censored MLE of the mean spacing: each stretch is an exposure of
+/// length L holding k arrivals.
 fn stretch_spacings(arcs: &[f64], stretches: &[(f64, f64)], total: f64) -> (Vec<f64>, f64, usize) {
     let mut gaps = Vec::new();
     let (mut length, mut count) = (0.0, 0);
@@ -485,8 +489,8 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             aoa[pos].push(r.angle_rel_deg - strongest.angle_rel_deg);
         }
         let n = rs.len() as f64;
-        let centroid = cluster_location(&m.poses[pos], rs, strongest);
-        let range = rs.iter().map(|r| r.delay_ns * 1e-9 * C0 / 2.0).sum::<f64>() / n;
+        let range = rs.iter().map(|r| range_m(r.delay_ns)).sum::<f64>() / n;
+        let centroid = cluster_location(&m.poses[pos], range, strongest);
         let (s, dist) = layout.project_to_perimeter(centroid);
         // d_c: every cluster's projection; the observed stretches decide which count
         arcs[pos].push(s);
@@ -519,10 +523,9 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
                 ));
             }
         }
-        let range = strongest.delay_ns * 1e-9 * C0 / 2.0;
+        let d = range_m(strongest.delay_ns);
         let e = 10f64.powf(strongest.power_db / 10.0);
-        sigma[pos]
-            .push(e * (4.0 * std::f64::consts::PI).powi(3) * range.powi(4) / (g0 * g0 * lc * lc));
+        sigma[pos].push(e * (4.0 * std::f64::consts::PI).powi(3) * d.powi(4) / (g0 * g0 * lc * lc));
     }
     let mut inter: Groups = vec![Vec::new(); np];
     let mut dc: Groups = vec![Vec::new(); np];
@@ -534,7 +537,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         let mut f = first[pos].clone();
         f.sort_by(f64::total_cmp);
         inter[pos] = f.windows(2).map(|w| (w[1] - w[0]).max(delta)).collect();
-        let stretches = observed_stretches(&layout, &m.poses[pos], m, OBSERVED_STEP_M);
+        let stretches = observed_stretches(&layout, &m.poses[pos], &region, OBSERVED_STEP_M);
         let (gaps, length, count) = stretch_spacings(&arcs[pos], &stretches, perim);
         dc[pos] = gaps;
         exposure[pos] = vec![length, count as f64];
@@ -913,7 +916,12 @@ mod tests {
         std::fs::write(dir.path().join("campaign.toml"), toml).unwrap();
         let c = Campaign::load(&dir.path().join("campaign.toml")).unwrap();
         let layout = Layout::load(&c.layout_path()).unwrap();
-        let st = observed_stretches(&layout, &c.manifest.poses[0], &c.manifest, 0.1);
+        let st = observed_stretches(
+            &layout,
+            &c.manifest.poses[0],
+            &Interior::of(&c.manifest),
+            0.1,
+        );
         assert_eq!(st.len(), 1, "{st:?}");
         let want = 10.0 + 2.0 * (8.0 - 5.0 / 70f64.to_radians().tan());
         let got = st[0].1 - st[0].0;
@@ -922,7 +930,7 @@ mod tests {
         // of the side walls
         let mut m = c.manifest.clone();
         m.poses[0].x_m = 7.0;
-        let st = observed_stretches(&layout, &m.poses[0], &m, 0.1);
+        let st = observed_stretches(&layout, &m.poses[0], &Interior::of(&m), 0.1);
         let got: f64 = st.iter().map(|s| s.1 - s.0).sum();
         let want = 2.0 * 70f64.to_radians().tan();
         assert!(
