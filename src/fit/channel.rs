@@ -47,8 +47,9 @@
 //!   - Reported in m and as ns one-way (m/c) and round-trip (2m/c).
 //! * Measured on `scripts/closed-loop` (120 m × 12 m hall, three sets; synth drew 39/35/25
 //!   clusters with mean offset 0.40/0.37/0.34 m and mean spacing 6.8/7.5/10.6 m):
-//!   - d_p on synth's truth reads 0.41/0.43/0.90 m; the chain reads 0.47/0.49/0.79 m.
-//!     Without the interior it read 0.38/0.57/1.00 m on truth. In the 16 m × 10 m hall, the
+//!   - d_p (signed mean) on synth's truth reads 0.41/0.41/0.74 m; the chain reads
+//!     0.44/0.41/0.52 m. Folded at the wall they read 0.41/0.43/0.90 and 0.49/0.49/0.83 m;
+//!     without the interior 0.38/0.57/1.00 m on truth (folded). In the 16 m × 10 m hall, the
 //!     members' mean bearing and the folded distance read 0.44/0.42/0.80 m on truth (realised
 //!     offsets 0.42/0.17/0.25 m).
 //!   - d_c on truth reads 7.1/7.3/7.8 m; the chain reads 6.9/9.2/14.7 m (clustering merges
