@@ -658,18 +658,43 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         .map(|[lo, hi]| [lo.max(1e-3), hi.max(1e-3)]);
     details.insert("perimeter_offset".to_string(), offset);
     // d_c: families, KS and samples from the complete gaps; the value and its interval
-    // from the censored (exposure) estimate Σ L / Σ k
-    let mut spacing = quantity(
-        "perimeter_spacing",
-        "m",
-        &dc,
-        Family::Exponential,
-        &pos_cands,
-        mean_of,
-        p,
-        5,
-        block,
-    )?;
+    // from the censored (exposure) estimate Σ L / Σ k. Fewer than two complete gaps (a gap
+    // needs two clusters on one observed stretch) leave the families and KS empty ("—" in
+    // the table, no plot), not the value.
+    let complete_gaps = flat(&dc).len();
+    let mut spacing = if complete_gaps >= 2 {
+        quantity(
+            "perimeter_spacing",
+            "m",
+            &dc,
+            Family::Exponential,
+            &pos_cands,
+            mean_of,
+            p,
+            5,
+            block,
+        )?
+    } else {
+        FittedQuantity {
+            q: Quantity {
+                value: f64::NAN, // set from the exposure below
+                unit: "m".into(),
+                family: Family::Exponential.name().into(),
+                interval: None,
+                ks: None,
+                ks_p: None,
+                n: Some(complete_gaps),
+            },
+            aic: Vec::new(),
+            samples: flat(&dc),
+            fitted: crate::fit::Fitted {
+                family: Family::Exponential,
+                params: vec![f64::NAN],
+                loglik: 0.0,
+                n: 0,
+            },
+        }
+    };
     let per_cluster = |s: &[f64]| {
         let (l, k) = s
             .chunks(2)
@@ -680,6 +705,10 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     spacing.q.value = per_cluster(&all_exposure)
         .ok_or_else(|| Error::param("perimeter_spacing", "no cluster on the observed perimeter"))?;
     spacing.q.interval = bootstrap_groups(&exposure, per_cluster, p.bootstrap, p.seed ^ 5, block);
+    if complete_gaps < 2 {
+        // the exponential law with the censored mean (for the report; no samples to plot)
+        spacing.fitted.params = vec![1.0 / spacing.q.value];
+    }
     details.insert("perimeter_spacing".to_string(), spacing);
     // decays, rays per cluster, σ: estimates with position-bootstrap intervals
     // a power-decay constant from (excess delay, relative power dB) pairs per position
@@ -836,17 +865,30 @@ fn rows7(f: &ChannelFit) -> Vec<[String; 7]> {
         ]
     };
     vec![
-        row("inter-cluster arrival rate Λ", &m.inter_cluster_rate, 1.0, best("inter_cluster_rate"), "0.21 1/ns"),
+        row(
+            "inter-cluster arrival rate Λ",
+            &m.inter_cluster_rate,
+            1.0,
+            best("inter_cluster_rate"),
+            "0.21 1/ns",
+        ),
         [
             "inter-cluster perimeter distance d_c".to_string(),
             format!(
-                "mean {:.3} m = {:.2} ns one-way / {:.2} ns round-trip; std {:.3} m = {:.2} / {:.2} ns",
+                "mean {:.3} m = {:.2} ns one-way / {:.2} ns round-trip; std {}",
                 dc_mean,
                 dc_mean * ns1,
                 2.0 * dc_mean * ns1,
-                dc_std,
-                dc_std * ns1,
-                2.0 * dc_std * ns1
+                if dc.len() >= 2 {
+                    format!(
+                        "{:.3} m = {:.2} / {:.2} ns",
+                        dc_std,
+                        dc_std * ns1,
+                        2.0 * dc_std * ns1
+                    )
+                } else {
+                    "— (fewer than 2 complete gaps)".to_string()
+                }
             ),
             fmt_iv(&m.perimeter_spacing, 1.0),
             m.perimeter_spacing.family.clone(),
@@ -854,10 +896,34 @@ fn rows7(f: &ChannelFit) -> Vec<[String; 7]> {
             best("perimeter_spacing"),
             "5.02 ns (\"standard deviation\")".to_string(),
         ],
-        row("intra-cluster arrival rate λ", &m.intra_cluster_rate, 1.0, best("intra_cluster_rate"), "0.43 1/ns"),
-        row("intra-cluster AoA (Laplacian std)", &m.intra_cluster_aoa, 1.0, best("intra_cluster_aoa"), "16.9 deg"),
-        row("perimeter offset d_p", &m.perimeter_offset, 1.0, best("perimeter_offset"), "—"),
-        row("cluster power decay Γ", &m.cluster_decay, 1.0, String::new(), "—"),
+        row(
+            "intra-cluster arrival rate λ",
+            &m.intra_cluster_rate,
+            1.0,
+            best("intra_cluster_rate"),
+            "0.43 1/ns",
+        ),
+        row(
+            "intra-cluster AoA (Laplacian std)",
+            &m.intra_cluster_aoa,
+            1.0,
+            best("intra_cluster_aoa"),
+            "16.9 deg",
+        ),
+        row(
+            "perimeter offset d_p",
+            &m.perimeter_offset,
+            1.0,
+            best("perimeter_offset"),
+            "—",
+        ),
+        row(
+            "cluster power decay Γ",
+            &m.cluster_decay,
+            1.0,
+            String::new(),
+            "—",
+        ),
         row("ray power decay γ", &m.ray_decay, 1.0, String::new(), "—"),
     ]
 }
@@ -937,6 +1003,72 @@ mod tests {
         let (mut g, l, k) = stretch_spacings(&[1.0, 4.0], &[(0.0, 10.0)], 10.0);
         g.sort_by(f64::total_cmp);
         assert_eq!((g, l, k), (vec![3.0, 7.0], 10.0, 2));
+    }
+
+    #[test]
+    fn spacing_without_two_complete_gaps_keeps_the_censored_value() {
+        // two poses at the centre of the 16 m × 10 m hall facing +x (each observes 22.4 m of
+        // perimeter, see the next test); pose 0 sees clusters A, B on the right wall (one
+        // complete gap), pose 1 sees C there and D on the top wall outside the interior:
+        // one complete gap in all, so d_c has no families, KS or std, but its value is
+        // Σ L / Σ k = 2 · 22.36 m / 3 clusters
+        let dir = tempfile::tempdir().unwrap();
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        std::fs::copy(
+            root.join("data/tests/hall.geojson"),
+            dir.path().join("hall.geojson"),
+        )
+        .unwrap();
+        let pose = "[[poses]]\nx_m = 0.0\ny_m = 0.0\nheading_deg = 0.0\n";
+        let toml = format!(
+            "schema_version = 1\nname = \"hall\"\nlayout = \"hall.geojson\"\nseed = 1\n\
+             [band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n[array]\nelements = 16\n\
+             [directions]\nstart_deg = -90.0\nstop_deg = 90.0\nstep_deg = 2.0\n\
+             [noise]\nfloor_dbm = -100.0\n[processing]\nmax_delay_ns = 80.0\n{pose}{pose}"
+        );
+        std::fs::write(dir.path().join("campaign.toml"), toml).unwrap();
+        let c = Campaign::load(&dir.path().join("campaign.toml")).unwrap();
+        let mut rays = Vec::new();
+        // (position, cluster, centroid x, y, first ray power dB)
+        for (position, cluster, x, y, p0) in [
+            (0, 0, 7.6, -1.0, -100.0),
+            (0, 1, 7.6, 2.0, -103.0),
+            (1, 2, 7.6, 0.0, -104.0),
+            (1, 3, 0.5, 4.6, -95.0),
+        ] {
+            let (r, bearing) = (f64::hypot(x, y), f64::atan2(y, x).to_degrees());
+            let excess = [0.0, 1.5, 3.2];
+            let depth = excess.iter().map(|t| range_m(*t)).sum::<f64>() / 3.0;
+            let t0 = 2.0 * (r - depth) / C0 * 1e9;
+            for (t, a, dp) in [(0.0, 0.0, 0.0), (1.5, 5.0, -3.0), (3.2, -4.0, -7.0)] {
+                rays.push(Ray {
+                    position,
+                    cluster,
+                    delay_ns: t0 + t,
+                    angle_rel_deg: bearing + a,
+                    power_db: p0 + dp,
+                });
+            }
+        }
+        let f = fit_rays(
+            Path::new("clusters.parquet"),
+            rays,
+            &c,
+            &FitParams::default(),
+        )
+        .unwrap();
+        let d = &f.details["perimeter_spacing"];
+        assert!(d.q.ks.is_none() && d.aic.is_empty() && d.samples.len() == 1);
+        let want = 2.0 * (10.0 + 2.0 * (8.0 - 5.0 / 70f64.to_radians().tan())) / 3.0;
+        let got = f.model.perimeter_spacing.value;
+        assert!((got - want).abs() < 0.3, "d_c {got} m, want {want} m");
+        let row = &table1_rows(&f, None)[1];
+        assert!(
+            row[1].contains("std — (fewer than 2 complete gaps)"),
+            "{}",
+            row[1]
+        );
+        assert_eq!(row[4], "—");
     }
 
     #[test]

@@ -91,6 +91,10 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
             let mut h = table1_html_rows(f, truth.as_ref());
             h.push_str("</table><p>From the simulated corridor's clusters; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n");
             for (name, d) in &f.details {
+                if d.samples.len() < 2 {
+                    h.push_str(&format!("<p>{name}: fewer than 2 samples, no plot.</p>\n"));
+                    continue;
+                }
                 let png = format!("fit_{name}.png");
                 report::fit_plot(&out.join(&png), name, &d.q.unit, &d.samples, &d.fitted)?;
                 h.push_str(&format!("<a href=\"{png}\"><img style=\"max-width:640px\" src=\"{png}\" alt=\"{name}\"></a>\n"));
