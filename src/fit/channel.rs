@@ -350,12 +350,13 @@ impl Interior {
 }
 
 /// The AoA samples per position, from the clusters whose reference ray lies at least 2·b̂₀
-/// inside the scanned sector, b̂₀ the Laplacian scale fitted to all clusters (at most a
-/// quarter of the sector; all clusters when none is that far in). A cluster whose
-/// reference is near a sector edge loses the rays beyond the edge, and the rest are one
-/// side of the Laplacian: on synth's truth (the long hall, AoA std 16.9°, 1 realised
-/// environment reading 18.8°) all clusters gave 18.1°, the 2·b̂ interior 18.8° (1·b̂:
-/// 18.6°, 3·b̂: 19.2°). A Laplacian tail beyond 2b is e^{−2}/2 = 7 % of the rays.
+/// inside the scanned sector, b̂₀ the Laplacian scale fitted to all clusters (the margin
+/// at most a quarter of the sector; all clusters when none lies that far in). A cluster
+/// whose reference is near a sector edge loses the rays beyond the edge, and what is left
+/// is mostly one side of the Laplacian. On synth's truth in the 120 m hall (model AoA std
+/// 16.9°; the offsets synth drew have 18.8°) all clusters gave 18.1°, the 2·b̂ interior
+/// 18.8° (1·b̂: 18.6°, 3·b̂: 19.2°). A Laplacian tail beyond 2b holds e^{−2}/2 = 7 % of
+/// the rays.
 fn aoa_groups(clusters: &[(usize, f64, Vec<f64>)], np: usize, lo: f64, hi: f64) -> Groups {
     let all: Vec<f64> = clusters.iter().flat_map(|c| c.2.iter().copied()).collect();
     let mut groups: Groups = vec![Vec::new(); np];
@@ -969,6 +970,29 @@ pub fn write_table1(md: &Path, f: &ChannelFit, truth: Option<&ChannelFit>) -> Re
 mod tests {
     use super::*;
 
+    /// The 16 m × 10 m hall (`data/tests/hall.geojson`), half-plane scan in 2° steps,
+    /// 80 ns of delay, `poses` poses at the centre facing +x; the folder keeps the files.
+    fn hall_at_centre(poses: usize) -> (tempfile::TempDir, Campaign) {
+        let dir = tempfile::tempdir().unwrap();
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        std::fs::copy(
+            root.join("data/tests/hall.geojson"),
+            dir.path().join("hall.geojson"),
+        )
+        .unwrap();
+        let toml = "schema_version = 1\nname = \"hall\"\nlayout = \"hall.geojson\"\nseed = 1\n\
+                    [band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n\
+                    [array]\nelements = 16\n\
+                    [directions]\nstart_deg = -90.0\nstop_deg = 90.0\nstep_deg = 2.0\n\
+                    [noise]\nfloor_dbm = -100.0\n\
+                    [processing]\nmax_delay_ns = 80.0\n"
+            .to_string()
+            + &"[[poses]]\nx_m = 0.0\ny_m = 0.0\nheading_deg = 0.0\n".repeat(poses);
+        std::fs::write(dir.path().join("campaign.toml"), toml).unwrap();
+        let c = Campaign::load(&dir.path().join("campaign.toml")).unwrap();
+        (dir, c)
+    }
+
     #[test]
     fn censored_spacing_recovers_the_mean_where_complete_gaps_do_not() {
         use rand::{Rng, SeedableRng};
@@ -1012,22 +1036,7 @@ mod tests {
         // complete gap), pose 1 sees C there and D on the top wall outside the interior:
         // one complete gap in all, so d_c has no families, KS or std, but its value is
         // Σ L / Σ k = 2 · 22.36 m / 3 clusters
-        let dir = tempfile::tempdir().unwrap();
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        std::fs::copy(
-            root.join("data/tests/hall.geojson"),
-            dir.path().join("hall.geojson"),
-        )
-        .unwrap();
-        let pose = "[[poses]]\nx_m = 0.0\ny_m = 0.0\nheading_deg = 0.0\n";
-        let toml = format!(
-            "schema_version = 1\nname = \"hall\"\nlayout = \"hall.geojson\"\nseed = 1\n\
-             [band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n[array]\nelements = 16\n\
-             [directions]\nstart_deg = -90.0\nstop_deg = 90.0\nstep_deg = 2.0\n\
-             [noise]\nfloor_dbm = -100.0\n[processing]\nmax_delay_ns = 80.0\n{pose}{pose}"
-        );
-        std::fs::write(dir.path().join("campaign.toml"), toml).unwrap();
-        let c = Campaign::load(&dir.path().join("campaign.toml")).unwrap();
+        let (_dir, c) = hall_at_centre(2);
         let mut rays = Vec::new();
         // (position, cluster, centroid x, y, first ray power dB)
         for (position, cluster, x, y, p0) in [
@@ -1076,22 +1085,7 @@ mod tests {
         // 16 m × 10 m hall, pose at the centre facing +x, half-plane scan, 12 m range: the
         // interior (±70°, 10.5 m) sees the right wall (10 m) and x ≥ 5/tan 70° of the top
         // and bottom walls (2 × 6.18 m), as one stretch
-        let dir = tempfile::tempdir().unwrap();
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        std::fs::copy(
-            root.join("data/tests/hall.geojson"),
-            dir.path().join("hall.geojson"),
-        )
-        .unwrap();
-        let toml = "schema_version = 1\nname = \"hall\"\nlayout = \"hall.geojson\"\nseed = 1\n\
-                    [band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n\
-                    [array]\nelements = 16\n\
-                    [directions]\nstart_deg = -90.0\nstop_deg = 90.0\nstep_deg = 2.0\n\
-                    [noise]\nfloor_dbm = -100.0\n\
-                    [processing]\nmax_delay_ns = 80.0\n\
-                    [[poses]]\nx_m = 0.0\ny_m = 0.0\nheading_deg = 0.0\n";
-        std::fs::write(dir.path().join("campaign.toml"), toml).unwrap();
-        let c = Campaign::load(&dir.path().join("campaign.toml")).unwrap();
+        let (_dir, c) = hall_at_centre(1);
         let layout = Layout::load(&c.layout_path()).unwrap();
         let st = observed_stretches(
             &layout,
