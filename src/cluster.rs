@@ -12,8 +12,9 @@
 //!   (default) the features are then divided by that solution's pooled within-cluster
 //!   standard deviations and K-means refitted from that solution's centroids in the new
 //!   metric (a warm start, one run), up to three times, stopping early at a fixed point (the
-//!   metric of a mixture with a shared diagonal covariance). K = 1 is the trivial partition. K-means is the only
-//!   clustering algorithm: the criteria below only choose among its partitions.
+//!   metric of a mixture with a shared diagonal covariance). K = 1 is the trivial
+//!   partition. K-means is the only clustering algorithm: the criteria below only choose
+//!   among its partitions.
 //! * Criteria ([`Criterion`]), each measured on K's own partition:
 //!   - `Silhouette`: mean silhouette s = mean_i (b_i − a_i)/max(a_i, b_i) (a_i mean
 //!     distance to its own cluster, b_i to the nearest other; 0 for singletons) in K's

@@ -13,8 +13,10 @@
 //! merges: clusters interleaved in delay and angle make one cluster of two, which widens
 //! the AoA spread and lowers Λ and the cluster count behind d_c.
 
+mod common;
+
 use pradar::campaign::manifest::Campaign;
-use pradar::campaign::modelfile::{ModelConfig, Quantity};
+use pradar::campaign::modelfile::ModelConfig;
 use pradar::fit::channel::{fit_truth, FitParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -35,60 +37,19 @@ fn campaign(dir: &Path) -> std::path::PathBuf {
         ),
     )
     .unwrap();
-    let mut t = String::from(
-        r#"schema_version = 1
-name = "hall"
-layout = "hall.geojson"
-seed = 77
-pulses = 1
-[band]
-start_hz = 57.5e9
-stop_hz = 63.5e9
-points = 801
-[array]
-elements = 400
-[directions]
-start_deg = -90.0
-stop_deg = 90.0
-step_deg = 2.0
-[noise]
-floor_dbm = -100.0
-tx_power_dbm = 0.0
-[processing]
-coupling = "gate"
-gate_ns = 3.0
-max_delay_ns = 80.0
-noise_from_ns = 100.0
-"#,
-    );
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    for _ in 0..POSES {
-        let (x, y, h): (f64, f64, f64) = (
-            rng.gen_range(-(HALL_M / 2.0 - 2.5)..(HALL_M / 2.0 - 2.5)),
-            rng.gen_range(-3.5..3.5),
-            rng.gen_range(-180.0..180.0),
-        );
-        t.push_str(&format!(
-            "[[poses]]\nx_m = {x:.3}\ny_m = {y:.3}\nheading_deg = {h:.1}\n"
-        ));
-    }
+    let poses: Vec<[f64; 3]> = (0..POSES)
+        .map(|_| {
+            [
+                rng.gen_range(-(HALL_M / 2.0 - 2.5)..(HALL_M / 2.0 - 2.5)),
+                rng.gen_range(-3.5..3.5),
+                rng.gen_range(-180.0..180.0),
+            ]
+        })
+        .collect();
     let path = dir.join("campaign.toml");
-    std::fs::write(&path, t).unwrap();
+    std::fs::write(&path, common::hall_manifest(2.0, &poses)).unwrap();
     path
-}
-
-fn model(lambda: f64, aoa_deg: f64, dc_m: f64) -> ModelConfig {
-    let mut m = ModelConfig::table1_defaults();
-    m.inter_cluster_rate = Quantity::new(0.21, "1/ns", "exponential");
-    m.intra_cluster_rate = Quantity::new(lambda, "1/ns", "exponential");
-    m.intra_cluster_aoa = Quantity::new(aoa_deg, "deg", "laplacian");
-    m.perimeter_offset = Quantity::new(0.4, "m", "exponential");
-    m.perimeter_spacing = Quantity::new(dc_m, "m", "exponential");
-    m.cluster_decay = Quantity::new(15.0, "ns", "exponential");
-    m.ray_decay = Quantity::new(4.0, "ns", "exponential");
-    m.rays_per_cluster = Quantity::new(5.0, "count", "poisson");
-    m.cluster_rrcs = Quantity::new(0.01, "m2", "lognormal");
-    m
 }
 
 fn run(args: &[&str]) {
@@ -130,7 +91,7 @@ fn closed_loop_recovers_the_model_at_three_parameter_sets() {
     for (k, (lambda, aoa, dc, asserted)) in sets.iter().enumerate() {
         let dir = tmp.path().join(format!("set{}", k + 1));
         std::fs::create_dir_all(&dir).unwrap();
-        let want = model(*lambda, *aoa, *dc);
+        let want = common::hall_model(*lambda, *aoa, *dc);
         want.save(&dir.join("model.toml")).unwrap();
         let (e, mp, cl, f, t) = (
             dir.join("e.parquet"),

@@ -1,10 +1,13 @@
 //! Issue 4: coverage of the 95 % position-bootstrap intervals over 50 seeded repetitions of
 //! one model set. Each repetition draws a new channel with `synth` (seed 1..=50) over the
 //! same 60 poses, a walk down a 120 m × 12 m hall (synth draws about 30 clusters there;
-//! the 16 m × 10 m hall held 2–7, so one draw's environment was far from the model), and applies the fit's estimators to synth's own truth (the true
-//! clusters and rays, as `pradar fit --truth` does): this measures the interval machinery
-//! and the estimators' bias on data that follow the model, without extraction or clustering
-//! (the chain's closed loop is `scripts/closed-loop`).
+//! the 16 m × 10 m hall held 2–7, so one draw's environment was far from the model), and
+//! applies the fit's estimators to synth's own truth (the true clusters and rays, as
+//! `pradar fit --truth` does): this measures the interval machinery and the estimators'
+//! bias on data that follow the model, without extraction or clustering (the chain's
+//! closed loop is `tests/closed_loop.rs` and `scripts/closed-loop`).
+
+mod common;
 
 use pradar::campaign::manifest::Campaign;
 use pradar::campaign::modelfile::{ModelConfig, Quantity};
@@ -14,37 +17,12 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn hall_campaign(dir: &std::path::Path) -> Campaign {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     std::fs::copy(
-        root.join("data/tests/long_hall.geojson"),
+        common::root().join("data/tests/long_hall.geojson"),
         dir.join("hall.geojson"),
     )
     .unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let mut t = String::from(
-        r#"schema_version = 1
-name = "hall"
-layout = "hall.geojson"
-seed = 77
-[band]
-start_hz = 57.5e9
-stop_hz = 63.5e9
-points = 801
-[array]
-elements = 400
-[directions]
-start_deg = -90.0
-stop_deg = 90.0
-step_deg = 90.0
-[noise]
-floor_dbm = -100.0
-[processing]
-coupling = "gate"
-gate_ns = 3.0
-max_delay_ns = 80.0
-noise_from_ns = 100.0
-"#,
-    );
     // a walk down the hall: poses in order of x (neighbours see the same clusters)
     let mut poses: Vec<[f64; 3]> = (0..60)
         .map(|_| {
@@ -56,26 +34,9 @@ noise_from_ns = 100.0
         })
         .collect();
     poses.sort_by(|a, b| a[0].total_cmp(&b[0]));
-    for [x, y, h] in poses {
-        t.push_str(&format!(
-            "[[poses]]\nx_m = {x:.3}\ny_m = {y:.3}\nheading_deg = {h:.1}\n"
-        ));
-    }
     let path = dir.join("campaign.toml");
-    std::fs::write(&path, t).unwrap();
+    std::fs::write(&path, common::hall_manifest(90.0, &poses)).unwrap();
     Campaign::load(&path).unwrap()
-}
-
-fn model_set() -> ModelConfig {
-    let mut m = ModelConfig::table1_defaults();
-    m.intra_cluster_rate = Quantity::new(0.43, "1/ns", "exponential");
-    m.intra_cluster_aoa = Quantity::new(16.9, "deg", "laplacian");
-    m.perimeter_offset = Quantity::new(0.4, "m", "exponential");
-    m.perimeter_spacing = Quantity::new(8.0, "m", "exponential");
-    m.cluster_decay = Quantity::new(15.0, "ns", "exponential");
-    m.ray_decay = Quantity::new(4.0, "ns", "exponential");
-    m.rays_per_cluster = Quantity::new(5.0, "count", "poisson");
-    m
 }
 
 type Pick = fn(&ModelConfig) -> &Quantity;
@@ -95,7 +56,7 @@ type Pick = fn(&ModelConfig) -> &Quantity;
 fn bootstrap_intervals_cover_the_true_values_in_88_percent_of_50_repetitions() {
     let tmp = tempfile::tempdir().unwrap();
     let c = hall_campaign(tmp.path());
-    let truth = model_set();
+    let truth = common::hall_model(0.43, 16.9, 8.0);
     let picks: [(&str, Pick); 6] = [
         ("λ (1/ns)", |m| &m.intra_cluster_rate),
         ("AoA std (deg)", |m| &m.intra_cluster_aoa),

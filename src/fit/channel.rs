@@ -131,7 +131,9 @@ fn flat(g: &Groups) -> Vec<f64> {
     g.iter().flatten().copied().collect()
 }
 
-/// Fit one sampled quantity: `family` gives the estimate through `value` (from the fit).
+/// Fit one sampled quantity: `family` gives the estimate through `value` (from the fit)
+/// and its interval by the position bootstrap, unless another estimator `given` them
+/// (value, interval): then the samples give only the families, KS and plots (d_p, d_c).
 #[allow(clippy::too_many_arguments)]
 fn quantity(
     name: &str,
@@ -140,6 +142,7 @@ fn quantity(
     family: Family,
     candidates: &[Family],
     value: impl Fn(&crate::fit::Fitted) -> f64 + Copy,
+    given: Option<(f64, Option<[f64; 2]>)>,
     p: &FitParams,
     seed_off: u64,
     block: usize,
@@ -147,20 +150,23 @@ fn quantity(
     let x = flat(groups);
     let f = fit(family, &x)
         .map_err(|e| Error::param(name, format!("cannot fit ({} samples): {e}", x.len())))?;
-    let v = value(&f);
+    let v = given.map_or_else(|| value(&f), |g| g.0);
     if !v.is_finite() || v <= 0.0 {
         return Err(Error::param(
             name,
             format!("fit gave {v} from {} samples", x.len()),
         ));
     }
-    let interval = bootstrap_groups(
-        groups,
-        |s| fit(family, s).ok().map(|f| value(&f)),
-        p.bootstrap,
-        p.seed ^ seed_off,
-        block,
-    );
+    let interval = match given {
+        Some(g) => g.1,
+        None => bootstrap_groups(
+            groups,
+            |s| fit(family, s).ok().map(|f| value(&f)),
+            p.bootstrap,
+            p.seed ^ seed_off,
+            block,
+        ),
+    };
     let (ks, ks_p) = ks_bootstrap(&f, &x, p.bootstrap.min(500), p.seed ^ seed_off ^ 0xB5);
     let mut aic: Vec<(String, f64)> = candidates
         .iter()
@@ -399,8 +405,7 @@ fn observed_stretches(
         .map(|i| {
             let (q, _) = layout.perimeter_point((i as f64 + 0.5) * ds);
             let d = q - from;
-            let rel =
-                (d.y.atan2(d.x).to_degrees() - pose.heading_deg + 180.0).rem_euclid(360.0) - 180.0;
+            let rel = crate::energy::wrap_deg(d.y.atan2(d.x).to_degrees() - pose.heading_deg);
             region.contains(rel, d.x.hypot(d.y)) && !layout.occluded(from, q, 0.05)
         })
         .collect();
@@ -603,6 +608,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             sh,
             &arrival_cands,
             rate,
+            None,
             p,
             1,
             block,
@@ -617,6 +623,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             sh,
             &arrival_cands,
             rate,
+            None,
             p,
             2,
             block,
@@ -631,6 +638,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             Family::Laplacian,
             &[Family::Laplacian, Family::Gaussian],
             |f| 2f64.sqrt() * f.params[1],
+            None,
             p,
             3,
             block,
@@ -642,28 +650,42 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     };
     // d_p: families, KS and samples from the folded offsets; the value and its interval
     // from the mean signed offset (floored at 1 mm)
-    let mut offset = quantity(
-        "perimeter_offset",
-        "m",
-        &dp,
-        Family::Exponential,
-        &pos_cands,
-        mean_of,
-        p,
-        4,
-        block,
-    )?;
     let mean = |s: &[f64]| (!s.is_empty()).then(|| s.iter().sum::<f64>() / s.len() as f64);
-    offset.q.value = mean(&flat(&dp_signed)).map_or(1e-3, |v| v.max(1e-3));
-    offset.q.interval = bootstrap_groups(&dp_signed, mean, p.bootstrap, p.seed ^ 4, block)
-        .map(|[lo, hi]| [lo.max(1e-3), hi.max(1e-3)]);
-    details.insert("perimeter_offset".to_string(), offset);
+    let signed = (
+        mean(&flat(&dp_signed)).map_or(1e-3, |v| v.max(1e-3)),
+        bootstrap_groups(&dp_signed, mean, p.bootstrap, p.seed ^ 4, block)
+            .map(|[lo, hi]| [lo.max(1e-3), hi.max(1e-3)]),
+    );
+    details.insert(
+        "perimeter_offset".to_string(),
+        quantity(
+            "perimeter_offset",
+            "m",
+            &dp,
+            Family::Exponential,
+            &pos_cands,
+            mean_of,
+            Some(signed),
+            p,
+            4,
+            block,
+        )?,
+    );
     // d_c: families, KS and samples from the complete gaps; the value and its interval
     // from the censored (exposure) estimate Σ L / Σ k. Fewer than two complete gaps (a gap
     // needs two clusters on one observed stretch) leave the families and KS empty ("—" in
     // the table, no plot), not the value.
-    let complete_gaps = flat(&dc).len();
-    let mut spacing = if complete_gaps >= 2 {
+    let per_cluster = |s: &[f64]| {
+        let (l, k) = s
+            .chunks(2)
+            .fold((0.0, 0.0), |(l, k), c| (l + c[0], k + c[1]));
+        (k > 0.0).then(|| l / k)
+    };
+    let censored = per_cluster(&flat(&exposure))
+        .ok_or_else(|| Error::param("perimeter_spacing", "no cluster on the observed perimeter"))?;
+    let censored_iv = bootstrap_groups(&exposure, per_cluster, p.bootstrap, p.seed ^ 5, block);
+    let complete_gaps = flat(&dc);
+    let spacing = if complete_gaps.len() >= 2 {
         quantity(
             "perimeter_spacing",
             "m",
@@ -671,6 +693,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
             Family::Exponential,
             &pos_cands,
             mean_of,
+            Some((censored, censored_iv)),
             p,
             5,
             block,
@@ -678,38 +701,25 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     } else {
         FittedQuantity {
             q: Quantity {
-                value: f64::NAN, // set from the exposure below
+                value: censored,
                 unit: "m".into(),
                 family: Family::Exponential.name().into(),
-                interval: None,
+                interval: censored_iv,
                 ks: None,
                 ks_p: None,
-                n: Some(complete_gaps),
+                n: Some(complete_gaps.len()),
             },
             aic: Vec::new(),
-            samples: flat(&dc),
+            samples: complete_gaps,
+            // the exponential law with the censored mean (for the report; no plot)
             fitted: crate::fit::Fitted {
                 family: Family::Exponential,
-                params: vec![f64::NAN],
+                params: vec![1.0 / censored],
                 loglik: 0.0,
                 n: 0,
             },
         }
     };
-    let per_cluster = |s: &[f64]| {
-        let (l, k) = s
-            .chunks(2)
-            .fold((0.0, 0.0), |(l, k), c| (l + c[0], k + c[1]));
-        (k > 0.0).then(|| l / k)
-    };
-    let all_exposure: Vec<f64> = exposure.iter().flatten().copied().collect();
-    spacing.q.value = per_cluster(&all_exposure)
-        .ok_or_else(|| Error::param("perimeter_spacing", "no cluster on the observed perimeter"))?;
-    spacing.q.interval = bootstrap_groups(&exposure, per_cluster, p.bootstrap, p.seed ^ 5, block);
-    if complete_gaps < 2 {
-        // the exponential law with the censored mean (for the report; no samples to plot)
-        spacing.fitted.params = vec![1.0 / spacing.q.value];
-    }
     details.insert("perimeter_spacing".to_string(), spacing);
     // decays, rays per cluster, σ: estimates with position-bootstrap intervals
     // a power-decay constant from (excess delay, relative power dB) pairs per position

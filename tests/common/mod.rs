@@ -83,3 +83,59 @@ pub fn assert_one_line_error(o: &std::process::Output, must_name: &str) {
         "should name {must_name}: {err}"
     );
 }
+
+/// The manifest of the fit tests in a hall (`tests/closed_loop.rs`, `tests/fit_coverage.rs`):
+/// layout `hall.geojson` beside it, seed 77, 801 points over 57.5–63.5 GHz, 400 elements, a
+/// half-plane scan in `step_deg` steps, noise floor −100 dBm, 80 ns of delay behind a 3 ns
+/// coupling gate, and `poses` as [x_m, y_m, heading_deg].
+pub fn hall_manifest(step_deg: f64, poses: &[[f64; 3]]) -> String {
+    let mut t = format!(
+        r#"schema_version = 1
+name = "hall"
+layout = "hall.geojson"
+seed = 77
+[band]
+start_hz = 57.5e9
+stop_hz = 63.5e9
+points = 801
+[array]
+elements = 400
+[directions]
+start_deg = -90.0
+stop_deg = 90.0
+step_deg = {step_deg:?}
+[noise]
+floor_dbm = -100.0
+[processing]
+coupling = "gate"
+gate_ns = 3.0
+max_delay_ns = 80.0
+noise_from_ns = 100.0
+"#
+    );
+    for [x, y, h] in poses {
+        t.push_str(&format!(
+            "[[poses]]\nx_m = {x:.3}\ny_m = {y:.3}\nheading_deg = {h:.1}\n"
+        ));
+    }
+    t
+}
+
+/// The closed-loop model sets of issue 4: Table 1 defaults with λ (1/ns), AoA std (deg) and
+/// d_c (m) given, d_p 0.4 m, Γ 15 ns, γ 4 ns and 5 rays per cluster.
+pub fn hall_model(
+    lambda: f64,
+    aoa_deg: f64,
+    dc_m: f64,
+) -> pradar::campaign::modelfile::ModelConfig {
+    use pradar::campaign::modelfile::{ModelConfig, Quantity};
+    let mut m = ModelConfig::table1_defaults();
+    m.intra_cluster_rate = Quantity::new(lambda, "1/ns", "exponential");
+    m.intra_cluster_aoa = Quantity::new(aoa_deg, "deg", "laplacian");
+    m.perimeter_offset = Quantity::new(0.4, "m", "exponential");
+    m.perimeter_spacing = Quantity::new(dc_m, "m", "exponential");
+    m.cluster_decay = Quantity::new(15.0, "ns", "exponential");
+    m.ray_decay = Quantity::new(4.0, "ns", "exponential");
+    m.rays_per_cluster = Quantity::new(5.0, "count", "poisson");
+    m
+}
