@@ -16,10 +16,11 @@
 //!   over the clusters whose reference lies 2·b̂₀ inside the sector (`aoa_groups`: near an
 //!   edge the rays beyond it are lost and the offsets read narrow);
 //! * Perimeter statistics look at the interior of what the pose observes (`Interior`: the
-//!   scanned sector less 20° at each edge, the detection range c·max_delay/2 less 1.5 m): a
-//!   cluster straddling the sector edge or the end of the delay window is seen in part, and
-//!   its location is off. d_p uses the clusters located in it; d_c the clusters whose
-//!   projections fall on the perimeter observed in it.
+//!   scanned sector less max(20°, 2·b̂₀) at each edge — the AoA's margin — and the
+//!   detection range c·max_delay/2 less 1.5 m): a cluster straddling the sector edge or the
+//!   end of the delay window is seen in part, and its location is off. d_p uses the
+//!   clusters located in it; d_c the clusters whose projections fall on the perimeter
+//!   observed in it.
 //! * d_p: distance of each cluster's location to the closest perimeter edge (projection
 //!   onto the layout perimeter). The location is the members' mean range c·τ/2 along the
 //!   reference (strongest) ray's bearing (see `cluster_location`).
@@ -47,14 +48,17 @@
 //!   - Reported in m and as ns one-way (m/c) and round-trip (2m/c).
 //! * Measured on `scripts/closed-loop` (120 m × 12 m hall, three sets; synth drew 39/35/25
 //!   clusters with mean offset 0.40/0.37/0.34 m and mean spacing 6.8/7.5/10.6 m):
-//!   - d_p (signed mean) on synth's truth reads 0.41/0.41/0.74 m; the chain reads
-//!     0.44/0.41/0.52 m. Folded at the wall they read 0.41/0.43/0.90 and 0.49/0.49/0.83 m;
-//!     without the interior 0.38/0.57/1.00 m on truth (folded). In the 16 m × 10 m hall, the
-//!     members' mean bearing and the folded distance read 0.44/0.42/0.80 m on truth (realised
-//!     offsets 0.42/0.17/0.25 m).
-//!   - d_c on truth reads 7.1/7.3/7.8 m; the chain reads 6.9/9.2/14.7 m (clustering merges
-//!     clusters, so fewer are counted). The largest-gap rule read 14.8/21.7/34.9 m (chain).
-//!   - 30° of AoA spread still carries clusters from outside the sector deep into it (set 3).
+//!   - d_p (signed mean) on synth's truth reads 0.41/0.42/0.58 m; the chain reads
+//!     0.44/0.43/0.48 m (with a 20° sector margin for every set: 0.41/0.41/0.74 m and
+//!     0.44/0.41/0.52 m). Folded at the wall, with the 20° margin, they read
+//!     0.41/0.43/0.90 and 0.49/0.49/0.83 m; without the interior 0.38/0.57/1.00 m on truth
+//!     (folded). In the 16 m × 10 m hall, the members' mean bearing and the folded distance
+//!     read 0.44/0.42/0.80 m on truth (realised offsets 0.42/0.17/0.25 m).
+//!   - d_c on truth reads 7.1/7.3/10.2 m; the chain reads 6.9/9.0/18.0 m (clustering merges
+//!     clusters, so fewer are counted; 20° margin: 7.1/7.3/7.8 and 6.9/9.2/14.7 m). The
+//!     largest-gap rule read 14.8/21.7/34.9 m (chain).
+//!   - 30° of AoA spread (b = 21°, a 42° margin) still carries clusters from outside the
+//!     sector into it (set 3).
 //! * Γ, γ: decay = −10·log10(e)/slope of power (dB) against delay.
 //!   - Γ: least-squares line (slope and intercept) of the clusters' total power against
 //!     their first arrival, both relative to the position's first cluster. Cluster powers
@@ -269,6 +273,13 @@ fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
         .collect()
 }
 
+/// A cluster's reference ray: its strongest member (the last of equals). `rs` is non-empty.
+fn strongest_of(rs: &[Ray]) -> &Ray {
+    rs.iter()
+        .max_by(|a, b| a.power_db.total_cmp(&b.power_db))
+        .expect("a cluster has members")
+}
+
 /// One-way range (m) of a round-trip delay (ns): c·τ/2.
 fn range_m(delay_ns: f64) -> f64 {
     delay_ns * 1e-9 * C0 / 2.0
@@ -324,13 +335,24 @@ fn bootstrap_block(m: &crate::campaign::manifest::Manifest) -> usize {
 }
 
 /// The interior of what a pose observes, for the perimeter statistics (d_p, d_c): the
-/// scanned sector shrunk by 20° at each edge (the zone where CLEAN fits edge signatures;
-/// at most a quarter of the sector) and the detection range c·max_delay/2 shrunk by 1.5 m
-/// (10 ns of delay; at most half the range). A cluster straddling the sector edge or the
-/// end of the delay window is seen only in part: its reference ray and mean range, hence
-/// its location, are off (on synth's truth in the long hall, by a median 3.8 m at the
-/// sector edges and 0.7 m beyond 11 m, against 0 inside). Clusters located outside the
-/// interior are left out of d_p and d_c, and the observed perimeter is cut the same way.
+/// scanned sector shrunk at each edge by max(20°, 2·b̂₀) (20°: the zone where CLEAN fits
+/// edge signatures; 2·b̂₀: the AoA's margin, [`aoa_margin`]; at most a quarter of the
+/// sector) and the detection range c·max_delay/2 shrunk by 1.5 m (10 ns of delay; at most
+/// half the range). A cluster straddling the sector edge or the end of the delay window is
+/// seen only in part: its reference ray and mean range, hence its location, are off (on
+/// synth's truth in the long hall, by a median 3.8 m at the sector edges and 0.7 m beyond
+/// 11 m, against 0 inside). Clusters located outside the interior are left out of d_p and
+/// d_c, and the observed perimeter is cut the same way.
+///
+/// Why the AoA's margin: a cluster whose own reference ray lies beyond the sector edge is
+/// seen through its other rays, and the strongest of those sits at a Laplacian offset from
+/// the cluster's bearing, so the location along it is off. On synth's truth (120 m hall,
+/// AoA std 16.9°, b = 12°, 50 draws of `tests/fit_coverage.rs`) such clusters were 4.0 % of
+/// those inside a 20° margin, located 1.35 m too far into the room on average (median
+/// 1.8 m): d_p read 0.452 m where the same clusters' drawn offsets average 0.394 m. With
+/// 2·b̂₀ (24°) they are 3.0 % and d_p reads 0.434 m; at 3·b̂₀ 1.5 % (0.417 m), at 3.5·b̂₀
+/// 1.2 % (0.411 m), each step leaving fewer clusters. Complete clusters read their drawn
+/// offset within 5 mm. A wider AoA spread (30°, b = 21°) moves the margin to 42°.
 struct Interior {
     lo_deg: f64,
     hi_deg: f64,
@@ -338,9 +360,11 @@ struct Interior {
 }
 
 impl Interior {
-    fn of(m: &crate::campaign::manifest::Manifest) -> Interior {
+    /// The interior with the sector shrunk by max(20°, `aoa_margin_deg`) at each edge (at
+    /// most a quarter of the sector).
+    fn of(m: &crate::campaign::manifest::Manifest, aoa_margin_deg: f64) -> Interior {
         let (lo, hi) = (m.directions.start_deg, m.directions.stop_deg);
-        let g = 20f64.min((hi - lo) / 4.0);
+        let g = 20f64.max(aoa_margin_deg).min((hi - lo) / 4.0);
         let r_max = range_m(m.processing.max_delay_ns);
         Interior {
             lo_deg: lo + g,
@@ -355,6 +379,14 @@ impl Interior {
     }
 }
 
+/// The sector-edge margin 2·b̂₀ (degrees), b̂₀ the Laplacian scale fitted to the AoA
+/// offsets of all clusters (0 when they cannot be fitted). A ray lies beyond 2b of its
+/// cluster's reference with probability e^{−2}/2 = 7 % on each side.
+fn aoa_margin(clusters: &[(usize, f64, Vec<f64>)]) -> f64 {
+    let all: Vec<f64> = clusters.iter().flat_map(|c| c.2.iter().copied()).collect();
+    fit(Family::Laplacian, &all).map_or(0.0, |f| 2.0 * f.params[1])
+}
+
 /// The AoA samples per position, from the clusters whose reference ray lies at least 2·b̂₀
 /// inside the scanned sector, b̂₀ the Laplacian scale fitted to all clusters (the margin
 /// at most a quarter of the sector; all clusters when none lies that far in). A cluster
@@ -363,12 +395,15 @@ impl Interior {
 /// 16.9°; the offsets synth drew have 18.8°) all clusters gave 18.1°, the 2·b̂ interior
 /// 18.8° (1·b̂: 18.6°, 3·b̂: 19.2°). A Laplacian tail beyond 2b holds e^{−2}/2 = 7 % of
 /// the rays.
-fn aoa_groups(clusters: &[(usize, f64, Vec<f64>)], np: usize, lo: f64, hi: f64) -> Groups {
-    let all: Vec<f64> = clusters.iter().flat_map(|c| c.2.iter().copied()).collect();
+fn aoa_groups(
+    clusters: &[(usize, f64, Vec<f64>)],
+    np: usize,
+    lo: f64,
+    hi: f64,
+    margin: f64,
+) -> Groups {
     let mut groups: Groups = vec![Vec::new(); np];
-    let margin = fit(Family::Laplacian, &all)
-        .map(|f| (2.0 * f.params[1]).min((hi - lo) / 4.0))
-        .unwrap_or(0.0);
+    let margin = margin.min((hi - lo) / 4.0);
     let inner = |a: f64| a >= lo + margin && a <= hi - margin;
     let any_inner = clusters.iter().any(|c| inner(c.1) && !c.2.is_empty());
     for (pos, reference, offsets) in clusters {
@@ -498,8 +533,6 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     }
     let mut first: Groups = vec![Vec::new(); np];
     let mut intra: Groups = vec![Vec::new(); np];
-    // (position, reference angle, offsets) per cluster; `aoa_groups` picks the inner ones
-    let mut aoa_by_cluster: Vec<(usize, f64, Vec<f64>)> = Vec::new();
     let mut dp: Groups = vec![Vec::new(); np];
     // the same offsets signed (negative beyond the perimeter): the value's estimate
     let mut dp_signed: Groups = vec![Vec::new(); np];
@@ -511,27 +544,33 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
     let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
     let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
     let lc = C0 / m.band.center_hz();
-    let region = Interior::of(m);
+    // (position, reference angle, offsets) per cluster, first: the offsets' Laplacian scale
+    // sets the sector margin of the AoA (`aoa_groups`) and of the perimeter statistics
+    let aoa_by_cluster: Vec<(usize, f64, Vec<f64>)> = by_cluster
+        .values()
+        .map(|rs| {
+            let strongest = strongest_of(rs);
+            let mut skipped = false;
+            let mut offsets = Vec::with_capacity(rs.len());
+            for r in rs {
+                if !skipped && std::ptr::eq(r, strongest) {
+                    skipped = true;
+                    continue;
+                }
+                offsets.push(r.angle_rel_deg - strongest.angle_rel_deg);
+            }
+            (rs[0].position, strongest.angle_rel_deg, offsets)
+        })
+        .collect();
+    let margin = aoa_margin(&aoa_by_cluster);
+    let region = Interior::of(m, margin);
     for rs in by_cluster.values() {
         let pos = rs[0].position;
         let mut d: Vec<f64> = rs.iter().map(|r| r.delay_ns).collect();
         d.sort_by(f64::total_cmp);
         first[pos].push(d[0]);
         intra[pos].extend(d.windows(2).map(|w| (w[1] - w[0]).max(delta)));
-        let strongest = rs
-            .iter()
-            .max_by(|a, b| a.power_db.total_cmp(&b.power_db))
-            .expect("non-empty");
-        let mut skipped = false;
-        let mut offsets = Vec::with_capacity(rs.len());
-        for r in rs {
-            if !skipped && std::ptr::eq(r, strongest) {
-                skipped = true;
-                continue;
-            }
-            offsets.push(r.angle_rel_deg - strongest.angle_rel_deg);
-        }
-        aoa_by_cluster.push((pos, strongest.angle_rel_deg, offsets));
+        let strongest = strongest_of(rs);
         let n = rs.len() as f64;
         let range = rs.iter().map(|r| range_m(r.delay_ns)).sum::<f64>() / n;
         let centroid = cluster_location(&m.poses[pos], range, strongest);
@@ -573,6 +612,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitParams) -> Res
         np,
         m.directions.start_deg,
         m.directions.stop_deg,
+        margin,
     );
     let mut inter: Groups = vec![Vec::new(); np];
     let mut dc: Groups = vec![Vec::new(); np];
@@ -1100,7 +1140,7 @@ mod tests {
         let st = observed_stretches(
             &layout,
             &c.manifest.poses[0],
-            &Interior::of(&c.manifest),
+            &Interior::of(&c.manifest, 0.0),
             0.1,
         );
         assert_eq!(st.len(), 1, "{st:?}");
@@ -1111,7 +1151,7 @@ mod tests {
         // of the side walls
         let mut m = c.manifest.clone();
         m.poses[0].x_m = 7.0;
-        let st = observed_stretches(&layout, &m.poses[0], &Interior::of(&m), 0.1);
+        let st = observed_stretches(&layout, &m.poses[0], &Interior::of(&m, 0.0), 0.1);
         let got: f64 = st.iter().map(|s| s.1 - s.0).sum();
         let want = 2.0 * 70f64.to_radians().tan();
         assert!(
