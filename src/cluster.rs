@@ -69,6 +69,12 @@
 //!   hierarchically nested groups: one far group, such as the echoes of a back wall, wins
 //!   K = 2. In the 120 m × 12 m hall (`HALL=long`, the script's default: more clusters per
 //!   position, overlapping in both delay and angle) it is 0.69/0.63/0.60, ARI 0.75/0.66/0.55.
+//! * K_max (default 8) caps K. Where a position's criterion still prefers the cap,
+//!   [`Clustering::positions_at_k_max`] names it, `pradar cluster` warns and the report
+//!   lists K per position: on the built-in corridor 11 of 12 positions end at 8, and with
+//!   K_max 12/16/24 the criterion takes up to 12/16/24 (Λ 0.28/0.33/0.41 per ns against
+//!   0.207 at 8; README "Corridor and K_max"). In synth's closed loop it binds at 3–7 of
+//!   ~230 positions.
 //! * Cost: the warm-started refits keep the corridor's clustering at 0.45 s (2 cores; with
 //!   ten k-means++ restarts per refit it was 1.0–1.2 s).
 //! * Summary per cluster: members, centroid delay and angles (member means), first arrival
@@ -793,6 +799,23 @@ pub struct Clustering {
     pub summary: Vec<ClusterSummary>,
     /// Per-position details (index = position).
     pub positions: Vec<PositionClustering>,
+}
+
+impl Clustering {
+    /// The positions whose chosen K is the cap `k_max` while their MPCs allowed more
+    /// (K_max < n − 1): there the criterion still preferred the largest K tried, so the
+    /// cluster count, and with it Λ, λ, the AoA spread and d_c, is set by K_max rather than
+    /// found. On the built-in corridor every position but one ends at K_max = 8 (its ~11
+    /// clutter clusters per position and the diffuse wall returns, a continuum, keep the
+    /// cross-validated likelihood rising up to K = 24).
+    pub fn positions_at_k_max(&self, k_max: usize) -> Vec<usize> {
+        self.positions
+            .iter()
+            .enumerate()
+            .filter(|(_, pc)| pc.k == k_max && pc.labels.len() > k_max + 1)
+            .map(|(p, _)| p)
+            .collect()
+    }
 }
 
 /// Cluster every position (positions in parallel; deterministic for any thread count).

@@ -505,6 +505,15 @@ fn run(cli: Cli) -> Result<()> {
             };
             let c = pradar::cluster::cluster(&m, &headings, &params)?;
             let summary = pradar::cluster::write(&out, &c)?;
+            let capped = c.positions_at_k_max(params.k_max);
+            if !capped.is_empty() {
+                eprintln!(
+                    "warning: K = K_max = {} at {} of {} positions (the criterion still preferred more clusters there; the counts are set by --k-max)",
+                    params.k_max,
+                    capped.len(),
+                    c.positions.len()
+                );
+            }
             if !quiet {
                 println!(
                     "{} clusters over {} positions -> {} and {}",

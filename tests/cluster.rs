@@ -186,3 +186,36 @@ fn edge_cases_never_panic() {
         .to_string()
         .contains("k_max"));
 }
+
+/// `positions_at_k_max` names the positions where the cap bound: three separated blobs at
+/// position 0 and one at position 1; K_max = 2 caps position 0 only, K_max = 8 none (the
+/// criterion finds 3 and 1). A position with too few MPCs for K_max + 1 is never capped.
+#[test]
+fn positions_at_k_max_names_where_the_cap_bound() {
+    let mut mpcs = Vec::new();
+    for (t0, a0) in [(10.0, -60.0), (40.0, 0.0), (70.0, 60.0)] {
+        for i in 0..10 {
+            let t = t0 + i as f64 * 0.7;
+            let a = a0 + ((i * 7) % 10) as f64 * 1.5 - 7.0;
+            mpcs.push(mpc(0, t, a, -60.0 - i as f64));
+        }
+    }
+    for i in 0..10 {
+        mpcs.push(mpc(
+            1,
+            20.0 + i as f64 * 0.7,
+            ((i * 3) % 10) as f64 - 5.0,
+            -60.0,
+        ));
+    }
+    mpcs.push(mpc(2, 30.0, 0.0, -60.0));
+    mpcs.push(mpc(2, 50.0, 40.0, -60.0));
+    let headings = [0.0; 3];
+    let capped = cluster(&mpcs, &headings, &ClusterParams::default().k_max(2)).unwrap();
+    assert_eq!(capped.positions[0].k, 2);
+    assert_eq!(capped.positions_at_k_max(2), vec![0]);
+    let free = cluster(&mpcs, &headings, &ClusterParams::default()).unwrap();
+    assert_eq!(free.positions[0].k, 3);
+    assert_eq!(free.positions[1].k, 1);
+    assert!(free.positions_at_k_max(8).is_empty());
+}

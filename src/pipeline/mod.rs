@@ -90,6 +90,7 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
             crate::fit::channel::write_table1(&out.join("table1.md"), f, truth.as_ref())?;
             let mut h = table1_html_rows(f, truth.as_ref());
             h.push_str("</table><p>From the simulated corridor's clusters; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n");
+            h.push_str(&k_cap_note(&clustering));
             for (name, d) in &f.details {
                 if d.samples.len() < 2 {
                     h.push_str(&format!("<p>{name}: fewer than 2 samples, no plot.</p>\n"));
@@ -388,6 +389,24 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     })
 }
 
+/// A paragraph on the K chosen per position, saying where K_max bound
+/// ([`cluster::Clustering::positions_at_k_max`]).
+fn k_cap_note(c: &cluster::Clustering) -> String {
+    let k_max = cluster::ClusterParams::default().k_max;
+    let ks: Vec<String> = c.positions.iter().map(|p| p.k.to_string()).collect();
+    let capped = c.positions_at_k_max(k_max);
+    let mut h = format!("<p>K chosen per position: {}.", ks.join(", "));
+    if !capped.is_empty() {
+        h.push_str(&format!(
+            " <b>K = K_max = {k_max} at {} of {} positions</b>: the criterion still preferred more clusters there, so the cluster counts, and with them Λ, λ, the AoA spread and d_c, are set by K_max rather than found (README, \"Corridor and K_max\").",
+            capped.len(),
+            c.positions.len()
+        ));
+    }
+    h.push_str("</p>\n");
+    h
+}
+
 /// Table 1 as HTML rows (ours, interval, family, KS p, AIC, paper, truth).
 fn table1_html_rows(
     f: &crate::fit::channel::ChannelFit,
@@ -452,5 +471,6 @@ fn geometry_only_table(c: &Campaign, dir: &Path, out: &Path, progress: Progress)
         mpcs.len(),
         clustering.summary.len()
     ));
+    h.push_str(&k_cap_note(&clustering));
     Ok(h)
 }
