@@ -51,6 +51,7 @@ enum KCriterion {
     ChannelBic,
     GaussBic,
     Cv,
+    CvShared,
 }
 
 #[derive(Subcommand)]
@@ -491,6 +492,7 @@ fn run(cli: Cli) -> Result<()> {
                     KCriterion::ChannelBic => pradar::cluster::Criterion::ChannelBic,
                     KCriterion::GaussBic => pradar::cluster::Criterion::GaussBic,
                     KCriterion::Cv => pradar::cluster::Criterion::CrossValidated,
+                    KCriterion::CvShared => pradar::cluster::Criterion::CrossValidatedShared,
                 });
             let headings: Vec<f64> = {
                 let np = m.iter().map(|x| x.position + 1).max().unwrap_or(0);

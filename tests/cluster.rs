@@ -90,6 +90,7 @@ fn k_recovered_on_table1_clusters() {
         Criterion::ChannelBic,
         Criterion::GaussBic,
         Criterion::CrossValidated,
+        Criterion::CrossValidatedShared,
     ] {
         let c = cluster(&mpcs, &[0.0; 60], &ClusterParams::default().criterion(crit)).unwrap();
         let within = k_true
