@@ -36,14 +36,16 @@
 //!     mixture with a Gaussian delay × Laplacian angle component: each MPC is scored by the
 //!     mixture fitted to K's partition without it, plus a "new cluster" term as in the
 //!     Chinese-restaurant predictive, ln[Σ_k n_k^{(−i)}/(n − 1 + α)·f_k^{(−i)}(τ_i, θ_i) +
-//!     α/(n − 1 + α)·g], g uniform over the position's delay span (at least 1 ns) × 180°,
+//!     α/(n − 1 + α)·g], g uniform over the position's delay span (at least 1 ns) × the
+//!     scanned sector (`sector_deg`, 180° by default),
 //!     α = `new_cluster_weight` (1, the usual default, not tuned). A cluster left with fewer
 //!     than 2 members drops out and its MPC is scored by the others and g. The largest
 //!     total wins, K = 1 included. No penalty term: the held-out MPC pays for over-fitting
 //!     itself. Without g, the MPC of a cluster of one or two (a single echo, a far object)
 //!     was scored by the distant other clusters alone, far below any cluster's density, so
-//!     every partition that isolated it lost to merging it. g assumes the half-plane
-//!     (180°), the DESIGN scan: `cluster` does not read the campaign's sector.
+//!     every partition that isolated it lost to merging it. The sector width comes from
+//!     the MPC table's `sector_deg` metadata (written by `extract` from the campaign's
+//!     directions; 180°, the DESIGN half-plane, when absent).
 //!   - `CrossValidatedShared` (`--criterion cv-shared`): the same leave-one-out score with
 //!     the delay standard deviation and the angular Laplacian scale shared by the clusters
 //!     of a position (pooled within-cluster MLEs over the clusters of two or more, the held-
@@ -173,6 +175,10 @@ pub struct ClusterParams {
     pub angle_res_deg: f64,
     /// Concentration α of the cross-validated criterion's "new cluster" term (0: none).
     pub new_cluster_weight: f64,
+    /// Width (degrees) of the scanned sector, over which the "new cluster" density is
+    /// uniform (default 180, the half-plane; `pradar cluster` takes it from the MPC table's
+    /// `sector_deg` metadata, which `extract` writes from the campaign's directions).
+    pub sector_deg: f64,
 }
 
 impl Default for ClusterParams {
@@ -188,6 +194,7 @@ impl Default for ClusterParams {
             delay_res_ns: 1.0 / 6.0,
             angle_res_deg: 5.0,
             new_cluster_weight: 1.0,
+            sector_deg: 180.0,
         }
     }
 }
@@ -206,6 +213,11 @@ impl ClusterParams {
     /// Builder: seed.
     pub fn seed(mut self, s: u64) -> Self {
         self.seed = s;
+        self
+    }
+    /// Builder: width of the scanned sector (degrees).
+    pub fn sector_deg(mut self, w: f64) -> Self {
+        self.sector_deg = w;
         self
     }
     /// Validate.
@@ -227,6 +239,9 @@ impl ClusterParams {
         }
         if !(self.new_cluster_weight >= 0.0 && self.new_cluster_weight.is_finite()) {
             return Err(Error::param("new_cluster_weight", "must be >= 0"));
+        }
+        if !(self.sector_deg > 0.0 && self.sector_deg <= 360.0) {
+            return Err(Error::param("sector_deg", "must lie in (0, 360]"));
         }
         Ok(())
     }
@@ -662,7 +677,7 @@ pub fn likelihood_criterion(
     };
     if criterion == Criterion::CrossValidated || shared {
         // the "new cluster" density g: uniform over the position's delay span (at least
-        // 1 ns) × the half-plane, entered with the Chinese-restaurant weight α/(n − 1 + α)
+        // 1 ns) × the scanned sector, entered with the Chinese-restaurant weight α/(n − 1 + α)
         let (lo, hi) = raw
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
@@ -670,7 +685,7 @@ pub fn likelihood_criterion(
             });
         let alpha = params.new_cluster_weight;
         let norm = (n - 1) as f64 + alpha;
-        let ln_new = (alpha / norm).ln() - ((hi - lo).max(1.0) * 180.0).ln();
+        let ln_new = (alpha / norm).ln() - ((hi - lo).max(1.0) * params.sector_deg).ln();
         let mut total = 0.0;
         for (i, p) in raw.iter().enumerate() {
             let own: Vec<usize> = members[labels[i]]
@@ -1097,6 +1112,33 @@ mod tests {
         assert!(silhouette(&x, &good, 2) > 0.95);
         assert!(silhouette(&x, &bad, 2) < 0.1);
         assert!(calinski_harabasz(&x, &good, 2) > 1e4 * calinski_harabasz(&x, &bad, 2).max(1e-9));
+    }
+
+    #[test]
+    fn new_cluster_density_spreads_over_the_scanned_sector() {
+        let x = [
+            [10.0, 0.0],
+            [10.5, 2.0],
+            [11.0, -1.0],
+            [11.5, 1.0],
+            [40.0, 30.0],
+        ];
+        let one = [0; 5];
+        let cv = |w: f64| {
+            likelihood_criterion(
+                &x,
+                &one,
+                Criterion::CrossValidated,
+                &ClusterParams::default().sector_deg(w),
+            )
+        };
+        // half the sector doubles g: each MPC's leave-one-out density gains between 0 and
+        // ln 2, so −2·ln L drops, by at most 2·5·ln 2
+        let (wide, narrow) = (cv(180.0), cv(90.0));
+        assert!(narrow < wide && wide - narrow <= 10.0 * 2f64.ln() + 1e-9);
+        for bad in [0.0, 400.0, f64::NAN] {
+            assert!(ClusterParams::default().sector_deg(bad).check().is_err());
+        }
     }
 
     #[test]

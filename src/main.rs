@@ -463,6 +463,10 @@ fn run(cli: Cli) -> Result<()> {
                 ("margin_db".into(), margin_db.to_string()),
                 ("dynamic_range_db".into(), dynamic_range_db.to_string()),
                 ("positions".into(), em.positions.to_string()),
+                (
+                    "sector_deg".into(),
+                    (c.manifest.directions.stop_deg - c.manifest.directions.start_deg).to_string(),
+                ),
             ];
             pradar::mpc::write_mpcs(&out, &mpcs, meta)?;
             if !quiet {
@@ -482,9 +486,11 @@ fn run(cli: Cli) -> Result<()> {
             criterion,
         } => {
             let m = pradar::mpc::read_mpcs(&mpcs)?;
+            let sector = pradar::mpc::read_sector_deg(&mpcs)?.unwrap_or(180.0);
             let params = pradar::cluster::ClusterParams::default()
                 .k_max(k_max)
                 .seed(seed)
+                .sector_deg(sector)
                 .criterion(match criterion {
                     KCriterion::Silhouette => pradar::cluster::Criterion::Silhouette,
                     KCriterion::Ch => pradar::cluster::Criterion::CalinskiHarabasz,

@@ -567,6 +567,22 @@ pub fn write_mpcs(path: &Path, mpcs: &[Mpc], meta: Vec<(String, String)>) -> Res
     table::write_parquet(path, &df, meta)
 }
 
+/// The scanned sector's width (degrees) recorded in an MPC table's `sector_deg` metadata by
+/// `extract`; None for tables written without it.
+pub fn read_sector_deg(path: &Path) -> Result<Option<f64>> {
+    let meta = table::parquet_metadata(path)?;
+    let Some((_, v)) = meta.iter().find(|(k, _)| k == "sector_deg") else {
+        return Ok(None);
+    };
+    match v.parse::<f64>() {
+        Ok(w) if w > 0.0 && w <= 360.0 => Ok(Some(w)),
+        _ => Err(Error::input(
+            path,
+            format!("metadata sector_deg = {v:?}: not a width in (0, 360] degrees"),
+        )),
+    }
+}
+
 /// Read an MPC table (extra columns such as `cluster_id` are ignored).
 pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
     let df = table::read_parquet(path, None)?;
@@ -599,4 +615,40 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_mpc() -> Mpc {
+        Mpc {
+            position: 0,
+            delay_ns: 20.0,
+            angle_rel_deg: 10.0,
+            angle_global_deg: 10.0,
+            power_db: -70.0,
+            snr_db: 30.0,
+            x_m: 2.9,
+            y_m: 0.5,
+            direction: 20,
+            bin: 120,
+        }
+    }
+
+    #[test]
+    fn sector_metadata_is_read_checked_or_absent() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.parquet");
+        write_mpcs(&p, &[one_mpc()], vec![("sector_deg".into(), "120".into())]).unwrap();
+        assert_eq!(read_sector_deg(&p).unwrap(), Some(120.0));
+        assert_eq!(read_mpcs(&p).unwrap(), vec![one_mpc()]);
+        write_mpcs(&p, &[one_mpc()], vec![]).unwrap();
+        assert_eq!(read_sector_deg(&p).unwrap(), None);
+        for bad in ["wide", "0", "400", "NaN"] {
+            write_mpcs(&p, &[one_mpc()], vec![("sector_deg".into(), bad.into())]).unwrap();
+            let e = read_sector_deg(&p).unwrap_err().to_string();
+            assert!(e.contains("sector_deg") && e.contains("m.parquet"), "{e}");
+        }
+    }
 }

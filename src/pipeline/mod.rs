@@ -374,7 +374,9 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
-    let clustering = cluster::cluster(&mpcs, &headings, &cluster::ClusterParams::default())?;
+    let d = &sc.manifest.directions;
+    let params = cluster::ClusterParams::default().sector_deg(d.stop_deg - d.start_deg);
+    let clustering = cluster::cluster(&mpcs, &headings, &params)?;
     let cp = work.join("clusters.parquet");
     cluster::write(&cp, &clustering)?;
     timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
