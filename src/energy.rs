@@ -1,4 +1,4 @@
-//! Energy matrices (DESIGN §2 "Energy matrix"): from S21 sweeps to E[position][direction][bin].
+//! Energy matrices (DESIGN §2 "Energy matrix"): from S21 sweeps to `E[position][direction][bin]`.
 //!
 //! Takes a campaign with `[sweeps]` (Touchstone or Parquet); gives the energy Parquet long
 //! table `position, direction, angle_rel_deg, angle_global_deg, bin, delay_ns, energy` with
@@ -156,7 +156,7 @@ impl EnergyProcessor {
         &self.band
     }
 
-    /// Scratch buffer for [`Self::profile`].
+    /// Scratch buffer for [`Self::profile_into`].
     pub fn scratch(&self) -> (Vec<Complex64>, Vec<Complex64>) {
         (
             vec![Complex64::new(0.0, 0.0); self.nfft],
@@ -321,7 +321,7 @@ impl EnergyMeta {
     }
 }
 
-/// An energy matrix E[position][direction][bin] with its axes.
+/// An energy matrix `E[position][direction][bin]` with its axes.
 #[derive(Debug, Clone)]
 pub struct EnergyMatrix {
     /// Metadata.

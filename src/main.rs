@@ -453,21 +453,7 @@ fn run(cli: Cli) -> Result<()> {
                 .margin_db(margin_db)
                 .dynamic_range_db(dynamic_range_db);
             let mpcs = pradar::mpc::extract(&em, &c, &params)?;
-            let meta = vec![
-                ("schema_version".to_string(), "1".to_string()),
-                (
-                    "method".into(),
-                    format!("{:?}", params.method).to_lowercase(),
-                ),
-                ("floor".into(), format!("{:.17e}", em.meta.noise_mean())),
-                ("margin_db".into(), margin_db.to_string()),
-                ("dynamic_range_db".into(), dynamic_range_db.to_string()),
-                ("positions".into(), em.positions.to_string()),
-                (
-                    "sector_deg".into(),
-                    (c.manifest.directions.stop_deg - c.manifest.directions.start_deg).to_string(),
-                ),
-            ];
+            let meta = pradar::mpc::table_metadata(&em, &c, &params);
             pradar::mpc::write_mpcs(&out, &mpcs, meta)?;
             if !quiet {
                 println!(

@@ -11,8 +11,10 @@
 //! The model, drawn once per run from the seed (so every pose sees the same clusters):
 //! * **clusters along the perimeter** ([`perimeter_walk`], shared with the simulator's
 //!   clutter): arc-length spacings ~ `perimeter_spacing` (d_c, its family), centroid offsets
-//!   ~ `perimeter_offset` (d_p) into the room; Λ is not drawn — it follows from the
-//!   geometry seen from each pose. A centre outside the free space is dropped;
+//!   ~ `perimeter_offset` (d_p) into the room, capped at 1.5 m as the simulator's clutter
+//!   (an exponential 0.4 m keeps a mean of 0.4·(1 − e^{−3.75}) = 0.391 m); Λ is not drawn
+//!   — it follows from the geometry seen from each pose. A centre outside the free space
+//!   is dropped;
 //! * **rays per cluster**: 1 + Poisson(`rays_per_cluster` − 1); excess delays τ_k with
 //!   exponential gaps of rate λ (`intra_cluster_rate`), τ_0 = 0; AoA offsets φ_k Laplacian
 //!   with std `intra_cluster_aoa` (scale b = std/√2), φ_0 = 0 (the reference ray);

@@ -5,7 +5,7 @@
 //! [`Mpc`] per extracted component: position, delay_ns, angle_rel_deg, angle_global_deg,
 //! power_db, x_m, y_m (plus the grid cell and the SNR).
 //!
-//! CLEAN, per position, on the residual R[d][b] (initially the energies):
+//! CLEAN, per position, on the residual `R[d][b]` (initially the energies):
 //! 1. floor F = N0·TW, the mean energy of a signal-free bin, from the energy table's
 //!    metadata (estimated by `energy` from the bins beyond `noise_from_ns`);
 //! 2. take the strongest cell (d*, b*); stop if R < F·10^(margin/10), if R is more than
@@ -565,6 +565,34 @@ pub fn mpc_frame(path: &Path, mpcs: &[Mpc]) -> Result<polars::prelude::DataFrame
 pub fn write_mpcs(path: &Path, mpcs: &[Mpc], meta: Vec<(String, String)>) -> Result<()> {
     let df = mpc_frame(path, mpcs)?;
     table::write_parquet(path, &df, meta)
+}
+
+/// File metadata of an MPC table (`extract`, and `reproduce`'s `work/mpcs.parquet`):
+/// schema version, method, the energy floor, margins, positions and the scanned sector's
+/// width (`sector_deg`, read back by [`read_sector_deg`] for `cluster`).
+pub fn table_metadata(
+    em: &EnergyMatrix,
+    c: &Campaign,
+    params: &ExtractParams,
+) -> Vec<(String, String)> {
+    vec![
+        ("schema_version".to_string(), "1".to_string()),
+        (
+            "method".into(),
+            format!("{:?}", params.method).to_lowercase(),
+        ),
+        ("floor".into(), format!("{:.17e}", em.meta.noise_mean())),
+        ("margin_db".into(), params.margin_db.to_string()),
+        (
+            "dynamic_range_db".into(),
+            params.dynamic_range_db.to_string(),
+        ),
+        ("positions".into(), em.positions.to_string()),
+        (
+            "sector_deg".into(),
+            c.manifest.directions.width_deg().to_string(),
+        ),
+    ]
 }
 
 /// The scanned sector's width (degrees) recorded in an MPC table's `sector_deg` metadata by

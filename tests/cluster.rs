@@ -190,7 +190,8 @@ fn edge_cases_never_panic() {
 
 /// `positions_at_k_max` names the positions where the cap bound: three separated blobs at
 /// position 0 and one at position 1; K_max = 2 caps position 0 only, K_max = 8 none (the
-/// criterion finds 3 and 1). A position with too few MPCs for K_max + 1 is never capped.
+/// criterion finds 3 and 1). Positions with too few MPCs for more than K_max clusters (two
+/// MPCs; three MPCs at K_max = 2) are never capped.
 #[test]
 fn positions_at_k_max_names_where_the_cap_bound() {
     let mut mpcs = Vec::new();
@@ -211,10 +212,20 @@ fn positions_at_k_max_names_where_the_cap_bound() {
     }
     mpcs.push(mpc(2, 30.0, 0.0, -60.0));
     mpcs.push(mpc(2, 50.0, 40.0, -60.0));
-    let headings = [0.0; 3];
+    // a pair and a far MPC: K = 2 is all n − 1 allows, so K_max = 2 is not what bound
+    for (t, a) in [(15.0, -70.0), (15.5, -69.0), (75.0, 70.0)] {
+        mpcs.push(mpc(3, t, a, -60.0));
+    }
+    let headings = [0.0; 4];
     let capped = cluster(&mpcs, &headings, &ClusterParams::default().k_max(2)).unwrap();
     assert_eq!(capped.positions[0].k, 2);
     assert_eq!(capped.positions_at_k_max(2), vec![0]);
+    let sil = ClusterParams::default()
+        .k_max(2)
+        .criterion(pradar::cluster::Criterion::Silhouette);
+    let by_silhouette = cluster(&mpcs, &headings, &sil).unwrap();
+    assert_eq!(by_silhouette.positions[3].k_tried, 2);
+    assert!(!by_silhouette.positions_at_k_max(2).contains(&3));
     let free = cluster(&mpcs, &headings, &ClusterParams::default()).unwrap();
     assert_eq!(free.positions[0].k, 3);
     assert_eq!(free.positions[1].k, 1);

@@ -149,6 +149,11 @@ pub struct Directions {
 }
 
 impl Directions {
+    /// Width of the scanned sector, degrees: stop − start, at least one step (a single
+    /// direction still sees a beam's width).
+    pub fn width_deg(&self) -> f64 {
+        (self.stop_deg - self.start_deg).max(self.step_deg)
+    }
     /// Number of directions.
     pub fn count(&self) -> usize {
         ((self.stop_deg - self.start_deg) / self.step_deg).round() as usize + 1

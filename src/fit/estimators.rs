@@ -70,8 +70,8 @@ impl Family {
 pub struct Fitted {
     /// Family.
     pub family: Family,
-    /// Parameters: exponential [rate]; shifted [rate]; Laplacian [location, scale];
-    /// Gaussian [mean, std]; log-normal [μ, σ]; gamma [shape, rate]; Rayleigh [σ].
+    /// Parameters: exponential `[rate]`; shifted `[rate]`; Laplacian `[location, scale]`;
+    /// Gaussian `[mean, std]`; log-normal `[μ, σ]`; gamma `[shape, rate]`; Rayleigh `[σ]`.
     pub params: Vec<f64>,
     /// Log-likelihood at the MLE.
     pub loglik: f64,

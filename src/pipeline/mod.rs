@@ -77,6 +77,7 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let Analysis {
         mpcs,
         clustering,
+        cluster_params,
         fit: fitted,
         timings: chain_timings,
     } = analyse(&sc, &em, &work, true)?;
@@ -90,7 +91,6 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
             crate::fit::channel::write_table1(&out.join("table1.md"), f, truth.as_ref())?;
             let mut h = table1_html_rows(f, truth.as_ref());
             h.push_str("</table><p>From the simulated corridor's clusters; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n");
-            h.push_str(&k_cap_note(&clustering));
             for (name, d) in &f.details {
                 if d.samples.len() < 2 {
                     h.push_str(&format!("<p>{name}: fewer than 2 samples, no plot.</p>\n"));
@@ -104,6 +104,7 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
         }
         Err(e) => format!("<p>fit failed: {}</p>", report::html_escape(&e.to_string())),
     };
+    let table1_html = format!("{}{table1_html}", k_cap_note(&clustering, &cluster_params));
     timings.push((
         "fit report (truth, plots)".into(),
         t.elapsed().as_secs_f64(),
@@ -295,7 +296,7 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
             ),
         ),
         (
-            "K per position (silhouette rule)".to_string(),
+            "K per position (cross-validated criterion)".to_string(),
             ks.join(", "),
         ),
     ]);
@@ -350,32 +351,35 @@ pub struct Analysis {
     pub mpcs: Vec<mpc::Mpc>,
     /// Their clustering.
     pub clustering: cluster::Clustering,
+    /// The clustering parameters used.
+    pub cluster_params: cluster::ClusterParams,
     /// The channel fit (Table 1, model file), or why it failed (too few clusters, say).
     pub fit: Result<crate::fit::channel::ChannelFit>,
     /// Stage timings, s.
     pub timings: Vec<(String, f64)>,
 }
 
-/// Run CLEAN (default parameters), K-means (silhouette rule) and the channel fit (default
+/// Run CLEAN (default parameters), K-means (default criterion, the campaign's sector) and
+/// the channel fit (default
 /// bootstrap) on an energy table of campaign `sc`, writing `work/clusters.parquet` and
 /// `work/clusters_summary.parquet` (and `work/mpcs.parquet` when `keep_mpcs`). Extraction or
 /// clustering errors are returned; a failed fit is kept in [`Analysis::fit`].
 pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -> Result<Analysis> {
     let mut timings = Vec::new();
     let t = Instant::now();
-    let mpcs = mpc::extract(em, sc, &mpc::ExtractParams::default())?;
+    let xp = mpc::ExtractParams::default();
+    let mpcs = mpc::extract(em, sc, &xp)?;
     if keep_mpcs {
         mpc::write_mpcs(
             &work.join("mpcs.parquet"),
             &mpcs,
-            vec![("schema_version".into(), "1".into())],
+            mpc::table_metadata(em, sc, &xp),
         )?;
     }
     timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
-    let d = &sc.manifest.directions;
-    let params = cluster::ClusterParams::default().sector_deg(d.stop_deg - d.start_deg);
+    let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
     let clustering = cluster::cluster(&mpcs, &headings, &params)?;
     let cp = work.join("clusters.parquet");
     cluster::write(&cp, &clustering)?;
@@ -386,6 +390,7 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     Ok(Analysis {
         mpcs,
         clustering,
+        cluster_params: params,
         fit,
         timings,
     })
@@ -393,8 +398,8 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
 
 /// A paragraph on the K chosen per position, saying where K_max bound
 /// ([`cluster::Clustering::positions_at_k_max`]).
-fn k_cap_note(c: &cluster::Clustering) -> String {
-    let k_max = cluster::ClusterParams::default().k_max;
+fn k_cap_note(c: &cluster::Clustering, params: &cluster::ClusterParams) -> String {
+    let k_max = params.k_max;
     let ks: Vec<String> = c.positions.iter().map(|p| p.k.to_string()).collect();
     let capped = c.positions_at_k_max(k_max);
     let mut h = format!("<p>K chosen per position: {}.", ks.join(", "));
@@ -465,6 +470,7 @@ fn geometry_only_table(c: &Campaign, dir: &Path, out: &Path, progress: Progress)
     energy::run(&sc, &e, &*cb)?;
     let em = EnergyMatrix::read(&e)?;
     let a = analyse(&sc, &em, dir, false)?;
+    let note = k_cap_note(&a.clustering, &a.cluster_params);
     let (mpcs, clustering, f) = (a.mpcs, a.clustering, a.fit?);
     crate::fit::channel::write_table1(&out.join("table1_geometry.md"), &f, None)?;
     let mut h = table1_html_rows(&f, None);
@@ -473,6 +479,6 @@ fn geometry_only_table(c: &Campaign, dir: &Path, out: &Path, progress: Progress)
         mpcs.len(),
         clustering.summary.len()
     ));
-    h.push_str(&k_cap_note(&clustering));
+    h.push_str(&note);
     Ok(h)
 }
