@@ -362,6 +362,19 @@ fn reproduce_writes_the_report() {
         assert_eq!(&bytes[1..4], b"PNG");
     }
     assert!(html.contains("Stage timings") && html.contains("simulate"));
+    // the K chosen per position and Table 1 against K_max: the default row, one row per
+    // larger cap, the truth row; every position's K at most its row's cap
+    assert!(html.contains("K chosen per position"));
+    let kmax = std::fs::read_to_string(out.join("table1_kmax.md")).unwrap();
+    let rows: Vec<&str> = kmax.lines().filter(|l| l.starts_with("| ")).collect();
+    assert_eq!(rows.len(), 6, "{kmax}");
+    for (row, cap) in rows[1..5].iter().zip([8usize, 12, 16, 24]) {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert!(cells[1].starts_with(&cap.to_string()), "{row}");
+        let hi: usize = cells[2].split(['–', ' ']).nth(1).unwrap().parse().unwrap();
+        assert!(hi <= cap, "{row}");
+    }
+    assert!(rows[5].contains("simulator truth"));
     // the experiments' sections, each with its panel and table
     for e in ["fig5", "fig6", "prior-sensitivity", "pose-noise"] {
         let png = format!("experiments/{e}/{e}.png");
