@@ -107,7 +107,6 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
     let table1_html = format!("{}{table1_html}", k_cap_note(&clustering, &cluster_params));
     let kmax_html = match k_max_sensitivity(
         &sc,
-        &mpcs,
         &clustering,
         &cluster_params,
         fitted.as_ref().ok(),
@@ -423,7 +422,6 @@ const K_MAX_TRIED: [usize; 3] = [12, 16, 24];
 /// table shows by how much (README "Corridor and K_max").
 fn k_max_sensitivity(
     sc: &Campaign,
-    mpcs: &[mpc::Mpc],
     base: &cluster::Clustering,
     params: &cluster::ClusterParams,
     default_fit: Option<&crate::fit::channel::ChannelFit>,
@@ -468,7 +466,7 @@ fn k_max_sensitivity(
             k_max: k,
             ..*params
         };
-        let c = cluster::cluster(mpcs, &headings, &p)?;
+        let c = cluster::cluster(&base.mpcs, &headings, &p)?;
         let path = work.join(format!("clusters_kmax{k}.parquet"));
         cluster::write(&path, &c)?;
         let f = crate::fit::channel::fit_channel(&path, sc, &Default::default()).ok();
