@@ -624,13 +624,11 @@ fn log_sum_exp(v: impl Iterator<Item = f64>) -> f64 {
     m + v.iter().map(|x| (x - m).exp()).sum::<f64>().ln()
 }
 
-/// Within-cluster sums of one cluster for the shared scales: [Σ (τ − mean τ)²,
-/// Σ |θ − median θ|, members], zero for a cluster of fewer than two (it has no spread).
-fn spread_sums(raw: &[[f64; 2]], m: &[usize]) -> [f64; 3] {
-    if m.len() < 2 {
-        return [0.0; 3];
-    }
-    let Some(c) = fit_component(raw, m, Family::GaussLaplace, [0.0, 0.0]) else {
+/// Within-cluster sums of one cluster for the shared scales about its fitted component `c`
+/// (mean delay, median angle): [Σ (τ − mean τ)², Σ |θ − median θ|, members], zero for a
+/// cluster of fewer than two (it has no spread).
+fn spread_sums(raw: &[[f64; 2]], m: &[usize], c: Option<&Component>) -> [f64; 3] {
+    let Some(c) = c.filter(|_| m.len() >= 2) else {
         return [0.0; 3];
     };
     let ss = m.iter().map(|&i| (raw[i][0] - c.delay.0).powi(2)).sum();
@@ -693,7 +691,11 @@ pub fn likelihood_criterion(
         let ln_new = (alpha / norm).ln() - ((hi - lo).max(1.0) * params.sector_deg).ln();
         // shared scales: each cluster's within sums and their total
         let csums: Vec<[f64; 3]> = if shared {
-            members.iter().map(|m| spread_sums(raw, m)).collect()
+            members
+                .iter()
+                .zip(&comps)
+                .map(|(m, c)| spread_sums(raw, m, c.as_ref()))
+                .collect()
         } else {
             Vec::new()
         };
@@ -716,7 +718,7 @@ pub fn likelihood_criterion(
             };
             // the pooled sums without MPC i: its cluster's full sums out, the rest in
             let scales = shared.then(|| {
-                let b = spread_sums(raw, &own);
+                let b = spread_sums(raw, &own, held.as_ref());
                 let a = &csums[labels[i]];
                 pooled_scales([0, 1, 2].map(|j| total_sums[j] - a[j] + b[j]), res)
             });
