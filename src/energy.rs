@@ -519,20 +519,7 @@ pub fn check_campaign(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()
     Ok(())
 }
 
-/// Wrap an angle to (−180, 180] degrees.
-///
-/// ```
-/// assert_eq!(pradar::energy::wrap_deg(270.0), -90.0);
-/// assert_eq!(pradar::energy::wrap_deg(-180.0), 180.0);
-/// ```
-pub fn wrap_deg(a: f64) -> f64 {
-    let r = a.rem_euclid(360.0);
-    if r > 180.0 {
-        r - 360.0
-    } else {
-        r
-    }
-}
+pub use crate::units::wrap_deg;
 
 /// Summary of an energy run.
 #[derive(Debug, Clone)]

@@ -9,13 +9,16 @@ pub mod campaign;
 pub mod cluster;
 pub mod energy;
 pub mod error;
+pub mod export;
 pub mod fit;
 pub mod io;
 pub mod mapping;
 pub mod model;
 pub mod mpc;
+pub mod params;
 pub mod pipeline;
 pub mod report;
 pub mod table;
+pub mod units;
 
 pub use error::{Error, Result};

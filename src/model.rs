@@ -52,7 +52,7 @@
 //! position, direction) (the noise), so the bytes do not depend on the thread count.
 
 use crate::campaign::layout::Layout;
-use crate::campaign::manifest::{Campaign, Steering, WindowKind, C0};
+use crate::campaign::manifest::{Campaign, Steering, WindowKind};
 use crate::campaign::modelfile::ModelConfig;
 use crate::campaign::pattern::{ArrayPattern, PatternTable};
 use crate::campaign::simulate::{
@@ -62,6 +62,7 @@ use crate::campaign::simulate::{
 use crate::energy::{self, EnergyProcessor};
 use crate::error::{Error, Result};
 use crate::table;
+use crate::units::{wrap_rad, C0};
 use geo::Coord;
 use num_complex::Complex64;
 use rand::SeedableRng;
@@ -185,7 +186,7 @@ impl ChannelModel {
             }
             let mean_depth_m = rays
                 .iter()
-                .map(|r| C0 * r.excess_ns * 1e-9 / 2.0)
+                .map(|r| crate::units::range_m(r.excess_ns))
                 .sum::<f64>()
                 / n as f64;
             clusters.push(ModelCluster {
@@ -215,7 +216,7 @@ impl ChannelModel {
                 continue;
             }
             let first = (r - c.mean_depth_m).max(0.05);
-            seen.push((l, 2.0 * first / C0, v.y.atan2(v.x)));
+            seen.push((l, crate::units::delay_s(first), v.y.atan2(v.x)));
         }
         let in_front = |th: f64| wrap_rad(th - heading).abs() < PI / 2.0;
         let Some(t0) = seen
@@ -226,7 +227,7 @@ impl ChannelModel {
         else {
             return Vec::new();
         };
-        let d0 = C0 * t0 / 2.0;
+        let d0 = crate::units::range_from_delay_s(t0);
         let re = 1.0 / ((4.0 * PI).powi(3) * d0.powi(4));
         let gamma_c = self.config.cluster_decay.value * 1e-9;
         let gamma_r = self.config.ray_decay.value;
@@ -237,7 +238,7 @@ impl ChannelModel {
             for r in &c.rays {
                 let tau = t + r.excess_ns * 1e-9;
                 let theta = th + r.aoa_rad;
-                let range = C0 * tau / 2.0;
+                let range = crate::units::range_from_delay_s(tau);
                 out.push(SeenRay {
                     cluster: l,
                     tau_s: tau,
@@ -267,10 +268,6 @@ pub struct SeenRay {
     pub amp2: f64,
     /// Where the echo maps to, m.
     pub pos: Coord<f64>,
-}
-
-fn wrap_rad(a: f64) -> f64 {
-    (a + PI).rem_euclid(2.0 * PI) - PI
 }
 
 /// The band-averaged pattern of one steering table: ḡ(θ) = Σ w(f)|F(θ,f)|²λ(f) / Σ w(f) and

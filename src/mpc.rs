@@ -42,11 +42,12 @@
 //! `peaks`: every cell that is a strict maximum of its 3×3 neighbourhood and above
 //! F·10^(margin/10) — no footprint, so side lobes and range side lobes become MPCs.
 
-use crate::campaign::manifest::{Campaign, Steering, C0};
+use crate::campaign::manifest::{Campaign, Steering};
 use crate::campaign::pattern::ArrayPattern;
-use crate::energy::{wrap_deg, EnergyMatrix, EnergyProcessor};
+use crate::energy::{EnergyMatrix, EnergyProcessor};
 use crate::error::{Error, Result};
 use crate::table;
+use crate::units::{db, wrap_deg};
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -258,10 +259,6 @@ fn parabola(lm: f64, l0: f64, lp: f64) -> f64 {
     }
 }
 
-fn db(x: f64) -> f64 {
-    10.0 * x.max(1e-300).log10()
-}
-
 /// Extract the MPCs of one position.
 fn extract_position(
     em: &EnergyMatrix,
@@ -287,7 +284,7 @@ fn extract_position(
         let delay_ns = ((b as f64 + db_) * tb).max(0.0);
         let angle_rel = em.angles_rel_deg[d] + dd * step;
         let glob = wrap_deg(pose.heading_deg + angle_rel);
-        let r = delay_ns * 1e-9 * C0 / 2.0;
+        let r = crate::units::range_m(delay_ns);
         Mpc {
             position: p,
             delay_ns,

@@ -54,7 +54,7 @@ pub fn energy_heatmap(
         em.angles_rel_deg[0] - step / 2.0,
         em.angles_rel_deg[nd - 1] + step / 2.0,
     );
-    let rmax = em.delay_ns(nb - 1) * 0.299_792_458 / 2.0;
+    let rmax = crate::units::range_m(em.delay_ns(nb - 1));
     {
         let root = BitMapBackend::new(&tmp, (640, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
@@ -78,7 +78,7 @@ pub fn energy_heatmap(
             .draw()
             .map_err(|e| plot_err(path, e))?;
         let db = |e: f64| (10.0 * (e.max(1e-300) / peak).log10()).max(floor_db);
-        let dr = em.meta.bin_width_ns * 0.299_792_458 / 2.0;
+        let dr = crate::units::range_m(em.meta.bin_width_ns);
         chart
             .draw_series((0..nd).flat_map(|d| {
                 let prof = em.profile(p, d);
@@ -251,6 +251,39 @@ pub fn html_escape(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+/// Render a [`Table`](crate::export::Table) as an HTML `<table>`: a header row of the
+/// displayed columns (their HTML header where set), one row per row, text escaped,
+/// [`Cell::Link`](crate::export::Cell::Link) cells as links.
+pub fn html_table(t: &crate::export::Table) -> String {
+    use crate::export::Cell;
+    let cols: Vec<usize> = (0..t.columns.len())
+        .filter(|&i| t.columns[i].displayed())
+        .collect();
+    let mut h = String::from("<table><tr>");
+    for &i in &cols {
+        let c = &t.columns[i];
+        let head = c.html_header.as_deref().unwrap_or(&c.header);
+        h.push_str(&format!("<th>{}</th>", html_escape(head)));
+    }
+    h.push_str("</tr>\n");
+    for r in &t.rows {
+        h.push_str("<tr>");
+        for &i in &cols {
+            match &r[i] {
+                Cell::Link { text, href } => h.push_str(&format!(
+                    "<td><a href=\"{}\">{}</a></td>",
+                    html_escape(href),
+                    html_escape(text)
+                )),
+                c => h.push_str(&format!("<td>{}</td>", html_escape(c.shown()))),
+            }
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n");
+    h
 }
 
 /// A section of the index page.

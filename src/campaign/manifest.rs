@@ -11,8 +11,7 @@ use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Speed of light in vacuum, m/s.
-pub const C0: f64 = 299_792_458.0;
+pub use crate::units::C0;
 
 /// Current manifest/energy schema version.
 pub const SCHEMA_VERSION: u32 = 1;

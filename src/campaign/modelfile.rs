@@ -118,11 +118,7 @@ impl ModelConfig {
             intra_cluster_rate: Quantity::new(0.43, "1/ns", "exponential"),
             intra_cluster_aoa: Quantity::new(16.9, "deg", "laplacian"),
             perimeter_offset: Quantity::new(0.3, "m", "exponential"),
-            perimeter_spacing: Quantity::new(
-                5.02e-9 * crate::campaign::manifest::C0,
-                "m",
-                "exponential",
-            ),
+            perimeter_spacing: Quantity::new(5.02e-9 * crate::units::C0, "m", "exponential"),
             cluster_decay: Quantity::new(12.0, "ns", "exponential"),
             ray_decay: Quantity::new(3.0, "ns", "exponential"),
             rays_per_cluster: Quantity::new(6.0, "count", "poisson"),

@@ -265,10 +265,7 @@ impl PatternTable {
     }
 }
 
-/// Convert a power ratio to dB.
-pub fn db(x: f64) -> f64 {
-    10.0 * x.log10()
-}
+pub use crate::units::db;
 
 /// Half-power beamwidth (one-way, degrees) and first side-lobe level (dB relative to the
 /// peak) of a pattern cut `g(θ)` (linear power, θ in rad) with its peak at `theta0`.

@@ -441,7 +441,7 @@ impl Scene {
                         // drawn for the reference ray too (keeps the stream)
                         let lap = laplace(rng, b);
                         let lap = if r == 0 { 0.0 } else { lap };
-                        let depth = C0 * tau * 1e-9 / 2.0;
+                        let depth = crate::units::range_m(tau);
                         let lateral = d_ref * lap.tan();
                         let pos = Coord {
                             x: centre.x - nrm.x * depth + tangent.x * lateral,
@@ -517,7 +517,7 @@ impl Scene {
                     return None;
                 }
                 Some(Path1 {
-                    tau_s: 2.0 * r / C0,
+                    tau_s: crate::units::delay_s(r),
                     theta: d.y.atan2(d.x),
                     amp,
                     scatterer: i,
@@ -544,7 +544,7 @@ impl Scene {
                 }
                 let gamma = self.cfg.material(&w.material).gamma();
                 out.push(Path1 {
-                    tau_s: 2.0 * d / C0,
+                    tau_s: crate::units::delay_s(d),
                     theta: (-v.y).atan2(-v.x),
                     amp: gamma / (4.0 * PI * 2.0 * d),
                     scatterer: usize::MAX,

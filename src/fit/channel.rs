@@ -282,7 +282,7 @@ fn strongest_of(rs: &[Ray]) -> &Ray {
 
 /// One-way range (m) of a round-trip delay (ns): c·τ/2.
 fn range_m(delay_ns: f64) -> f64 {
-    delay_ns * 1e-9 * C0 / 2.0
+    crate::units::range_m(delay_ns)
 }
 
 /// A cluster's location seen from `pose`: the members' mean range (c·τ/2) along the bearing
@@ -1105,7 +1105,7 @@ mod tests {
             let (r, bearing) = (f64::hypot(x, y), f64::atan2(y, x).to_degrees());
             let excess = [0.0, 1.5, 3.2];
             let depth = excess.iter().map(|t| range_m(*t)).sum::<f64>() / 3.0;
-            let t0 = 2.0 * (r - depth) / C0 * 1e9;
+            let t0 = crate::units::delay_ns(r - depth);
             for (t, a, dp) in [(0.0, 0.0, 0.0), (1.5, 5.0, -3.0), (3.2, -4.0, -7.0)] {
                 rays.push(Ray {
                     position,

@@ -32,9 +32,10 @@
 //! pass of a mapper; [`ObservationModel::beams`] builds one pose's beams in parallel.
 
 use crate::campaign::layout::GridSpec;
-use crate::campaign::manifest::{Manifest, Pose, Steering, C0};
+use crate::campaign::manifest::{Manifest, Pose, Steering};
 use crate::campaign::pattern::ArrayPattern;
 use crate::error::{Error, Result};
+use crate::units::{wrap_rad, C0};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -115,15 +116,6 @@ struct GainModel {
     gmax: Vec<f64>,
     /// Per direction: device-frame angle intervals (rad, within (−π, π]) where w ≥ floor.
     intervals: Vec<Vec<(f64, f64)>>,
-}
-
-fn wrap_rad(a: f64) -> f64 {
-    let r = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if r <= -PI {
-        r + 2.0 * PI
-    } else {
-        r
-    }
 }
 
 fn lookup(table: &[f64], deg: f64) -> f64 {
@@ -359,7 +351,7 @@ impl ObservationModel {
 
     /// Largest range covered by the bins, m.
     pub fn max_range_m(&self) -> f64 {
-        (self.bins as f64 - 0.5) * self.bin_width_s * C0 / 2.0
+        crate::units::range_from_delay_s((self.bins as f64 - 0.5) * self.bin_width_s)
     }
 
     /// Two-way weight of direction `d` towards relative bearing `theta_rel` (rad).
@@ -378,7 +370,9 @@ impl ObservationModel {
         let pose = self.poses[p];
         let spec = &self.spec;
         let rmax = self.max_range_m();
-        let rmin = (self.min_bin as f64 - 0.5).max(0.0) * self.bin_width_s * C0 / 2.0;
+        let rmin = crate::units::range_from_delay_s(
+            (self.min_bin as f64 - 0.5).max(0.0) * self.bin_width_s,
+        );
         let heading = pose.heading_deg.to_radians();
         let s = self.params.subsamples;
         let inv = 1.0 / (s * s) as f64;

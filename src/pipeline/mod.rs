@@ -145,12 +145,7 @@ pub fn reproduce(opts: &ReproduceOptions, progress: Progress) -> Result<PathBuf>
         let marks: Vec<(f64, f64)> = mpcs
             .iter()
             .filter(|m| m.position == p)
-            .map(|m| {
-                (
-                    m.angle_rel_deg,
-                    m.delay_ns * 1e-9 * crate::campaign::manifest::C0 / 2.0,
-                )
-            })
+            .map(|m| (m.angle_rel_deg, crate::units::range_m(m.delay_ns)))
             .collect();
         report::energy_heatmap(
             &em,
