@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pradar::campaign::manifest::{Campaign, SweepFormat};
+use pradar::params::ParamGuard;
 use pradar::pipeline::experiment::ExperimentParams;
 use std::path::PathBuf;
 
@@ -554,8 +555,9 @@ fn run(cli: Cli) -> Result<()> {
                 campaign,
                 elements,
                 experiments: !skip_experiments,
-                experiment_params: ExperimentParams::default().seeds(seeds),
-            };
+                experiment_params: ExperimentParams::default().seeds(seeds).check()?,
+            }
+            .check()?;
             let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
             let index = pradar::pipeline::reproduce(&opts, &progress)?;
             if !quiet {
@@ -581,7 +583,7 @@ fn run(cli: Cli) -> Result<()> {
                 energy,
                 model,
             };
-            let params = ExperimentParams::default().seeds(seeds);
+            let params = ExperimentParams::default().seeds(seeds).check()?;
             let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
             let results = run_experiments(&which, &inputs, &params, &out, &progress)?;
             if !quiet {

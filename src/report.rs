@@ -3,12 +3,19 @@
 //!
 //! Takes energy matrices, campaign summaries and stage timings; gives per-position heat maps
 //! (range vs direction, dB relative to the position's peak) and the index page.
+//!
+//! All HTML lives here: the shared pieces ([`html_escape`], [`html_table`] for an
+//! [`export::Table`](crate::export::Table), [`kv_table`], [`write_index`]) in this file; the
+//! `reproduce` page in [`reproduce`], the experiments' sections and page in [`experiments`].
 
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
+
+pub mod experiments;
+pub mod reproduce;
 
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
@@ -77,7 +84,7 @@ pub fn energy_heatmap(
             .label_style(("sans-serif", 12))
             .draw()
             .map_err(|e| plot_err(path, e))?;
-        let db = |e: f64| (10.0 * (e.max(1e-300) / peak).log10()).max(floor_db);
+        let db = |e: f64| crate::units::db(e.max(1e-300) / peak).max(floor_db);
         let dr = crate::units::range_m(em.meta.bin_width_ns);
         chart
             .draw_series((0..nd).flat_map(|d| {
@@ -325,6 +332,9 @@ pub fn write_index(path: &Path, title: &str, sections: &[Section]) -> Result<()>
 
 /// Histogram of `samples` (density-normalised) with the fitted pdf, and the empirical vs
 /// fitted CDF beside it.
+///
+/// The x range is the 0.5 % to 99.5 % quantiles (from 0 when the samples are non-negative),
+/// with √n bins (5 to 40); the pdf and CDF are drawn on 201 points of that range.
 pub fn fit_plot(
     path: &Path,
     title: &str,
@@ -340,95 +350,136 @@ pub fn fit_plot(
     let tmp = crate::io::temp_path(path).with_extension("png");
     let mut v = samples.to_vec();
     v.sort_by(f64::total_cmp);
-    let lo = v[(v.len() as f64 * 0.005) as usize].min(0.0_f64.max(v[0]));
-    let hi = v[((v.len() - 1) as f64 * 0.995) as usize];
-    let (lo, hi) = if hi > lo {
-        (lo, hi)
-    } else {
-        (lo - 1.0, lo + 1.0)
-    };
-    let nbins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 40);
-    let w = (hi - lo) / nbins as f64;
-    let mut counts = vec![0usize; nbins];
-    for &x in &v {
-        if x >= lo && x <= hi {
-            counts[(((x - lo) / w) as usize).min(nbins - 1)] += 1;
-        }
-    }
-    let dens: Vec<f64> = counts
-        .iter()
-        .map(|&c| c as f64 / (v.len() as f64 * w))
-        .collect();
+    let hist = Histogram::of(&v);
+    let (lo, hi) = (hist.lo, hist.hi);
     let grid: Vec<f64> = (0..=200)
         .map(|i| lo + (hi - lo) * i as f64 / 200.0)
         .collect();
-    let pdf: Vec<f64> = grid.iter().map(|&x| fitted.pdf(x)).collect();
-    let ymax = dens
-        .iter()
-        .chain(&pdf)
-        .cloned()
-        .fold(0.0, f64::max)
-        .max(1e-12)
-        * 1.1;
+    let pdf: Vec<(f64, f64)> = grid.iter().map(|&x| (x, fitted.pdf(x))).collect();
+    let cdf: Vec<(f64, f64)> = grid.iter().map(|&x| (x, fitted.cdf(x))).collect();
     {
         let root = BitMapBackend::new(&tmp, (900, 360)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let (left, right) = root.split_horizontally(450);
-        let mut c1 = ChartBuilder::on(&left)
-            .caption(
-                format!("{title}: histogram, fitted {}", fitted.family.name()),
-                ("sans-serif", 14),
-            )
-            .margin(8)
-            .x_label_area_size(35)
-            .y_label_area_size(50)
-            .build_cartesian_2d(lo..hi, 0.0..ymax)
-            .map_err(|e| plot_err(path, e))?;
-        c1.configure_mesh()
-            .x_desc(unit)
-            .y_desc("density")
-            .label_style(("sans-serif", 11))
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
-        c1.draw_series(dens.iter().enumerate().map(|(i, &d)| {
-            let x0 = lo + i as f64 * w;
-            Rectangle::new(
-                [(x0, 0.0), (x0 + w, d)],
-                RGBColor(31, 119, 180).mix(0.5).filled(),
-            )
-        }))
-        .map_err(|e| plot_err(path, e))?;
-        c1.draw_series(line_path(
-            grid.iter().cloned().zip(pdf.iter().cloned()),
-            RED.stroke_width(2),
-        ))
-        .map_err(|e| plot_err(path, e))?;
-        let mut c2 = ChartBuilder::on(&right)
-            .caption("empirical vs fitted CDF", ("sans-serif", 14))
-            .margin(8)
-            .x_label_area_size(35)
-            .y_label_area_size(40)
-            .build_cartesian_2d(lo..hi, 0.0..1.0)
-            .map_err(|e| plot_err(path, e))?;
-        c2.configure_mesh()
-            .x_desc(unit)
-            .label_style(("sans-serif", 11))
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
-        let n = v.len() as f64;
-        c2.draw_series(line_path(
-            v.iter().enumerate().map(|(i, &x)| (x, (i + 1) as f64 / n)),
-            BLACK.stroke_width(1),
-        ))
-        .map_err(|e| plot_err(path, e))?;
-        c2.draw_series(line_path(
-            grid.iter().map(|&x| (x, fitted.cdf(x))),
-            RED.stroke_width(2),
-        ))
-        .map_err(|e| plot_err(path, e))?;
+        let caption = format!("{title}: histogram, fitted {}", fitted.family.name());
+        draw_histogram(&left, path, &caption, unit, &hist, &pdf)?;
+        draw_cdfs(&right, path, unit, (lo, hi), &v, &cdf)?;
         root.present().map_err(|e| plot_err(path, e))?;
     }
     std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// A density-normalised histogram of sorted samples.
+struct Histogram {
+    /// Range start.
+    lo: f64,
+    /// Range end.
+    hi: f64,
+    /// Bin width.
+    w: f64,
+    /// Density per bin.
+    dens: Vec<f64>,
+}
+
+impl Histogram {
+    /// The histogram of sorted samples `v` (at least 2) over their 0.5–99.5 % range.
+    fn of(v: &[f64]) -> Histogram {
+        let lo = v[(v.len() as f64 * 0.005) as usize].min(0.0_f64.max(v[0]));
+        let hi = v[((v.len() - 1) as f64 * 0.995) as usize];
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo - 1.0, lo + 1.0)
+        };
+        let nbins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 40);
+        let w = (hi - lo) / nbins as f64;
+        let mut counts = vec![0usize; nbins];
+        for &x in v {
+            if x >= lo && x <= hi {
+                counts[(((x - lo) / w) as usize).min(nbins - 1)] += 1;
+            }
+        }
+        let dens = counts
+            .iter()
+            .map(|&c| c as f64 / (v.len() as f64 * w))
+            .collect();
+        Histogram { lo, hi, w, dens }
+    }
+}
+
+/// The left chart of [`fit_plot`]: the histogram and the fitted pdf (red).
+fn draw_histogram(
+    area: &DrawingArea<BitMapBackend, plotters::coord::Shift>,
+    path: &Path,
+    caption: &str,
+    unit: &str,
+    hist: &Histogram,
+    pdf: &[(f64, f64)],
+) -> Result<()> {
+    let (lo, hi, w) = (hist.lo, hist.hi, hist.w);
+    let ymax = (hist.dens.iter())
+        .chain(pdf.iter().map(|p| &p.1))
+        .cloned()
+        .fold(0.0, f64::max)
+        .max(1e-12)
+        * 1.1;
+    let mut c1 = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 14))
+        .margin(8)
+        .x_label_area_size(35)
+        .y_label_area_size(50)
+        .build_cartesian_2d(lo..hi, 0.0..ymax)
+        .map_err(|e| plot_err(path, e))?;
+    c1.configure_mesh()
+        .x_desc(unit)
+        .y_desc("density")
+        .label_style(("sans-serif", 11))
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    c1.draw_series(hist.dens.iter().enumerate().map(|(i, &d)| {
+        let x0 = lo + i as f64 * w;
+        Rectangle::new(
+            [(x0, 0.0), (x0 + w, d)],
+            RGBColor(31, 119, 180).mix(0.5).filled(),
+        )
+    }))
+    .map_err(|e| plot_err(path, e))?;
+    c1.draw_series(line_path(pdf.iter().cloned(), RED.stroke_width(2)))
+        .map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
+
+/// The right chart of [`fit_plot`]: the empirical CDF of sorted `v` (black) and the fitted
+/// CDF (red).
+fn draw_cdfs(
+    area: &DrawingArea<BitMapBackend, plotters::coord::Shift>,
+    path: &Path,
+    unit: &str,
+    (lo, hi): (f64, f64),
+    v: &[f64],
+    cdf: &[(f64, f64)],
+) -> Result<()> {
+    let mut c2 = ChartBuilder::on(area)
+        .caption("empirical vs fitted CDF", ("sans-serif", 14))
+        .margin(8)
+        .x_label_area_size(35)
+        .y_label_area_size(40)
+        .build_cartesian_2d(lo..hi, 0.0..1.0)
+        .map_err(|e| plot_err(path, e))?;
+    c2.configure_mesh()
+        .x_desc(unit)
+        .label_style(("sans-serif", 11))
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    let n = v.len() as f64;
+    c2.draw_series(line_path(
+        v.iter().enumerate().map(|(i, &x)| (x, (i + 1) as f64 / n)),
+        BLACK.stroke_width(1),
+    ))
+    .map_err(|e| plot_err(path, e))?;
+    c2.draw_series(line_path(cdf.iter().cloned(), RED.stroke_width(2)))
+        .map_err(|e| plot_err(path, e))?;
+    Ok(())
 }
 
 fn line_path(

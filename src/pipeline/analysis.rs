@@ -1,0 +1,75 @@
+//! The analysis chain on one energy table: CLEAN → K-means → channel fit ([`analyse`]).
+//!
+//! Every stage runs with its defaults (the clustering with the campaign's angular sector),
+//! so `reproduce`, its geometry-only table and the experiments' model fit are the same
+//! chain. A failed fit (too few clusters, say) is kept as a value, not raised, so the report
+//! can say why.
+
+use crate::campaign::manifest::Campaign;
+use crate::energy::EnergyMatrix;
+use crate::error::Result;
+use crate::{cluster, mpc};
+use std::path::Path;
+use std::time::Instant;
+
+/// What the analysis chain (CLEAN → K-means → fit) gave for one energy table.
+pub struct Analysis {
+    /// Extracted MPCs.
+    pub mpcs: Vec<mpc::Mpc>,
+    /// Their clustering.
+    pub clustering: cluster::Clustering,
+    /// The clustering parameters used.
+    pub cluster_params: cluster::ClusterParams,
+    /// The channel fit (Table 1, model file), or why it failed (too few clusters, say).
+    pub fit: Result<crate::fit::channel::ChannelFit>,
+    /// Stage timings, s.
+    pub timings: Vec<(String, f64)>,
+}
+
+/// Run CLEAN (default parameters), K-means (default criterion, the campaign's sector) and
+/// the channel fit (default bootstrap) on an energy table of campaign `sc`, writing
+/// `work/clusters.parquet` and `work/clusters_summary.parquet` (and `work/mpcs.parquet` when
+/// `keep_mpcs`). Extraction or clustering errors are returned; a failed fit is kept in
+/// [`Analysis::fit`].
+///
+/// ```no_run
+/// use pradar::campaign::manifest::Campaign;
+/// use pradar::energy::EnergyMatrix;
+/// use std::path::Path;
+/// let sc = Campaign::load(Path::new("work/simulated/campaign.toml"))?;
+/// let em = EnergyMatrix::read(Path::new("work/energy.parquet"))?;
+/// let a = pradar::pipeline::analyse(&sc, &em, Path::new("work"), true)?;
+/// println!("{} MPCs in {} clusters", a.mpcs.len(), a.clustering.summary.len());
+/// # Ok::<(), pradar::error::Error>(())
+/// ```
+pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -> Result<Analysis> {
+    let mut timings = Vec::new();
+    let t = Instant::now();
+    let xp = mpc::ExtractParams::default();
+    let mpcs = mpc::extract(em, sc, &xp)?;
+    if keep_mpcs {
+        mpc::write_mpcs(
+            &work.join("mpcs.parquet"),
+            &mpcs,
+            mpc::table_metadata(em, sc, &xp),
+        )?;
+    }
+    timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
+    let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
+    let clustering = cluster::cluster(&mpcs, &headings, &params)?;
+    let cp = work.join("clusters.parquet");
+    cluster::write(&cp, &clustering)?;
+    timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());
+    timings.push(("fit (Table 1)".into(), t.elapsed().as_secs_f64()));
+    Ok(Analysis {
+        mpcs,
+        clustering,
+        cluster_params: params,
+        fit,
+        timings,
+    })
+}

@@ -1,0 +1,58 @@
+//! fig5: EKF maps at the campaign's array from the simulated sweeps and from model data
+//! (every seed), side by side with the reference.
+
+use super::lab::{join, mean, CaseFigures, DataSource, Lab};
+use super::ExperimentResult;
+use crate::error::Result;
+use crate::report;
+
+impl Lab<'_> {
+    pub(super) fn fig5(&mut self) -> Result<ExperimentResult> {
+        let n = self.campaign_elements;
+        let mut cases = vec![self.base_case(DataSource::Sweeps, n, "ekf")];
+        for s in self.seeds() {
+            cases.push(self.base_case(DataSource::Model(s), n, "ekf"));
+        }
+        let done = self.map_all("fig5", &cases)?;
+        let tiles = vec![
+            self.reference_tile(),
+            self.tile(
+                format!("EKF, simulated sweeps: ψ {:.2}", done[0].0.psi_whole),
+                &done[0].1,
+            ),
+            self.tile(
+                format!(
+                    "EKF, model data (seed {}): ψ {:.2}",
+                    self.params.seeds[0], done[1].0.psi_whole
+                ),
+                &done[1].1,
+            ),
+        ];
+        self.panel("fig5", &tiles, 3)?;
+        let model_psi: Vec<f64> = done[1..].iter().map(|d| d.0.psi_whole).collect();
+        let findings = vec![
+            (
+                "ψ whole, simulated sweeps".to_string(),
+                format!("{:.3}", done[0].0.psi_whole),
+            ),
+            (
+                "ψ whole, model data (mean over seeds)".to_string(),
+                format!("{:.3} ({})", mean(&model_psi), join(&model_psi, 3)),
+            ),
+            (
+                "ψ whole, all-free map".to_string(),
+                format!("{:.3}", done[0].0.all_free_psi_whole),
+            ),
+        ];
+        let cases: Vec<CaseFigures> = done.into_iter().map(|d| d.0).collect();
+        let keys: Vec<&str> = cases.iter().take(2).map(|c| c.key.as_str()).collect();
+        let extra = report::experiments::ekf_mean_figures(&keys);
+        Ok(self.result(
+            "fig5",
+            &format!("EKF maps ({n} elements, the campaign's array) from the simulated sweeps and from model data (synth with the model file), 0.1 m cells. Colours: black occupied in both, red false occupied, blue missed occupied, white free, grey outside (free in the map)."),
+            cases,
+            findings,
+            &extra,
+        ))
+    }
+}

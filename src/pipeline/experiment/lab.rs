@@ -1,0 +1,507 @@
+//! What the experiments share: the cases ([`Case`], one map each), their scoring
+//! ([`CaseFigures`]), the result of one experiment ([`ExperimentResult`]) with its case
+//! table, and the [`Lab`] that makes model data and sweeps, maps every case once per
+//! process and writes each experiment's files.
+//!
+//! Scoring: ψ, F1 and the wrong-cell count of a map on three regions (module docs of
+//! [`super`]): the whole map and the observable region come from the map's own metrics
+//! (`metrics.json`); the interior is the reference's known cells (not
+//! [`CellClass::Outside`]), evaluated here with [`crate::mapping::metrics::evaluate`]. A
+//! wrong-cell count is the metric's rate times the region's cells, rounded.
+
+use super::super::Progress;
+use super::{Experiment, ExperimentInputs, ExperimentValid};
+use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
+use crate::campaign::manifest::{Campaign, SweepFormat};
+use crate::campaign::modelfile::ModelConfig;
+use crate::campaign::simulate::simulate;
+use crate::energy;
+use crate::error::{Error, Result};
+use crate::export::{Cell, Column, Table};
+use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, PoseNoise};
+use crate::mapping::{EkfParams, Method, OgParams};
+use crate::model::{synth, SynthParams};
+use crate::report::{self, MapTile, Section};
+use serde::Serialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Where a map's data come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum DataSource {
+    /// The campaign's sweeps (simulated or measured).
+    Sweeps,
+    /// `synth` with the model file, this seed.
+    Model(u64),
+}
+
+/// One map of an experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Case {
+    /// Data.
+    pub source: DataSource,
+    /// Array elements.
+    pub elements: usize,
+    /// Mapper (`og` or `ekf`).
+    pub method: &'static str,
+    /// OG prior p0.
+    pub og_prior: f64,
+    /// EKF prior mean μ0, m.
+    pub mu0: f64,
+    /// Pose noise given to the mapper.
+    pub pose_noise: PoseNoise,
+}
+
+impl Case {
+    /// Folder name under `maps/`: data, N, mapper, and whatever differs from the base.
+    pub fn key(&self, base: &ExperimentValid) -> String {
+        let mut k = match self.source {
+            DataSource::Sweeps => format!("sweeps_n{}_{}", self.elements, self.method),
+            DataSource::Model(s) => format!("model_s{s}_n{}_{}", self.elements, self.method),
+        };
+        if self.method == "og" && self.og_prior != base.og.prior {
+            k.push_str(&format!("_prior{:.3}", self.og_prior));
+        }
+        if self.method == "ekf" && self.mu0 != base.ekf.mu0 {
+            k.push_str(&format!("_mu{:.4}", self.mu0));
+        }
+        if self.pose_noise.position_m > 0.0 {
+            k.push_str(&format!("_pos{:.0}mm", self.pose_noise.position_m * 1000.0));
+        }
+        if self.pose_noise.heading_deg > 0.0 {
+            k.push_str(&format!("_hdg{:.1}deg", self.pose_noise.heading_deg));
+        }
+        k
+    }
+}
+
+/// Figures of one map (see the module docs for the three regions).
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseFigures {
+    /// Folder under `maps/`.
+    pub key: String,
+    /// The case.
+    pub case: Case,
+    /// ψ on the whole map, cells.
+    pub psi_whole: f64,
+    /// ψ on the observable region, cells.
+    pub psi_observable: f64,
+    /// Occupied F1 on the whole map.
+    pub f1_whole: f64,
+    /// Occupied F1 on the observable region.
+    pub f1_observable: f64,
+    /// Wrong cells on the whole map.
+    pub wrong_whole: usize,
+    /// Wrong cells on the observable region.
+    pub wrong_observable: usize,
+    /// Cells of the observable region.
+    pub observable_cells: usize,
+    /// Occupied cells of the map (whole).
+    pub map_occupied: usize,
+    /// ψ of the all-free map, whole.
+    pub all_free_psi_whole: f64,
+    /// ψ of the all-free map, observable region.
+    pub all_free_psi_observable: f64,
+    /// Wrong cells of the all-free map, whole.
+    pub all_free_wrong_whole: usize,
+    /// ψ on the interior (the reference's known cells: inside the perimeter).
+    pub psi_interior: f64,
+    /// Wrong cells on the interior.
+    pub wrong_interior: usize,
+    /// Occupied F1 on the interior.
+    pub f1_interior: f64,
+    /// Cells of the interior.
+    pub interior_cells: usize,
+}
+
+fn count(rate: f64, cells: usize) -> usize {
+    (rate * cells as f64).round() as usize
+}
+
+impl CaseFigures {
+    fn new(key: String, case: Case, r: &MapReport, reference: &ReferenceMap) -> CaseFigures {
+        let m = &r.metrics;
+        let s = reference.spec;
+        let refo: Vec<bool> = reference
+            .cells
+            .iter()
+            .map(|c| *c == CellClass::Occupied)
+            .collect();
+        let interior: Vec<bool> = reference
+            .cells
+            .iter()
+            .map(|c| *c != CellClass::Outside)
+            .collect();
+        let i = crate::mapping::metrics::evaluate(&r.binary, &refo, &interior, s.rows, s.cols);
+        CaseFigures {
+            psi_interior: i.psi,
+            wrong_interior: count(i.wrong_cell_rate, i.cells),
+            f1_interior: i.f1,
+            interior_cells: i.cells,
+            key,
+            case,
+            psi_whole: m.whole.psi,
+            psi_observable: m.observable.psi,
+            f1_whole: m.whole.f1,
+            f1_observable: m.observable.f1,
+            wrong_whole: count(m.whole.wrong_cell_rate, m.whole.cells),
+            wrong_observable: count(m.observable.wrong_cell_rate, m.observable.cells),
+            observable_cells: m.observable.cells,
+            map_occupied: m.whole.map_occupied,
+            all_free_psi_whole: m.whole_all_free.psi,
+            all_free_psi_observable: m.observable_all_free.psi,
+            all_free_wrong_whole: count(m.whole_all_free.wrong_cell_rate, m.whole_all_free.cells),
+        }
+    }
+}
+
+/// What one experiment measured and wrote.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExperimentResult {
+    /// Experiment name.
+    pub name: String,
+    /// Every map, with its figures.
+    pub cases: Vec<CaseFigures>,
+    /// Derived statements (e.g. fig6's N = 16 vs N = 100 check, relative ψ changes).
+    pub findings: Vec<(String, String)>,
+    /// Report section (links relative to the experiments folder's parent, see
+    /// [`Lab::section`]).
+    #[serde(skip)]
+    pub html: String,
+}
+
+/// A mapped case: its figures and its binary map (for the panels).
+pub(super) type Mapped = (CaseFigures, Vec<bool>);
+
+/// Runs experiments, sharing model data and maps between them.
+pub struct Lab<'a> {
+    inputs: ExperimentInputs,
+    pub(super) params: ExperimentValid,
+    pub(super) out: PathBuf,
+    model: ModelConfig,
+    pub(super) campaign_elements: usize,
+    reference: ReferenceMap,
+    synth_cache: HashMap<(usize, u64), PathBuf>,
+    sweeps_cache: HashMap<usize, (PathBuf, PathBuf)>,
+    map_cache: HashMap<String, MapReport>,
+    progress: Progress<'a>,
+}
+
+impl<'a> Lab<'a> {
+    /// A lab writing into `out` (maps in `out/maps`, model data in `out/work/synth`).
+    pub fn new(
+        inputs: ExperimentInputs,
+        params: ExperimentValid,
+        out: &Path,
+        progress: Progress<'a>,
+    ) -> Result<Lab<'a>> {
+        let model = ModelConfig::load(&inputs.model)?;
+        let c = Campaign::load(&inputs.campaign)?;
+        let layout = Layout::load(&c.layout_path())?;
+        let reference = layout.rasterize(params.grid.cell_m, params.grid.margin_m);
+        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        Ok(Lab {
+            campaign_elements: c.manifest.array.elements,
+            inputs,
+            params,
+            out: out.to_path_buf(),
+            model,
+            reference,
+            synth_cache: HashMap::new(),
+            sweeps_cache: HashMap::new(),
+            map_cache: HashMap::new(),
+            progress,
+        })
+    }
+
+    /// The inputs in use.
+    pub fn inputs(&self) -> &ExperimentInputs {
+        &self.inputs
+    }
+
+    /// The case of these data, N and mapper with the base parameters and no pose noise.
+    pub(super) fn base_case(
+        &self,
+        source: DataSource,
+        elements: usize,
+        method: &'static str,
+    ) -> Case {
+        Case {
+            source,
+            elements,
+            method,
+            og_prior: self.params.og.prior,
+            mu0: self.params.ekf.mu0,
+            pose_noise: PoseNoise::default(),
+        }
+    }
+
+    /// Model data at N elements and this seed (synth once per process).
+    fn model_data(&mut self, elements: usize, seed: u64) -> Result<PathBuf> {
+        if let Some(p) = self.synth_cache.get(&(elements, seed)) {
+            return Ok(p.clone());
+        }
+        let dir = self.out.join("work").join("synth");
+        let path = dir.join(format!("n{elements}_s{seed}.parquet"));
+        let mut c = Campaign::load(&self.inputs.campaign)?;
+        c.set_elements(elements)?;
+        let sp = SynthParams::default()
+            .seed(seed)
+            .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")));
+        synth(&c, &self.model, &path, &sp, &|_, _| {})?;
+        self.synth_cache.insert((elements, seed), path.clone());
+        Ok(path)
+    }
+
+    /// Sweeps at N elements: the campaign's own, or the campaign simulated again at N (it
+    /// needs a `[scene]`), once per process. Returns (manifest, energy table).
+    pub(super) fn sweeps_data(&mut self, elements: usize) -> Result<(PathBuf, PathBuf)> {
+        if elements == self.campaign_elements {
+            return Ok((self.inputs.campaign.clone(), self.inputs.energy.clone()));
+        }
+        if let Some(p) = self.sweeps_cache.get(&elements) {
+            return Ok(p.clone());
+        }
+        let mut c = Campaign::load(&self.inputs.campaign)?;
+        c.set_elements(elements)?;
+        let dir = self.out.join("work").join(format!("sweeps_n{elements}"));
+        let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
+        let sc = Campaign::load(&sim.manifest)?;
+        let e = dir.join("energy.parquet");
+        energy::run(&sc, &e, &|_, _| {})?;
+        let r = (sim.manifest, e);
+        self.sweeps_cache.insert(elements, r.clone());
+        Ok(r)
+    }
+
+    /// Map one case (once per process) and return its report.
+    fn map(&mut self, case: &Case) -> Result<(String, MapReport)> {
+        let key = case.key(&self.params);
+        if let Some(r) = self.map_cache.get(&key) {
+            return Ok((key, r.clone()));
+        }
+        let (campaign, energy, elements) = match case.source {
+            DataSource::Sweeps => {
+                let (c, e) = self.sweeps_data(case.elements)?;
+                (c, e, None)
+            }
+            DataSource::Model(s) => (
+                self.inputs.campaign.clone(),
+                self.model_data(case.elements, s)?,
+                Some(case.elements),
+            ),
+        };
+        let method = Method::parse(case.method)?;
+        let opts = MapOptions {
+            method,
+            runs: vec![MapRun { campaign, energy }],
+            out: self.out.join("maps").join(&key),
+            elements,
+            grid: self.params.grid,
+            og: OgParams {
+                prior: case.og_prior,
+                ..self.params.og
+            },
+            ekf: EkfParams {
+                mu0: case.mu0,
+                ..self.params.ekf
+            },
+            pose_noise: case.pose_noise,
+        };
+        let r = run_map(&opts, &|_, _| {})?;
+        self.map_cache.insert(key.clone(), r.clone());
+        Ok((key, r))
+    }
+
+    /// Map every case with a progress bar labelled `label`.
+    pub(super) fn map_all(&mut self, label: &str, cases: &[Case]) -> Result<Vec<Mapped>> {
+        let cb = (self.progress)(label, cases.len());
+        let mut out = Vec::new();
+        for (i, c) in cases.iter().enumerate() {
+            let (key, r) = self.map(c)?;
+            out.push((
+                CaseFigures::new(key, *c, &r, &self.reference),
+                r.binary.clone(),
+            ));
+            cb(i + 1, cases.len());
+        }
+        Ok(out)
+    }
+
+    /// A panel tile: the binary map scored against the reference.
+    pub(super) fn tile(&self, title: String, binary: &[bool]) -> MapTile {
+        MapTile {
+            title,
+            cells: binary
+                .iter()
+                .zip(&self.reference.cells)
+                .map(|(&b, &r)| report::scored_colour(b, r))
+                .collect(),
+        }
+    }
+
+    /// The reference's own tile.
+    pub(super) fn reference_tile(&self) -> MapTile {
+        let occupied = self
+            .reference
+            .cells
+            .iter()
+            .map(|c| *c == CellClass::Occupied);
+        let b: Vec<bool> = occupied.collect();
+        self.tile("reference".into(), &b)
+    }
+
+    /// Write the experiment's panel `out/<name>/<name>.png`.
+    pub(super) fn panel(&self, name: &str, tiles: &[MapTile], columns: usize) -> Result<()> {
+        let s = self.reference.spec;
+        report::map_panel(
+            &self.out.join(name).join(format!("{name}.png")),
+            s.rows,
+            s.cols,
+            tiles,
+            columns,
+        )
+    }
+
+    /// Run one experiment: map its cases, write its files, return its figures.
+    pub fn run(&mut self, e: Experiment) -> Result<ExperimentResult> {
+        let dir = self.out.join(e.name());
+        std::fs::create_dir_all(&dir).map_err(|err| Error::io(&dir, err))?;
+        let r = match e {
+            Experiment::Fig5 => self.fig5()?,
+            Experiment::Fig6 => self.fig6()?,
+            Experiment::PriorSensitivity => self.prior_sensitivity()?,
+            Experiment::PoseNoise => self.pose_noise()?,
+        };
+        let name = e.name();
+        let table = case_table(&r.cases);
+        let mut md = String::new();
+        for (k, v) in &r.findings {
+            md.push_str(&format!("- {k}: {v}\n"));
+        }
+        md.push('\n');
+        md.push_str(&table.to_markdown());
+        crate::io::write_bytes(&dir.join(format!("{name}.md")), md.as_bytes())?;
+        crate::io::write_bytes(&dir.join(format!("{name}.csv")), table.to_csv().as_bytes())?;
+        let json = serde_json::to_string_pretty(&r)
+            .map_err(|err| Error::param("experiment", err.to_string()))?;
+        crate::io::write_bytes(&dir.join(format!("{name}.json")), json.as_bytes())?;
+        Ok(r)
+    }
+
+    /// The model-data seeds.
+    pub(super) fn seeds(&self) -> Vec<u64> {
+        self.params.seeds.clone()
+    }
+
+    /// Assemble a result; `extra` HTML may use `{P}` for the experiments folder prefix.
+    pub(super) fn result(
+        &self,
+        name: &str,
+        caption: &str,
+        cases: Vec<CaseFigures>,
+        findings: Vec<(String, String)>,
+        extra: &str,
+    ) -> ExperimentResult {
+        let html = report::experiments::result_html(name, caption, extra, &findings, &cases);
+        ExperimentResult {
+            name: name.to_string(),
+            cases,
+            findings,
+            html,
+        }
+    }
+
+    /// The report section of a result, links prefixed by `prefix` (the experiments folder
+    /// relative to the page: `""` for `DIR/index.html`, `"experiments/"` in `reproduce`).
+    pub fn section(r: &ExperimentResult, prefix: &str) -> Section {
+        report::experiments::section(r, prefix)
+    }
+}
+
+/// The mean of `v` (NaN when empty).
+pub(super) fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v.iter().sum::<f64>() / v.len() as f64
+    }
+}
+
+/// `v` with `digits` decimals, comma-separated.
+pub(super) fn join(v: &[f64], digits: usize) -> String {
+    v.iter()
+        .map(|x| format!("{x:.digits$}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `v` comma-separated.
+pub(super) fn join_u(v: &[u64]) -> String {
+    v.iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The case table of an experiment (`NAME.md` after the findings, and `NAME.csv`): one row
+/// per map; ψ and F1 shown with 3 decimals (full precision in the CSV); the all-free map's
+/// wrong cells in the CSV only.
+pub fn case_table(cases: &[CaseFigures]) -> Table {
+    let col = Column::new;
+    let mut t = Table::new(vec![
+        col("map", "map"),
+        col("data", "data"),
+        col("seed", "seed"),
+        col("N", "elements"),
+        col("mapper", "mapper"),
+        col("OG prior", "og_prior"),
+        col("EKF μ0 (m)", "mu0_m"),
+        col("pose σ (m)", "pose_sigma_m"),
+        col("heading σ (°)", "heading_sigma_deg"),
+        col("ψ whole", "psi_whole"),
+        col("wrong whole", "wrong_whole"),
+        col("F1 whole", "f1_whole"),
+        col("ψ obs.", "psi_observable"),
+        col("wrong obs.", "wrong_observable"),
+        col("F1 obs.", "f1_observable"),
+        col("obs. cells", "observable_cells"),
+        col("ψ interior", "psi_interior"),
+        col("wrong interior", "wrong_interior"),
+        col("F1 interior", "f1_interior"),
+        col("all-free ψ whole", "all_free_psi_whole"),
+        col("all-free wrong whole", "all_free_wrong_whole").csv_only(),
+    ]);
+    let plain = |v: f64| Cell::num(v, v.to_string());
+    for c in cases {
+        let k = &c.case;
+        let (data, seed) = match k.source {
+            DataSource::Sweeps => ("sweeps", Cell::missing("")),
+            DataSource::Model(s) => ("model", Cell::text(s.to_string())),
+        };
+        t.push(vec![
+            Cell::text(&c.key),
+            Cell::text(data),
+            seed,
+            Cell::count(k.elements),
+            Cell::text(k.method),
+            plain(k.og_prior),
+            plain(k.mu0),
+            plain(k.pose_noise.position_m),
+            plain(k.pose_noise.heading_deg),
+            Cell::fixed(c.psi_whole, 3),
+            Cell::count(c.wrong_whole),
+            Cell::fixed(c.f1_whole, 3),
+            Cell::fixed(c.psi_observable, 3),
+            Cell::count(c.wrong_observable),
+            Cell::fixed(c.f1_observable, 3),
+            Cell::count(c.observable_cells),
+            Cell::fixed(c.psi_interior, 3),
+            Cell::count(c.wrong_interior),
+            Cell::fixed(c.f1_interior, 3),
+            Cell::fixed(c.all_free_psi_whole, 3),
+            Cell::count(c.all_free_wrong_whole),
+        ]);
+    }
+    t
+}

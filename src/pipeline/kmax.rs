@@ -1,0 +1,107 @@
+//! Table 1's cluster-count quantities against the clustering cap K_max
+//! ([`k_max_sensitivity`]).
+//!
+//! Where the clustering criterion keeps preferring more clusters (the built-in corridor),
+//! Λ, λ, the AoA spread and d_c are set by K_max rather than found; refitting with the cap
+//! raised to 12, 16 and 24, beside the default fit and the simulator's truth through the same
+//! estimators, shows by how much (README "Corridor and K_max").
+
+use crate::campaign::manifest::Campaign;
+use crate::campaign::modelfile::ModelConfig;
+use crate::cluster;
+use crate::error::Result;
+use crate::export::{Cell, Column, Table};
+use crate::fit::channel::ChannelFit;
+use std::path::Path;
+
+/// The larger caps of the K_max sensitivity table.
+pub(crate) const K_MAX_TRIED: [usize; 3] = [12, 16, 24];
+
+/// The text before the table in `table1_kmax.md`.
+const KMAX_MD_HEAD: &str = "# Table 1 against the clustering cap K_max\n\nThe cluster-count quantities refitted with K_max raised; where positions end at the cap, the criterion still preferred more clusters and the values are set by K_max.\n\n";
+
+/// Table 1's cluster-count quantities refitted with the clustering cap raised to 12, 16 and
+/// 24 (those above the default), beside the default fit and the truth; written as
+/// `out/table1_kmax.md` (clusterings in `work/clusters_kmax<K>.parquet`) and returned for the
+/// report.
+pub(crate) fn k_max_sensitivity(
+    sc: &Campaign,
+    base: &cluster::Clustering,
+    params: &cluster::ClusterParams,
+    default_fit: Option<&ChannelFit>,
+    truth: Option<&ChannelFit>,
+    work: &Path,
+    out: &Path,
+) -> Result<Table> {
+    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
+    let mut t = kmax_table();
+    t.push(kmax_row(
+        format!("{} (default)", params.k_max),
+        ks_of(base, params.k_max),
+        default_fit,
+    ));
+    for k in K_MAX_TRIED.into_iter().filter(|&k| k > params.k_max) {
+        let p = cluster::ClusterParams {
+            k_max: k,
+            ..*params
+        };
+        let c = cluster::cluster(&base.mpcs, &headings, &p)?;
+        let path = work.join(format!("clusters_kmax{k}.parquet"));
+        cluster::write(&path, &c)?;
+        let f = crate::fit::channel::fit_channel(&path, sc, &Default::default()).ok();
+        t.push(kmax_row(k.to_string(), ks_of(&c, k), f.as_ref()));
+    }
+    if let Some(f) = truth {
+        t.push(kmax_row(
+            "simulator truth (same estimators)".into(),
+            "—".into(),
+            Some(f),
+        ));
+    }
+    let md = format!("{KMAX_MD_HEAD}{}", t.to_markdown());
+    crate::io::write_bytes(&out.join("table1_kmax.md"), md.as_bytes())?;
+    Ok(t)
+}
+
+/// The K_max table's columns.
+fn kmax_table() -> Table {
+    Table::new(vec![
+        Column::new("K_max", "k_max"),
+        Column::new("K per position", "k_per_position"),
+        Column::new("Λ (1/ns)", "inter_cluster_rate_per_ns"),
+        Column::new("d_c (m)", "perimeter_spacing_m"),
+        Column::new("λ (1/ns)", "intra_cluster_rate_per_ns"),
+        Column::new("AoA std (deg)", "intra_cluster_aoa_std_deg"),
+        Column::new("γ (ns)", "ray_decay_ns"),
+    ])
+}
+
+/// One row: the cap, the K range, and the fit's cluster-count quantities ("—" without a fit).
+fn kmax_row(label: String, ks: String, f: Option<&ChannelFit>) -> Vec<Cell> {
+    let v = |g: fn(&ModelConfig) -> f64, digits: usize| {
+        f.map_or(Cell::missing("—"), |f| Cell::fixed(g(&f.model), digits))
+    };
+    vec![
+        Cell::text(label),
+        Cell::text(ks),
+        v(|m| m.inter_cluster_rate.value, 3),
+        v(|m| m.perimeter_spacing.value, 2),
+        v(|m| m.intra_cluster_rate.value, 3),
+        v(|m| m.intra_cluster_aoa.value, 1),
+        v(|m| m.ray_decay.value, 2),
+    ]
+}
+
+/// "lo–hi (n of N at the cap)" of the K chosen per position.
+fn ks_of(c: &cluster::Clustering, k_max: usize) -> String {
+    let ks: Vec<usize> = c.positions.iter().map(|p| p.k).collect();
+    let (lo, hi) = (
+        ks.iter().min().copied().unwrap_or(0),
+        ks.iter().max().copied().unwrap_or(0),
+    );
+    format!(
+        "{lo}–{hi} ({} of {} at the cap)",
+        c.positions_at_k_max(k_max).len(),
+        c.positions.len()
+    )
+}

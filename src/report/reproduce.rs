@@ -1,0 +1,175 @@
+//! HTML of the `reproduce` report ([`crate::pipeline::reproduce`]): the Table 1 sections
+//! (with the fit plots, the K note and the K_max table), the MPC and cluster section, the
+//! stage timings, and the page that gathers them ([`write_index`]).
+
+use super::{html_escape, html_table, kv_table, write_index as write_page, Section};
+use crate::cluster::Clustering;
+use crate::error::Result;
+use crate::export::Table;
+use std::path::Path;
+
+/// Everything the `reproduce` page shows, in page order.
+pub struct ReproducePage {
+    /// Page title.
+    pub title: String,
+    /// Campaign summary (key, value).
+    pub campaign: Vec<(String, String)>,
+    /// Positions (one heat map and one cluster plot each).
+    pub positions: usize,
+    /// Table 1 section body ([`table1_html`]).
+    pub table1: String,
+    /// Geometry-only Table 1 section body ([`geometry_html`]).
+    pub geometry: String,
+    /// The MPC and cluster summary (key, value).
+    pub mpcs: Vec<(String, String)>,
+    /// The maps section.
+    pub maps: Section,
+    /// The experiments' sections.
+    pub experiments: Vec<Section>,
+    /// Stage timings (label, s).
+    pub timings: Vec<(String, f64)>,
+}
+
+/// Write the `reproduce` page: campaign, energy heat maps, Table 1, the geometry-only
+/// Table 1, MPCs and clusters, maps, the experiments, stage timings.
+pub fn write_index(path: &Path, page: &ReproducePage) -> Result<()> {
+    let mut sections = vec![
+        Section {
+            title: "Campaign".into(),
+            html: kv_table(&page.campaign),
+        },
+        Section {
+            title: "Energy matrices (range vs direction, dB re position peak)".into(),
+            html: heat_maps_html(page.positions),
+        },
+        Section {
+            title: "Table 1 (corridor)".into(),
+            html: page.table1.clone(),
+        },
+        Section {
+            title: "Table 1 of the corridor without clutter (geometry only)".into(),
+            html: page.geometry.clone(),
+        },
+        Section {
+            title: "MPCs (2-D CLEAN) and clusters (K-means)".into(),
+            html: mpcs_html(&page.mpcs, page.positions),
+        },
+        page.maps.clone(),
+    ];
+    sections.extend(page.experiments.iter().cloned());
+    sections.push(Section {
+        title: "Stage timings".into(),
+        html: timings_html(&page.timings),
+    });
+    write_page(path, &page.title, &sections)
+}
+
+/// The per-position energy heat maps `energy_pNN.png`.
+fn heat_maps_html(positions: usize) -> String {
+    (0..positions)
+        .map(|p| format!("<a href=\"energy_p{p:02}.png\"><img src=\"energy_p{p:02}.png\" alt=\"position {p}\"></a>\n"))
+        .collect()
+}
+
+/// The MPC summary, the global MPC map and the per-position cluster plots.
+fn mpcs_html(summary: &[(String, String)], positions: usize) -> String {
+    let mut h = kv_table(summary);
+    h.push_str("<p>MPCs are marked (white circles) on the energy heat maps above.</p>\n<a href=\"mpcs_global.png\"><img style=\"max-width:900px\" src=\"mpcs_global.png\" alt=\"global\"></a><br>\n");
+    for p in 0..positions {
+        h.push_str(&format!("<a href=\"clusters_p{p:02}.png\"><img src=\"clusters_p{p:02}.png\" alt=\"clusters {p}\"></a>\n"));
+    }
+    h
+}
+
+/// The stage timings with their total.
+fn timings_html(timings: &[(String, f64)]) -> String {
+    let total: f64 = timings.iter().map(|t| t.1).sum();
+    let mut rows: Vec<(String, String)> = timings
+        .iter()
+        .map(|(k, v)| (k.clone(), format!("{v:.2} s")))
+        .collect();
+    rows.push(("total".into(), format!("{total:.2} s")));
+    kv_table(&rows)
+}
+
+/// `<p>{what} failed: {error}</p>` (the error escaped).
+pub fn failed(what: &str, e: &dyn std::fmt::Display) -> String {
+    format!("<p>{what} failed: {}</p>", html_escape(&e.to_string()))
+}
+
+/// `<p>not run: the fit gave no model (…)</p>`, the experiments' section when the fit failed.
+pub fn experiments_not_run(e: &dyn std::fmt::Display) -> Section {
+    Section {
+        title: "Experiments".into(),
+        html: format!(
+            "<p>not run: the fit gave no model ({})</p>",
+            html_escape(&e.to_string())
+        ),
+    }
+}
+
+/// A fit plot of Table 1: `Some(png)` when drawn, `None` when the quantity had fewer than
+/// 2 samples.
+pub type FitPlot = (String, Option<String>);
+
+/// The fitted Table 1 after its rows (`rows_html`, an open `<table>` as
+/// `pipeline::table1_html_rows` gives): the closing note with links and the fit plots.
+pub fn table1_fitted_html(rows_html: &str, plots: &[FitPlot]) -> String {
+    let mut h = rows_html.to_string();
+    h.push_str("</table><p>From the simulated corridor's clusters; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n");
+    for (name, png) in plots {
+        match png {
+            None => h.push_str(&format!("<p>{name}: fewer than 2 samples, no plot.</p>\n")),
+            Some(png) => h.push_str(&format!("<a href=\"{png}\"><img style=\"max-width:640px\" src=\"{png}\" alt=\"{name}\"></a>\n")),
+        }
+    }
+    h
+}
+
+/// The Table 1 section: the K note, Table 1 (or why the fit failed) and the K_max table (or
+/// why it failed).
+pub fn table1_html(k_note: &str, table1: &str, kmax: &str) -> String {
+    format!("{k_note}{table1}{kmax}")
+}
+
+/// The K_max sensitivity table with its heading and note.
+pub fn kmax_html(t: &Table) -> String {
+    format!(
+        "<h3>Table 1 against the clustering cap K_max</h3>{}<p>Where positions end at the cap, the criterion still preferred more clusters: these values are set by K_max, not found (<a href=\"table1_kmax.md\">table1_kmax.md</a>).</p>\n",
+        html_table(t)
+    )
+}
+
+/// A paragraph on the K chosen per position, saying where K_max bound
+/// ([`Clustering::positions_at_k_max`]).
+pub fn k_cap_note(c: &Clustering, k_max: usize) -> String {
+    let ks: Vec<String> = c.positions.iter().map(|p| p.k.to_string()).collect();
+    let capped = c.positions_at_k_max(k_max);
+    let mut h = format!("<p>K chosen per position: {}.", ks.join(", "));
+    if !capped.is_empty() {
+        h.push_str(&format!(
+            " <b>K = K_max = {k_max} at {} of {} positions</b>: the criterion still preferred more clusters there, so the cluster counts, and with them Λ, λ, the AoA spread and d_c, are set by K_max rather than found (README, \"Corridor and K_max\").",
+            capped.len(),
+            c.positions.len()
+        ));
+    }
+    h.push_str("</p>\n");
+    h
+}
+
+/// The geometry-only Table 1: its rows (`rows_html`, as `pipeline::table1_html_rows`
+/// gives), what was simulated and found, and the K note.
+pub fn geometry_html(
+    rows_html: &str,
+    mpcs: usize,
+    clusters: usize,
+    positions: usize,
+    k_note: &str,
+) -> String {
+    let mut h = rows_html.to_string();
+    h.push_str(&format!(
+        "<p>The corridor simulated without its <code>[clutter]</code> section: walls (diffuse and specular), corners, edges and objects only; {mpcs} MPCs in {clusters} clusters over {positions} positions. What the chain calls clusters here is the layout's own structure (<a href=\"table1_geometry.md\">table1_geometry.md</a>).</p>\n",
+    ));
+    h.push_str(k_note);
+    h
+}
