@@ -13,6 +13,7 @@ use crate::{cluster, mpc};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub mod commands;
 pub mod experiment;
 
 /// The built-in corridor manifest.
