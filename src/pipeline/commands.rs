@@ -53,6 +53,39 @@
 //!     params: pradar::fit::channel::FitParams::default(),
 //! })?;
 //! println!("{fit}");
+//! let synth = commands::synth(
+//!     &commands::Synth {
+//!         model: "fitted_model.toml".into(),
+//!         campaign: "sim/campaign.toml".into(),
+//!         out: "model.parquet".into(),
+//!         elements: None,
+//!         params: pradar::model::SynthParams::default(),
+//!     },
+//!     &none,
+//! )?;
+//! println!("{synth}");
+//! let map = commands::Map {
+//!     options: pradar::mapping::MapOptions {
+//!         method: pradar::mapping::Method::Og,
+//!         runs: vec![],
+//!         out: "map".into(),
+//!         elements: None,
+//!         grid: Default::default(),
+//!         og: Default::default(),
+//!         ekf: Default::default(),
+//!         pose_noise: Default::default(),
+//!     },
+//!     run_specs: vec!["sim/campaign.toml=energy.parquet".into()],
+//! };
+//! println!("{}", commands::map(&map, &none)?);
+//! let experiments = commands::Experiments {
+//!     name: "all".into(),
+//!     inputs: Default::default(),
+//!     params: Default::default(),
+//!     out: "experiments".into(),
+//! };
+//! let bars = |_: &str, _: usize| -> Box<dyn Fn(usize, usize)> { Box::new(|_, _| {}) };
+//! println!("{}", commands::experiments(&experiments, &bars)?);
 //! # Ok::<(), pradar::Error>(())
 //! ```
 
