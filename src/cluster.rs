@@ -119,27 +119,34 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Criterion that picks K among 2..K_max.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Criterion {
     /// Largest mean silhouette.
+    #[value(name = "silhouette", help = None::<&str>)]
     Silhouette,
     /// Largest Calinski–Harabasz index.
+    #[value(name = "ch", help = None::<&str>)]
     CalinskiHarabasz,
     /// Gap statistic (Tibshirani, Walther & Hastie 2001) against `gap_refs` uniform
     /// reference sets over the data's bounding box: the smallest K with
     /// Gap(K) ≥ Gap(K+1) − s(K+1); handles K = 1 natively.
+    #[value(name = "gap", help = None::<&str>)]
     Gap,
     /// Smallest BIC of an exponential-delay × Laplacian-angle mixture (the channel model's
     /// cluster shape); handles K = 1 natively.
+    #[value(name = "channel-bic", help = None::<&str>)]
     ChannelBic,
     /// Smallest BIC of a diagonal-Gaussian mixture (X-means); handles K = 1 natively.
+    #[value(name = "gauss-bic", help = None::<&str>)]
     GaussBic,
     /// Largest leave-one-out log-likelihood of a Gaussian-delay × Laplacian-angle mixture;
     /// handles K = 1 natively.
+    #[value(name = "cv", help = None::<&str>)]
     CrossValidated,
     /// `CrossValidated` with the delay spread and the angular scale shared by the clusters
     /// of a position (pooled within-cluster MLEs; the channel model's clusters share λ and
     /// the AoA law), each cluster keeping its own location and weight.
+    #[value(name = "cv-shared", help = None::<&str>)]
     CrossValidatedShared,
 }
 

@@ -77,11 +77,13 @@ pub struct Mpc {
 }
 
 /// Extraction method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Method {
     /// Iterative 2-D CLEAN.
+    #[value(name = "clean", help = None::<&str>)]
     Clean,
     /// Local maxima (baseline).
+    #[value(name = "peaks", help = None::<&str>)]
     Peaks,
 }
 

@@ -399,3 +399,86 @@ fn unknown_command_fails_cleanly() {
     assert_ne!(o.status.code(), Some(0));
     assert!(!String::from_utf8_lossy(&o.stderr).contains("panicked"));
 }
+
+/// Every out-of-range or unknown flag value: one `error:` line naming the flag, exit status
+/// 1, no panic, nothing written, and no work started (the inputs need not exist).
+#[test]
+fn out_of_range_flags_give_one_clear_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let o = s(&out);
+    let corridor = root().join("data/corridor/campaign.toml");
+    let c = s(&corridor);
+    let map = ["map", "--campaign", c, "--energy", "e.parquet", "--out", o];
+    let extract = [
+        "extract",
+        "--energy",
+        "e.parquet",
+        "--campaign",
+        c,
+        "--out",
+        o,
+    ];
+    let cluster = ["cluster", "--mpcs", "m.parquet", "--out", o];
+    let fit = [
+        "fit",
+        "--clusters",
+        "c.parquet",
+        "--campaign",
+        c,
+        "--out",
+        o,
+        "--table",
+        "t.md",
+    ];
+    let simulate = ["simulate", "--campaign", c, "--out", o];
+    let synth = [
+        "synth",
+        "--model",
+        "nowhere.toml",
+        "--campaign",
+        c,
+        "--out",
+        o,
+    ];
+    let reproduce = ["reproduce", "--out", o];
+    let experiment = ["experiment", "fig5", "--out", o];
+    let cases: Vec<(&[&str], &[&str], &str)> = vec![
+        (&fit, &["--bootstrap", "0"], "--bootstrap"),
+        (&cluster, &["--k-max", "0"], "--k-max"),
+        (&cluster, &["--k-max", "-2"], "--k-max"),
+        (&cluster, &["--criterion", "best"], "--criterion"),
+        (&map, &["--cell-m", "0"], "--cell-m"),
+        (&map, &["--cell-m", "20"], "--cell-m"),
+        (&map, &["--pfa", "0"], "--pfa"),
+        (&map, &["--pfa", "1.5"], "--pfa"),
+        (&map, &["--prior", "0"], "--prior"),
+        (&map, &["--prior", "1"], "--prior"),
+        (&map, &["--mu0", "-1"], "--mu0"),
+        (&map, &["--sigma0", "0"], "--sigma0"),
+        (&map, &["--pose-noise-m", "-1"], "--pose-noise-m"),
+        (&map, &["--pose-noise-deg", "NaN"], "--pose-noise-deg"),
+        (&map, &["--ekf", "sparse"], "--ekf"),
+        (&map, &["--method", "ogb"], "--method"),
+        (&extract, &["--margin-db", "-1"], "--margin-db"),
+        (&extract, &["--margin-db", "inf"], "--margin-db"),
+        (&extract, &["--dynamic-range-db", "0"], "--dynamic-range-db"),
+        (&extract, &["--method", "music"], "--method"),
+        (&simulate, &["--elements", "7"], "--elements"),
+        (&simulate, &["--format", "csv"], "--format"),
+        (&synth, &["--elements", "7"], "--elements"),
+        (&reproduce, &["--seeds", ""], "--seeds"),
+        (&experiment, &["--seeds", ""], "--seeds"),
+        (&experiment, &["--seeds", "1,1"], "seeds"),
+    ];
+    for (cmd, flag, name) in cases {
+        let args: Vec<&str> = cmd.iter().chain(flag).copied().collect();
+        let r = run(&args, None);
+        assert_eq!(r.code, 1, "{args:?}: {}", r.stderr);
+        assert_clean_error(&r, name, &out);
+    }
+    // an unknown experiment: named, before any input is resolved
+    let r = run(&["experiment", "fig7", "--out", o], None);
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    assert_clean_error(&r, "fig7", &out);
+}

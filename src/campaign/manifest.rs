@@ -298,13 +298,15 @@ impl Processing {
 }
 
 /// Sweep file format.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum SweepFormat {
     /// One Touchstone v1 `.s2p` per (position, direction, pulse).
     #[default]
+    #[value(name = "touchstone", help = None::<&str>)]
     Touchstone,
     /// One Parquet long table (position, direction, pulse, frequency_hz, re, im).
+    #[value(name = "parquet", help = None::<&str>)]
     Parquet,
 }
 

@@ -92,11 +92,13 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 /// Which implementation of the EKF.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 pub enum EkfVariant {
     /// Exact dense covariance ([`DenseEkf`]).
+    #[value(name = "dense", help = None::<&str>)]
     Dense,
     /// Block-diagonal covariance by tiles ([`TiledEkf`]).
+    #[value(name = "scalable", help = None::<&str>)]
     Scalable,
 }
 

@@ -67,14 +67,17 @@ use statrs::distribution::{ContinuousCDF, Gamma};
 use std::time::Instant;
 
 /// Inverse sensor model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Method {
     /// Side-lobe-aware occupancy grid (responsibilities over the range ring).
+    #[value(name = "og", help = "Side-lobe-aware occupancy grid")]
     Og,
     /// Boresight-only baseline.
+    #[value(name = "og-boresight", help = "Boresight-only baseline")]
     OgBoresight,
     /// EKF over the RRCS per cell ([`crate::mapping::ekf`]; not an inverse sensor model:
     /// [`og_map`] refuses it, [`crate::mapping::run_map`] dispatches it).
+    #[value(name = "ekf", help = "EKF over the RRCS per cell")]
     Ekf,
 }
 

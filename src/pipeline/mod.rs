@@ -14,6 +14,7 @@ use crate::report;
 use std::path::{Path, PathBuf};
 
 mod analysis;
+pub mod commands;
 pub mod experiment;
 mod geometry;
 mod kmax;

@@ -1,0 +1,276 @@
+//! The `pradar` command line's clap definitions (binary-private: declared by `main.rs`,
+//! not by the library).
+//!
+//! One `…Args` struct per subcommand; their flag names, defaults and help texts are the
+//! command contract of DESIGN §3 and the README's "Commands". The enumerated flags
+//! (`--format`, `--method`, `--criterion`, `--ekf`) parse straight into the library's enums
+//! (`clap::ValueEnum` is derived there, with the flag spellings in `#[value(name)]`).
+//! Numeric flags with a range are checked while parsing ([`ranges`]), so an out-of-range
+//! value fails before any file is read, with a message naming the flag.
+
+pub mod ranges;
+
+use clap::{Args, Parser, Subcommand};
+use pradar::campaign::manifest::SweepFormat;
+use pradar::cluster::Criterion;
+use pradar::mapping::{EkfVariant, Method as MapMethod};
+use pradar::mpc::Method as ExtractMethod;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "pradar",
+    version,
+    about = "mm-wave personal radar campaigns: simulate, energy matrices, channel statistics, maps"
+)]
+pub struct Cli {
+    /// No progress bars (for scripts).
+    #[arg(long, global = true)]
+    pub quiet: bool,
+    #[command(subcommand)]
+    pub cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+pub enum Cmd {
+    /// Simulate a campaign: sweeps (Touchstone or Parquet), manifest with [sweeps], truth/.
+    Simulate(SimulateArgs),
+    /// Energy matrices from a campaign's sweeps.
+    Energy(EnergyArgs),
+    /// Statistical channel model: an energy table (and its truth) from a model file.
+    Synth(SynthArgs),
+    /// Occupancy-grid map from one run (--campaign + --energy) or several (--run, fused).
+    Map(MapArgs),
+    /// Extract MPCs (2-D CLEAN, or the local-maximum baseline) from an energy table.
+    Extract(ExtractArgs),
+    /// Cluster MPCs per position with K-means (writes <out> and <stem>_summary.parquet).
+    Cluster(ClusterArgs),
+    /// Fit the channel model (Table 1) from clustered MPCs.
+    Fit(FitArgs),
+    /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
+    Reproduce(ReproduceArgs),
+    /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
+    Experiment(ExperimentArgs),
+}
+
+// `pradar simulate`
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// Input manifest with [scene] (and optionally [clutter]).
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Override [array] elements (16, 100, 400).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Sweep file format.
+    #[arg(long, value_enum, default_value = "touchstone")]
+    pub format: SweepFormat,
+}
+
+// `pradar energy`
+#[derive(Args)]
+pub struct EnergyArgs {
+    /// Manifest with [sweeps].
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Output energy Parquet.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+// `pradar synth`
+#[derive(Args)]
+pub struct SynthArgs {
+    /// Model file (fitted_model.toml or hand-written, DESIGN §3 "Model").
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Campaign manifest (layout, poses, directions, band, array, noise; no sweeps).
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Output energy Parquet.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Override [array] elements (16, 100, 400).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Seed (default: the campaign's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Ground-truth folder (default: <out stem>_truth beside the output).
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+}
+
+// `pradar map`
+#[derive(Args)]
+pub struct MapArgs {
+    /// Inverse sensor model.
+    #[arg(long, value_enum, default_value = "og")]
+    pub method: MapMethod,
+    /// Campaign manifest of a single run (with --energy).
+    #[arg(long, requires = "energy", conflicts_with = "run")]
+    pub campaign: Option<PathBuf>,
+    /// Energy Parquet of a single run (with --campaign).
+    #[arg(long, requires = "campaign")]
+    pub energy: Option<PathBuf>,
+    /// A run `campaign.toml=energy.parquet` (repeatable: runs are fused).
+    #[arg(long)]
+    pub run: Vec<String>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Override [array] elements (16, 100, 400).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Cell side, m.
+    #[arg(long, default_value_t = 0.1, value_parser = ranges::cell_m, allow_negative_numbers = true)]
+    pub cell_m: f64,
+    /// Detector false-alarm probability per bin.
+    #[arg(long, default_value_t = 1e-3, value_parser = ranges::pfa, allow_negative_numbers = true)]
+    pub pfa: f64,
+    /// Prior occupancy probability.
+    #[arg(long, default_value_t = 0.5, value_parser = ranges::open_unit, allow_negative_numbers = true)]
+    pub prior: f64,
+    /// EKF implementation (`--method ekf`): dense (exact) or scalable (tiled).
+    #[arg(
+        long,
+        value_enum,
+        default_value = "scalable",
+        hide_possible_values = true
+    )]
+    pub ekf: EkfVariant,
+    /// EKF prior mean of the RRCS μ0, m.
+    #[arg(long, default_value_t = 0.01, value_parser = ranges::positive, allow_negative_numbers = true)]
+    pub mu0: f64,
+    /// EKF prior standard deviation σ0, m.
+    #[arg(long, default_value_t = 0.1, value_parser = ranges::positive, allow_negative_numbers = true)]
+    pub sigma0: f64,
+    /// Pose noise given to the mapper: position standard deviation per axis, m.
+    #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    pub pose_noise_m: f64,
+    /// Pose noise given to the mapper: heading standard deviation, degrees.
+    #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    pub pose_noise_deg: f64,
+    /// Seed of the pose-noise draws.
+    #[arg(long, default_value_t = 1)]
+    pub pose_seed: u64,
+}
+
+// `pradar extract`
+#[derive(Args)]
+pub struct ExtractArgs {
+    /// Energy Parquet.
+    #[arg(long)]
+    pub energy: PathBuf,
+    /// The campaign the energy came from.
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Output MPC Parquet.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Method.
+    #[arg(long, value_enum, default_value = "clean")]
+    pub method: ExtractMethod,
+    /// Keep components above the floor plus this margin, dB.
+    #[arg(long, default_value_t = 13.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    pub margin_db: f64,
+    /// Stop at components this far below the position's strongest, dB.
+    #[arg(
+        long,
+        default_value_t = pradar::mpc::ExtractParams::default().dynamic_range_db,
+        value_parser = ranges::dynamic_range_db,
+        allow_negative_numbers = true
+    )]
+    pub dynamic_range_db: f64,
+}
+
+// `pradar cluster`
+#[derive(Args)]
+pub struct ClusterArgs {
+    /// MPC Parquet from `extract`.
+    #[arg(long)]
+    pub mpcs: PathBuf,
+    /// Output clustered MPC Parquet.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Largest K tried per position.
+    #[arg(long, default_value_t = 8, value_parser = ranges::at_least_one, allow_negative_numbers = true)]
+    pub k_max: usize,
+    /// Seed of the k-means++ draws.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Criterion choosing K.
+    #[arg(long, value_enum, default_value = "cv")]
+    pub criterion: Criterion,
+}
+
+// `pradar fit`
+#[derive(Args)]
+pub struct FitArgs {
+    /// Clustered MPC Parquet from `cluster`.
+    #[arg(long)]
+    pub clusters: PathBuf,
+    /// The campaign (analysis view: [scene]/[clutter] are never read).
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Output model file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Table 1 Markdown (a CSV is written beside it).
+    #[arg(long)]
+    pub table: PathBuf,
+    /// Bootstrap resamples.
+    #[arg(long, default_value_t = 1000, value_parser = ranges::at_least_one, allow_negative_numbers = true)]
+    pub bootstrap: usize,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// A simulator's truth/ folder: add the same estimators on its true clusters.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+}
+
+// `pradar reproduce`
+#[derive(Args)]
+pub struct ReproduceArgs {
+    /// Report folder.
+    #[arg(long, default_value = "reports/corridor")]
+    pub out: PathBuf,
+    /// Use this manifest instead of the built-in corridor.
+    #[arg(long)]
+    pub campaign: Option<PathBuf>,
+    /// Override [array] elements.
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Skip the mapping experiments.
+    #[arg(long)]
+    pub skip_experiments: bool,
+    /// Model-data seeds of the experiments (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+    pub seeds: Vec<u64>,
+}
+
+// `pradar experiment`
+#[derive(Args)]
+pub struct ExperimentArgs {
+    /// fig5 | fig6 | prior-sensitivity | pose-noise | all.
+    pub name: String,
+    /// Output folder (DIR/NAME/ per experiment, DIR/maps/, DIR/index.html).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Campaign manifest (default: the built-in corridor, simulated).
+    #[arg(long)]
+    pub campaign: Option<PathBuf>,
+    /// Energy table of the campaign's sweeps (default: computed, simulating if needed).
+    #[arg(long)]
+    pub energy: Option<PathBuf>,
+    /// Model file for model data (default: fitted from the campaign's energy table).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Model-data seeds (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+    pub seeds: Vec<u64>,
+}

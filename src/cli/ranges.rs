@@ -1,0 +1,85 @@
+//! Range checks of numeric flags, run by clap while parsing.
+//!
+//! Each parser accepts exactly what the library's check of the same field accepts (named
+//! beside it), so no value the library takes is refused here; checking at parse time only
+//! moves the failure before any file is read and lets the message name the flag
+//! (`error: invalid value '0' for '--cell-m <CELL_M>': must be in [0.005, 10] m`). The
+//! binary prints such an error as one line and exits with status 1.
+
+fn real(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .map_err(|e| format!("not a number ({e})"))
+}
+
+fn checked(s: &str, ok: impl Fn(f64) -> bool, range: &str) -> Result<f64, String> {
+    let v = real(s)?;
+    if ok(v) {
+        Ok(v)
+    } else {
+        Err(format!("must be {range}"))
+    }
+}
+
+/// An integer ≥ 1 (`--k-max`: `ClusterParams` k_max; `--bootstrap`: resamples).
+pub fn at_least_one(s: &str) -> Result<usize, String> {
+    let s = s.trim();
+    match s.parse::<usize>() {
+        Ok(0) => Err("must be >= 1".into()),
+        Err(_) if s.starts_with('-') && s[1..].parse::<usize>().is_ok() => {
+            Err("must be >= 1".into())
+        }
+        Ok(v) => Ok(v),
+        Err(e) => Err(format!("not a whole number ({e})")),
+    }
+}
+
+/// `--cell-m`: in [0.005, 10] m (`GridParams` cell_m).
+pub fn cell_m(s: &str) -> Result<f64, String> {
+    checked(s, |v| (0.005..=10.0).contains(&v), "in [0.005, 10] m")
+}
+
+/// `--pfa`: in (0, 0.5] (`OgParams` pfa).
+pub fn pfa(s: &str) -> Result<f64, String> {
+    checked(s, |v| v > 0.0 && v <= 0.5, "in (0, 0.5]")
+}
+
+/// `--prior`: in (0, 1) (`OgParams` prior).
+pub fn open_unit(s: &str) -> Result<f64, String> {
+    checked(s, |v| v > 0.0 && v < 1.0, "in (0, 1)")
+}
+
+/// `--mu0`, `--sigma0`: finite and > 0 (`EkfParams` mu0, sigma0).
+pub fn positive(s: &str) -> Result<f64, String> {
+    checked(s, |v| v.is_finite() && v > 0.0, "finite and > 0")
+}
+
+/// `--pose-noise-m`, `--pose-noise-deg`, `--margin-db`: finite and ≥ 0 (`PoseNoise`,
+/// `ExtractParams` margin_db).
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    checked(s, |v| v.is_finite() && v >= 0.0, "finite and >= 0")
+}
+
+/// `--dynamic-range-db`: > 0 (`ExtractParams` dynamic_range_db; infinity means no limit).
+pub fn dynamic_range_db(s: &str) -> Result<f64, String> {
+    checked(s, |v| v > 0.0, "> 0")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_match_the_library_checks() {
+        assert!(at_least_one("0").is_err() && at_least_one("1").is_ok());
+        assert_eq!(at_least_one("-2").unwrap_err(), "must be >= 1");
+        assert!(cell_m("0").is_err() && cell_m("0.005").is_ok() && cell_m("10.5").is_err());
+        assert!(pfa("0").is_err() && pfa("0.5").is_ok() && pfa("1.5").is_err());
+        assert!(open_unit("0").is_err() && open_unit("1").is_err() && open_unit("0.5").is_ok());
+        assert!(positive("0").is_err() && positive("inf").is_err() && positive("1e-3").is_ok());
+        assert!(non_negative("-1").is_err() && non_negative("0").is_ok());
+        assert!(non_negative("NaN").is_err());
+        assert!(dynamic_range_db("0").is_err() && dynamic_range_db("inf").is_ok());
+        assert!(dynamic_range_db("NaN").is_err());
+    }
+}
