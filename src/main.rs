@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pradar::campaign::manifest::{Campaign, SweepFormat};
+use pradar::params::ParamGuard;
 use pradar::pipeline::experiment::ExperimentParams;
 use std::path::PathBuf;
 
@@ -451,7 +452,8 @@ fn run(cli: Cli) -> Result<()> {
                     ExtractMethod::Peaks => pradar::mpc::Method::Peaks,
                 })
                 .margin_db(margin_db)
-                .dynamic_range_db(dynamic_range_db);
+                .dynamic_range_db(dynamic_range_db)
+                .check()?;
             let mpcs = pradar::mpc::extract(&em, &c, &params)?;
             let meta = pradar::mpc::table_metadata(&em, &c, &params);
             pradar::mpc::write_mpcs(&out, &mpcs, meta)?;
@@ -485,7 +487,8 @@ fn run(cli: Cli) -> Result<()> {
                     KCriterion::GaussBic => pradar::cluster::Criterion::GaussBic,
                     KCriterion::Cv => pradar::cluster::Criterion::CrossValidated,
                     KCriterion::CvShared => pradar::cluster::Criterion::CrossValidatedShared,
-                });
+                })
+                .check()?;
             let headings: Vec<f64> = {
                 let np = m.iter().map(|x| x.position + 1).max().unwrap_or(0);
                 (0..np)

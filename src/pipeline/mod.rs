@@ -8,6 +8,7 @@ use crate::campaign::manifest::{Campaign, SweepFormat};
 use crate::campaign::simulate::simulate;
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
+use crate::params::ParamGuard;
 use crate::report::{self, kv_table, Section};
 use crate::{cluster, mpc};
 use std::path::{Path, PathBuf};
@@ -378,7 +379,7 @@ pub struct Analysis {
 pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -> Result<Analysis> {
     let mut timings = Vec::new();
     let t = Instant::now();
-    let xp = mpc::ExtractParams::default();
+    let xp = mpc::ExtractParams::default().check()?;
     let mpcs = mpc::extract(em, sc, &xp)?;
     if keep_mpcs {
         mpc::write_mpcs(
@@ -391,7 +392,7 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let t = Instant::now();
     let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
     let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
-    let clustering = cluster::cluster(&mpcs, &headings, &params)?;
+    let clustering = cluster::cluster(&mpcs, &headings, &params.check()?)?;
     let cp = work.join("clusters.parquet");
     cluster::write(&cp, &clustering)?;
     timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
@@ -461,7 +462,7 @@ fn k_max_sensitivity(
             k_max: k,
             ..*params
         };
-        let c = cluster::cluster(&base.mpcs, &headings, &p)?;
+        let c = cluster::cluster(&base.mpcs, &headings, &p.check()?)?;
         let path = work.join(format!("clusters_kmax{k}.parquet"));
         cluster::write(&path, &c)?;
         let f = crate::fit::channel::fit_channel(&path, sc, &Default::default()).ok();
