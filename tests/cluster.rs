@@ -240,3 +240,26 @@ fn positions_at_k_max_names_where_the_cap_bound() {
     assert_eq!(free.positions[1].k, 1);
     assert!(free.positions_at_k_max(8).is_empty());
 }
+
+/// `pradar cluster --k-max 0`: one clear line naming the flag and its range, exit 1, no
+/// panic.
+#[test]
+fn k_max_0_on_the_command_line_is_one_clear_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mpcs = tmp.path().join("mpcs.parquet");
+    let m = vec![mpc(0, 10.0, 5.0, -50.0), mpc(0, 30.0, -40.0, -52.0)];
+    pradar::mpc::write_mpcs(&mpcs, &m, vec![]).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pradar"))
+        .args(["cluster", "--k-max", "0", "--mpcs"])
+        .arg(&mpcs)
+        .arg("--out")
+        .arg(tmp.path().join("clusters.parquet"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("k_max") && stderr.contains("--k-max") && stderr.contains(">= 1"));
+    assert!(!tmp.path().join("clusters.parquet").exists());
+}

@@ -4,10 +4,10 @@
 //! Takes 2-D feature points; gives labels 0..K in order of first appearance (so they do not
 //! depend on the order of linfa's centroids).
 //!
-//! * Features: (delay_ns, angle_rel_deg) standardised per position ([`standardise`]:
+//! * Features: (delay_ns, angle_rel_deg) standardised per position (`standardise`:
 //!   z-scores, minus the position's mean, divided by its standard deviation; a feature with
 //!   zero spread is only centred). Relative angles never wrap (the half-plane −90°..90°).
-//! * [`partition`]: K-means with k-means++ initialisation and `n_runs` restarts, the RNG
+//! * `partition`: K-means with k-means++ initialisation and `n_runs` restarts, the RNG
 //!   seeded from (seed, position, K), on the z-scores with the delay axis weighted by `w`;
 //!   with `adaptive_scaling` the features are then divided by that solution's pooled
 //!   within-cluster standard deviations and K-means refitted from that solution's

@@ -6,7 +6,7 @@
 //! per-cluster summary ([`Clustering`]).
 //!
 //! * Features ([`kmeans`]): (delay_ns, angle_rel_deg) standardised per position (z-scores).
-//! * Partitions ([`kmeans::partition`]): for K = 2..min(K_max, n − 1), K-means with
+//! * Partitions (`kmeans::partition`): for K = 2..min(K_max, n − 1), K-means with
 //!   k-means++ initialisation, `n_runs` restarts, the RNG seeded from (seed, position, K),
 //!   then with `adaptive_scaling` (default) refitted in the pooled within-cluster metric (the
 //!   metric of a mixture with a shared diagonal covariance). K = 1 is the trivial

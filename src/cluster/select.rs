@@ -2,7 +2,7 @@
 //! the choice among them by the stated [`Criterion`].
 //!
 //! * K = 1 is the trivial partition; for K ≥ 2 the partitions are K-means's
-//!   ([`super::kmeans::partition`]), seeded from (seed, position, K).
+//!   (`kmeans::partition`), seeded from (seed, position, K).
 //! * Distance indices (silhouette, CH): K's partition from the unweighted z-scores, the index
 //!   measured in K's own (adaptively rescaled) metric; the largest wins, and K = 1 when the
 //!   winner's silhouette is below `min_silhouette` (or no K ≥ 2 is possible).

@@ -1,13 +1,13 @@
 //! The mixture components of the likelihood criteria: per-cluster MLEs and log densities in
 //! the original units (ns, degrees).
 //!
-//! * [`Family::ExpLaplace`] (ChannelBic, the channel model's cluster shape, DESIGN §2 and
+//! * `Family::ExpLaplace` (ChannelBic, the channel model's cluster shape, DESIGN §2 and
 //!   the Table 1 families): delay after the cluster's first arrival exponential, angle
 //!   Laplacian around the cluster's median angle,
 //!   f(τ, θ) = μ e^{−μ(τ − τ0)} · e^{−|θ − θ_c|/b} / (2b) for τ ≥ τ0, with τ0 the first
 //!   arrival, 1/μ the mean excess delay, θ_c the median, b the mean |θ − θ_c|.
-//! * [`Family::Gauss`] (GaussBic, X-means): diagonal Gaussian (means, variances).
-//! * [`Family::GaussLaplace`] (the cross-validated criteria): Gaussian delay × Laplacian
+//! * `Family::Gauss` (GaussBic, X-means): diagonal Gaussian (means, variances).
+//! * `Family::GaussLaplace` (the cross-validated criteria): Gaussian delay × Laplacian
 //!   angle.
 //!
 //! Likelihoods are evaluated in the original units: rescaling a feature adds the same
