@@ -1,11 +1,17 @@
 //! K-means clustering of MPCs: K recovery on clusters drawn with the Table 1 rates,
 //! determinism across thread counts, edge cases.
 
-use pradar::cluster::{adjusted_rand_index, cluster, ClusterParams};
+use pradar::cluster::{adjusted_rand_index, cluster, ClusterParams, ClusterValid};
 use pradar::mpc::Mpc;
+use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Exp, Poisson};
+
+/// Checked clustering parameters.
+fn ok(p: ClusterParams) -> ClusterValid {
+    p.check().unwrap()
+}
 
 fn mpc(p: usize, delay_ns: f64, angle: f64, power_db: f64) -> Mpc {
     let r = delay_ns * 0.299_792_458 / 2.0;
@@ -92,7 +98,12 @@ fn k_recovered_on_table1_clusters() {
         Criterion::CrossValidated,
         Criterion::CrossValidatedShared,
     ] {
-        let c = cluster(&mpcs, &[0.0; 60], &ClusterParams::default().criterion(crit)).unwrap();
+        let c = cluster(
+            &mpcs,
+            &[0.0; 60],
+            &ok(ClusterParams::default().criterion(crit)),
+        )
+        .unwrap();
         let within = k_true
             .iter()
             .zip(&c.positions)
@@ -125,7 +136,7 @@ fn k_recovered_on_table1_clusters() {
     assert!(fracs[0] >= 0.65, "silhouette: K within ±1 at {}", fracs[0]);
     let within = |seed: u64| {
         let (mpcs, _, k_true) = table1_scene(60, seed);
-        let c = cluster(&mpcs, &[0.0; 60], &ClusterParams::default()).unwrap();
+        let c = cluster(&mpcs, &[0.0; 60], &ok(ClusterParams::default())).unwrap();
         k_true
             .iter()
             .zip(&c.positions)
@@ -154,20 +165,20 @@ fn same_labels_with_one_and_two_threads() {
             .num_threads(t)
             .build()
             .unwrap();
-        pool.install(|| cluster(&mpcs, &[0.0; 20], &ClusterParams::default()).unwrap())
+        pool.install(|| cluster(&mpcs, &[0.0; 20], &ok(ClusterParams::default())).unwrap())
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.cluster_id, b.cluster_id);
     assert_eq!(a.summary, b.summary);
     // and another seed may differ but stays a valid labelling
-    let c = cluster(&mpcs, &[0.0; 20], &ClusterParams::default().seed(99)).unwrap();
+    let c = cluster(&mpcs, &[0.0; 20], &ok(ClusterParams::default().seed(99))).unwrap();
     assert_eq!(c.cluster_id.len(), mpcs.len());
 }
 
 #[test]
 fn edge_cases_never_panic() {
     // no MPCs at all
-    let c = cluster(&[], &[0.0; 3], &ClusterParams::default()).unwrap();
+    let c = cluster(&[], &[0.0; 3], &ok(ClusterParams::default())).unwrap();
     assert!(c.summary.is_empty() && c.positions.iter().all(|p| p.k == 0));
     // position 0 empty, position 1 one MPC, position 2 three MPCs with K_max 10
     let m = vec![
@@ -176,16 +187,14 @@ fn edge_cases_never_panic() {
         mpc(2, 11.0, -41.0, -52.0),
         mpc(2, 30.0, 50.0, -55.0),
     ];
-    let c = cluster(&m, &[0.0; 3], &ClusterParams::default().k_max(10)).unwrap();
+    let c = cluster(&m, &[0.0; 3], &ok(ClusterParams::default().k_max(10))).unwrap();
     assert_eq!(c.positions[0].k, 0);
     assert_eq!(c.positions[1].k, 1);
     assert!(c.positions[2].k >= 1 && c.positions[2].k <= 2);
     assert_eq!(c.summary.iter().filter(|s| s.position == 1).count(), 1);
     // invalid parameters are an error, not a panic
-    assert!(cluster(&m, &[0.0; 3], &ClusterParams::default().k_max(0))
-        .unwrap_err()
-        .to_string()
-        .contains("k_max"));
+    let e = ClusterParams::default().k_max(0).check().unwrap_err();
+    assert!(e.to_string().contains("k_max"), "{e}");
 }
 
 /// `positions_at_k_max` names the positions where the cap bound: three separated blobs at
@@ -217,17 +226,40 @@ fn positions_at_k_max_names_where_the_cap_bound() {
         mpcs.push(mpc(3, t, a, -60.0));
     }
     let headings = [0.0; 4];
-    let capped = cluster(&mpcs, &headings, &ClusterParams::default().k_max(2)).unwrap();
+    let capped = cluster(&mpcs, &headings, &ok(ClusterParams::default().k_max(2))).unwrap();
     assert_eq!(capped.positions[0].k, 2);
     assert_eq!(capped.positions_at_k_max(2), vec![0]);
     let sil = ClusterParams::default()
         .k_max(2)
         .criterion(pradar::cluster::Criterion::Silhouette);
-    let by_silhouette = cluster(&mpcs, &headings, &sil).unwrap();
+    let by_silhouette = cluster(&mpcs, &headings, &ok(sil)).unwrap();
     assert_eq!(by_silhouette.positions[3].k_tried, 2);
     assert!(!by_silhouette.positions_at_k_max(2).contains(&3));
-    let free = cluster(&mpcs, &headings, &ClusterParams::default()).unwrap();
+    let free = cluster(&mpcs, &headings, &ok(ClusterParams::default())).unwrap();
     assert_eq!(free.positions[0].k, 3);
     assert_eq!(free.positions[1].k, 1);
     assert!(free.positions_at_k_max(8).is_empty());
+}
+
+/// `pradar cluster --k-max 0`: one clear line naming the flag and its range, exit 1, no
+/// panic.
+#[test]
+fn k_max_0_on_the_command_line_is_one_clear_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mpcs = tmp.path().join("mpcs.parquet");
+    let m = vec![mpc(0, 10.0, 5.0, -50.0), mpc(0, 30.0, -40.0, -52.0)];
+    pradar::mpc::write_mpcs(&mpcs, &m, vec![]).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pradar"))
+        .args(["cluster", "--k-max", "0", "--mpcs"])
+        .arg(&mpcs)
+        .arg("--out")
+        .arg(tmp.path().join("clusters.parquet"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("k_max") && stderr.contains("--k-max") && stderr.contains(">= 1"));
+    assert!(!tmp.path().join("clusters.parquet").exists());
 }

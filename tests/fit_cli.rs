@@ -153,7 +153,9 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         direction: 18,
         bin: 60,
     }];
-    let c = pradar::cluster::cluster(&mpcs, &[0.0], &Default::default()).unwrap();
+    let params =
+        pradar::params::ParamGuard::check(&pradar::cluster::ClusterParams::default()).unwrap();
+    let c = pradar::cluster::cluster(&mpcs, &[0.0], &params).unwrap();
     let cl = tmp.path().join("clusters.parquet");
     pradar::cluster::write(&cl, &c).unwrap();
     let man = write_campaign(&tmp.path().join("in"), &corridor());

@@ -6,7 +6,13 @@ use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat, C0};
 use pradar::campaign::pattern::{beam_metrics, ArrayPattern};
 use pradar::energy::{EnergyMatrix, EnergyProcessor};
-use pradar::mpc::{extract, ExtractParams, Method, Mpc};
+use pradar::mpc::{extract, ExtractParams, ExtractValid, Method, Mpc};
+use pradar::params::ParamGuard;
+
+/// Checked extraction parameters.
+fn checked(p: ExtractParams) -> ExtractValid {
+    p.check().unwrap()
+}
 
 /// Simulate a point-target scene (targets as (range m, angle deg, rrcs m)) and compute its
 /// energy matrix.
@@ -81,8 +87,9 @@ fn clean_recall_and_precision_on_point_scenes() {
                 &targets,
                 -110.0,
             );
-            let clean = extract(&em, &c, &ExtractParams::default()).unwrap();
-            let peaks = extract(&em, &c, &ExtractParams::default().method(Method::Peaks)).unwrap();
+            let clean = extract(&em, &c, &checked(ExtractParams::default())).unwrap();
+            let peaks = checked(ExtractParams::default().method(Method::Peaks));
+            let peaks = extract(&em, &c, &peaks).unwrap();
             let (rc, pc) = score(&clean, &targets, em.meta.bin_width_ns);
             let (rp, pp) = score(&peaks, &targets, em.meta.bin_width_ns);
             eprintln!("N={n} one_bit={one_bit}: CLEAN {} MPCs recall {rc:.2} precision {pc:.2}; peaks {} MPCs recall {rp:.2} precision {pp:.2}", clean.len(), peaks.len());
@@ -112,7 +119,7 @@ fn two_equal_targets_one_and_a_half_beamwidths_apart_are_both_found() {
         let a2 = a1 + 1.5 * hpbw;
         let targets = [(3.0, a1, 0.3), (3.0, a2, 0.3)];
         let (c, em) = scene(&tmp.path().join(format!("{n}")), n, false, &targets, -110.0);
-        let clean = extract(&em, &c, &ExtractParams::default()).unwrap();
+        let clean = extract(&em, &c, &checked(ExtractParams::default())).unwrap();
         let (r, pr) = score(&clean, &targets, em.meta.bin_width_ns);
         eprintln!("N={n}: HPBW {hpbw:.1} deg, targets at {a1} and {a2:.1} deg: {} MPCs, recall {r:.2} precision {pr:.2}", clean.len());
         for m in &clean {
@@ -130,8 +137,9 @@ fn single_strong_target_n16_one_mpc_where_peaks_gives_more() {
     let tmp = tempfile::tempdir().unwrap();
     let targets = [(3.0, 20.0, 1.0)];
     let (c, em) = scene(tmp.path(), 16, false, &targets, -110.0);
-    let clean = extract(&em, &c, &ExtractParams::default()).unwrap();
-    let peaks = extract(&em, &c, &ExtractParams::default().method(Method::Peaks)).unwrap();
+    let clean = extract(&em, &c, &checked(ExtractParams::default())).unwrap();
+    let peaks = checked(ExtractParams::default().method(Method::Peaks));
+    let peaks = extract(&em, &c, &peaks).unwrap();
     eprintln!(
         "N=16 strong target (SNR {:.1} dB): CLEAN {} MPC(s), peaks {} MPCs",
         clean.first().map(|m| m.snr_db).unwrap_or(0.0),
@@ -167,7 +175,7 @@ fn floor_tracks_the_configured_noise_floor() {
         );
         assert!(err.abs() <= 1.0);
         // and CLEAN keeps nothing from noise alone
-        let clean = extract(&em, &c, &ExtractParams::default()).unwrap();
+        let clean = extract(&em, &c, &checked(ExtractParams::default())).unwrap();
         assert!(clean.len() <= 2, "floor {floor_dbm}: {} MPCs", clean.len());
     }
 }
@@ -180,7 +188,7 @@ fn corridor_strong_scatterer_recall_is_printed() {
         set(&mut t, "array.elements", n as i64);
         let dir = tmp.path().join(format!("c{n}"));
         let (sc, em) = chain(&dir, &t, SweepFormat::Parquet);
-        let mpcs = extract(&em, &sc, &ExtractParams::default()).unwrap();
+        let mpcs = extract(&em, &sc, &checked(ExtractParams::default())).unwrap();
         let rays = pradar::table::read_parquet(&dir.join("sim/truth/rays.parquet"), None).unwrap();
         let path = std::path::Path::new("rays");
         let pos = pradar::table::i64_column(path, &rays, "position").unwrap();

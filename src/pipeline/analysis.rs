@@ -8,6 +8,7 @@
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
 use crate::error::Result;
+use crate::params::ParamGuard;
 use crate::{cluster, mpc};
 use std::path::Path;
 use std::time::Instant;
@@ -46,7 +47,7 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let mut timings = Vec::new();
     let t = Instant::now();
     let xp = mpc::ExtractParams::default();
-    let mpcs = mpc::extract(em, sc, &xp)?;
+    let mpcs = mpc::extract(em, sc, &xp.check()?)?;
     if keep_mpcs {
         mpc::write_mpcs(
             &work.join("mpcs.parquet"),
@@ -58,7 +59,7 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let t = Instant::now();
     let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
     let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
-    let clustering = cluster::cluster(&mpcs, &headings, &params)?;
+    let clustering = cluster::cluster(&mpcs, &headings, &params.check()?)?;
     let cp = work.join("clusters.parquet");
     cluster::write(&cp, &clustering)?;
     timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));

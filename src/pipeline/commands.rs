@@ -340,7 +340,7 @@ impl fmt::Display for ExtractSummary {
 pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
     let c = Campaign::load(&cmd.campaign)?;
     let em = EnergyMatrix::read(&cmd.energy)?;
-    let mpcs = crate::mpc::extract(&em, &c, &cmd.params)?;
+    let mpcs = crate::mpc::extract(&em, &c, &cmd.params.check()?)?;
     let meta = crate::mpc::table_metadata(&em, &c, &cmd.params);
     crate::mpc::write_mpcs(&cmd.out, &mpcs, meta)?;
     Ok(ExtractSummary {
@@ -425,7 +425,7 @@ pub fn cluster(cmd: &Cluster) -> Result<ClusterSummary> {
     let m = crate::mpc::read_mpcs(&cmd.mpcs)?;
     let sector = crate::mpc::read_sector_deg(&cmd.mpcs)?.unwrap_or(180.0);
     let params = cmd.params.sector_deg(sector);
-    let c = crate::cluster::cluster(&m, &pose_headings(&m), &params)?;
+    let c = crate::cluster::cluster(&m, &pose_headings(&m), &params.check()?)?;
     let summary = crate::cluster::write(&cmd.out, &c)?;
     Ok(ClusterSummary {
         clusters: c.summary.len(),

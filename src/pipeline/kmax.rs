@@ -12,6 +12,7 @@ use crate::cluster;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
+use crate::params::ParamGuard;
 use std::path::Path;
 
 /// The larger caps of the K_max sensitivity table.
@@ -45,7 +46,7 @@ pub(crate) fn k_max_sensitivity(
             k_max: k,
             ..*params
         };
-        let c = cluster::cluster(&base.mpcs, &headings, &p)?;
+        let c = cluster::cluster(&base.mpcs, &headings, &p.check()?)?;
         let path = work.join(format!("clusters_kmax{k}.parquet"));
         cluster::write(&path, &c)?;
         let f = crate::fit::channel::fit_channel(&path, sc, &Default::default()).ok();

@@ -1,0 +1,56 @@
+//! Parquet output of a clustering (DESIGN §3): the clustered MPC table (the MPC columns plus
+//! `cluster_id`) and the per-cluster summary `<stem>_summary.parquet`, both with
+//! `schema_version` 1.
+
+use super::Clustering;
+use crate::error::{Error, Result};
+use crate::table;
+use std::path::{Path, PathBuf};
+
+/// Write the clustered MPC table (`path`) and the summary (`<stem>_summary.parquet`).
+pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
+    let mut df = crate::mpc::mpc_frame(path, &c.mpcs)?;
+    df.with_column(table::col(
+        "cluster_id",
+        c.cluster_id.iter().map(|&i| i as i64).collect::<Vec<_>>(),
+    ))
+    .map_err(|e| Error::table(path, e))?;
+    table::write_parquet(path, &df, vec![("schema_version".into(), "1".into())])?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "clusters".into());
+    let spath = path.with_file_name(format!("{stem}_summary.parquet"));
+    let s = &c.summary;
+    let f64s = |name: &str, g: fn(&super::ClusterSummary) -> f64| {
+        table::col(name, s.iter().map(g).collect::<Vec<_>>())
+    };
+    let sdf = table::frame(
+        &spath,
+        vec![
+            table::col(
+                "position",
+                s.iter().map(|x| x.position as i32).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "cluster_id",
+                s.iter().map(|x| x.cluster_id as i64).collect::<Vec<_>>(),
+            ),
+            table::col(
+                "members",
+                s.iter().map(|x| x.members as i64).collect::<Vec<_>>(),
+            ),
+            f64s("centroid_delay_ns", |x| x.centroid_delay_ns),
+            f64s("centroid_angle_rel_deg", |x| x.centroid_angle_rel_deg),
+            f64s("centroid_angle_global_deg", |x| x.centroid_angle_global_deg),
+            f64s("first_arrival_ns", |x| x.first_arrival_ns),
+            f64s("ref_delay_ns", |x| x.ref_delay_ns),
+            f64s("ref_angle_rel_deg", |x| x.ref_angle_rel_deg),
+            f64s("power_db", |x| x.power_db),
+            f64s("centroid_x_m", |x| x.centroid_x_m),
+            f64s("centroid_y_m", |x| x.centroid_y_m),
+        ],
+    )?;
+    table::write_parquet(&spath, &sdf, vec![("schema_version".into(), "1".into())])?;
+    Ok(spath)
+}

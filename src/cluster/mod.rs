@@ -1,0 +1,174 @@
+//! Clustering of MPCs (DESIGN §2 "Clustering"): K-means (linfa-clustering, k-means++,
+//! seeded) per position on scaled (delay, angle_rel), K from a stated criterion.
+//!
+//! Takes the MPCs of each position and checked parameters ([`ClusterValid`]); gives a
+//! cluster label per MPC (ids unique over the campaign, numbered position by position) and a
+//! per-cluster summary ([`Clustering`]).
+//!
+//! * Features ([`kmeans`]): (delay_ns, angle_rel_deg) standardised per position (z-scores).
+//! * Partitions (`kmeans::partition`): for K = 2..min(K_max, n − 1), K-means with
+//!   k-means++ initialisation, `n_runs` restarts, the RNG seeded from (seed, position, K),
+//!   then with `adaptive_scaling` (default) refitted in the pooled within-cluster metric (the
+//!   metric of a mixture with a shared diagonal covariance). K = 1 is the trivial
+//!   partition. K-means is the only clustering algorithm: the criteria only choose among
+//!   its partitions.
+//! * Criteria ([`criteria`], [`Criterion`]), each measured on K's own partition: mean
+//!   silhouette, Calinski–Harabasz, the gap statistic, ChannelBic (the channel model's
+//!   exponential-delay × Laplacian-angle component), GaussBic (X-means), and the
+//!   cross-validated leave-one-out likelihood with a "new cluster" term, with per-cluster
+//!   (`CrossValidated`, the default) or shared (`CrossValidatedShared`) scales.
+//! * Selection ([`select`]): the candidate partitions per K (four delay weights for the
+//!   likelihood criteria) and the winner; K = 1 when the distance indices find no
+//!   substantial structure.
+//! * K_max (default 8) caps K. Where a position's criterion still prefers the cap,
+//!   [`Clustering::positions_at_k_max`] names it, `pradar cluster` warns and the report
+//!   lists K per position.
+//! * Summary per cluster ([`summary`]) and Parquet output ([`io`]); the adjusted Rand index
+//!   ([`metrics`]) compares labellings.
+//!
+//! Positions are clustered in parallel; the result does not depend on the thread count.
+//! Measurements of the criteria and of the default's choice are in `docs/cluster.md`.
+//!
+//! ```
+//! use pradar::cluster::{cluster, ClusterParams};
+//! use pradar::mpc::Mpc;
+//! use pradar::params::ParamGuard;
+//! let mpc = |delay_ns: f64, angle_rel_deg: f64| Mpc {
+//!     position: 0, delay_ns, angle_rel_deg, angle_global_deg: angle_rel_deg,
+//!     power_db: -60.0, snr_db: 30.0, x_m: 0.0, y_m: 0.0, direction: 0, bin: 0,
+//! };
+//! let mpcs: Vec<Mpc> = (0..8)
+//!     .map(|i| mpc(10.0 + 0.3 * i as f64, -50.0 + i as f64))
+//!     .chain((0..8).map(|i| mpc(40.0 + 0.3 * i as f64, 45.0 - i as f64)))
+//!     .collect();
+//! let params = ClusterParams::default().check().unwrap();
+//! let c = cluster(&mpcs, &[0.0], &params).unwrap();
+//! assert_eq!(c.summary.len(), 2);
+//! assert!(ClusterParams::default().k_max(0).check().is_err());
+//! ```
+
+pub mod criteria;
+pub mod io;
+pub mod kmeans;
+pub mod metrics;
+pub mod params;
+pub mod select;
+pub mod summary;
+
+pub use criteria::{calinski_harabasz, likelihood_criterion, silhouette};
+pub use io::write;
+pub use kmeans::{kmeans_labels, pooled_within_sd, within_ss};
+pub use metrics::adjusted_rand_index;
+pub use params::{ClusterParams, ClusterValid, Criterion};
+pub use select::cluster_position;
+pub use summary::ClusterSummary;
+
+use crate::error::Result;
+use crate::mpc::Mpc;
+use rayon::prelude::*;
+
+/// Result of clustering one position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PositionClustering {
+    /// Chosen K (0 for no MPCs).
+    pub k: usize,
+    /// The K whose partition won (the K tried; `k` can be smaller when K-means left a
+    /// cluster empty).
+    pub k_tried: usize,
+    /// Label per MPC (0..k).
+    pub labels: Vec<usize>,
+    /// Mean silhouette per tried K (K, s).
+    pub silhouettes: Vec<(usize, f64)>,
+    /// CH per tried K.
+    pub ch: Vec<(usize, f64)>,
+    /// Likelihood criterion per tried K (K, value; BIC, or −2 × the leave-one-out
+    /// log-likelihood: smaller is better); empty for the other criteria.
+    pub likelihood: Vec<(usize, f64)>,
+}
+
+/// Clustering of a whole campaign.
+#[derive(Debug, Clone)]
+pub struct Clustering {
+    /// MPCs in input order.
+    pub mpcs: Vec<Mpc>,
+    /// Campaign-wide cluster id per MPC.
+    pub cluster_id: Vec<usize>,
+    /// Per-cluster summaries.
+    pub summary: Vec<ClusterSummary>,
+    /// Per-position details (index = position).
+    pub positions: Vec<PositionClustering>,
+}
+
+impl Clustering {
+    /// The positions whose chosen K is the cap `k_max` while their MPCs allowed more
+    /// (K_max < n − 1): there the criterion still preferred the largest K tried, so the
+    /// cluster count, and with it Λ, λ, the AoA spread and d_c, is set by K_max rather than
+    /// found.
+    pub fn positions_at_k_max(&self, k_max: usize) -> Vec<usize> {
+        self.positions
+            .iter()
+            .enumerate()
+            .filter(|(_, pc)| pc.k_tried == k_max && pc.labels.len() > k_max + 1)
+            .map(|(p, _)| p)
+            .collect()
+    }
+}
+
+/// The MPC indices of each position (index = position; at least `n_positions` entries).
+fn by_position(mpcs: &[Mpc], n_positions: usize) -> Vec<Vec<usize>> {
+    let np = mpcs
+        .iter()
+        .map(|m| m.position + 1)
+        .max()
+        .unwrap_or(0)
+        .max(n_positions);
+    let mut by_pos: Vec<Vec<usize>> = vec![Vec::new(); np];
+    for (i, m) in mpcs.iter().enumerate() {
+        by_pos[m.position].push(i);
+    }
+    by_pos
+}
+
+/// Cluster every position (positions in parallel; deterministic for any thread count).
+/// `headings_deg[p]` gives the pose heading for the global centroid angle.
+pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterValid) -> Result<Clustering> {
+    let by_pos = by_position(mpcs, headings_deg.len());
+    let per: Vec<PositionClustering> = by_pos
+        .par_iter()
+        .enumerate()
+        .map(|(p, idx)| {
+            let ms: Vec<&Mpc> = idx.iter().map(|&i| &mpcs[i]).collect();
+            cluster_position(&ms, params, p)
+        })
+        .collect::<Result<_>>()?;
+    // campaign-wide ids, position by position, and the summaries
+    let mut cluster_id = vec![0usize; mpcs.len()];
+    let mut summary = Vec::new();
+    for (p, (idx, pc)) in by_pos.iter().zip(&per).enumerate() {
+        for c in 0..pc.k {
+            let members: Vec<&Mpc> = idx
+                .iter()
+                .zip(&pc.labels)
+                .filter(|(_, &l)| l == c)
+                .map(|(&i, _)| &mpcs[i])
+                .collect();
+            if members.is_empty() {
+                continue;
+            }
+            let id = summary.len();
+            for (&i, &l) in idx.iter().zip(&pc.labels) {
+                if l == c {
+                    cluster_id[i] = id;
+                }
+            }
+            let heading = headings_deg.get(p).copied();
+            summary.push(ClusterSummary::of(p, id, &members, heading));
+        }
+    }
+    Ok(Clustering {
+        mpcs: mpcs.to_vec(),
+        cluster_id,
+        summary,
+        positions: per,
+    })
+}
