@@ -432,3 +432,71 @@ fn clutter_clusters(
         });
     });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cfg() -> SceneConfig {
+        SceneConfig {
+            walls: true,
+            wall_rcs_per_m: 0.01,
+            scatterers_per_cell: 20.0,
+            specular: true,
+            corner_rcs_m2: 0.1,
+            edge_rcs_m2: 0.01,
+            coupling_db: -30.0,
+            coupling_delay_ns: 0.2,
+            pattern_knots: 0,
+            materials: BTreeMap::new(),
+            targets: vec![],
+        }
+    }
+
+    #[test]
+    fn check_names_the_field_and_range() {
+        assert!(cfg().check().is_ok());
+        let e = SceneConfig {
+            pattern_knots: 1,
+            ..cfg()
+        }
+        .check()
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("scene.pattern_knots") && e.contains(">= 2"),
+            "{e}"
+        );
+        let e = SceneConfig {
+            scatterers_per_cell: 5.0,
+            ..cfg()
+        }
+        .check()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("scene.scatterers_per_cell"), "{e}");
+    }
+
+    #[test]
+    fn scene_depends_on_the_seed_only() {
+        let square = r#"{"type":"FeatureCollection","features":[
+          {"type":"Feature","properties":{"role":"perimeter"},
+           "geometry":{"type":"Polygon","coordinates":[[[0,0],[4,0],[4,2],[0,2],[0,0]]]}}]}"#;
+        let layout = Layout::from_geojson(square, std::path::Path::new("t.geojson")).unwrap();
+        let build = |seed| Scene::build(layout.clone(), cfg().check().unwrap(), None, 6e9, seed);
+        let (a, b) = (build(7), build(7));
+        assert_eq!(a.scatterers.len(), b.scatterers.len());
+        assert!(a
+            .scatterers
+            .iter()
+            .zip(&b.scatterers)
+            .all(|(x, y)| x.pos == y.pos && x.x == y.x));
+        // four concave corners of the perimeter, the rest diffuse
+        let corners = a
+            .scatterers
+            .iter()
+            .filter(|s| s.kind == ScattererKind::Corner)
+            .count();
+        assert_eq!(corners, 4);
+    }
+}
