@@ -29,16 +29,16 @@
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 //!
 //! Layout: [`processor`] (window, IFFT, bins, TW/ENBW), [`matrix`] (the table read back,
-//! campaign check), [`write`] (table and metadata); [`run`] streams a campaign through them
+//! campaign check), [`writer`] (table and metadata); [`run`] streams a campaign through them
 //! and estimates N0.
 
 pub mod matrix;
 pub mod processor;
-pub mod write;
+pub mod writer;
 
 pub use matrix::{check_campaign, EnergyMatrix, EnergyMeta};
 pub use processor::{window, EnergyProcessor};
-pub use write::{table_metadata, write_table};
+pub use writer::{table_metadata, write_table};
 
 use crate::campaign::manifest::Campaign;
 use crate::campaign::sweeps::SweepReader;
