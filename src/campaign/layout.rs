@@ -15,7 +15,10 @@
 //! walls: never observable, reported separately by the metrics).
 
 use crate::error::{Error, Result};
-use geo::{BoundingRect, Contains, Coord, Intersects, Line, Point, Polygon, Rect, Winding};
+use geo::{
+    BoundingRect, Contains, Coord, Euclidean, InterpolatePoint, Intersects, Line, LineLocatePoint,
+    Point, Polygon, Rect, Winding,
+};
 use geojson::GeoJson;
 use std::path::Path;
 
@@ -358,44 +361,60 @@ impl Layout {
             .sum()
     }
 
+    /// The perimeter walls in ring order (counter-clockwise).
+    fn perimeter_walls(&self) -> impl Iterator<Item = &Wall> {
+        self.walls.iter().filter(|w| w.kind == WallKind::Perimeter)
+    }
+
     /// Point at arc length `s` (m, modulo the perimeter length) along the counter-clockwise
     /// perimeter, with the inward unit normal of that edge.
+    ///
+    /// Walks the walls to the one holding `s`, then interpolates on it with geo's Euclidean
+    /// `point_at_ratio_between` (the successor of `LineInterpolatePoint`). Not the
+    /// `LineString` form: it takes a fraction of the total length (`s/total·total` rounds,
+    /// so the simulator's bytes would move) and does not say which edge, whose normal we need.
     pub fn perimeter_point(&self, s: f64) -> (Coord<f64>, Coord<f64>) {
         let total = self.perimeter_length();
         let mut s = s.rem_euclid(total);
-        let per: Vec<&Wall> = self
-            .walls
-            .iter()
-            .filter(|w| w.kind == WallKind::Perimeter)
-            .collect();
-        for w in &per {
+        let mut last = None;
+        for w in self.perimeter_walls() {
             let l = w.length();
             if s <= l {
-                let t = s / l;
-                let p = w.line.start + (w.line.end - w.line.start) * t;
-                return (p, w.normal());
+                let p = Euclidean.point_at_ratio_between(
+                    w.line.start_point(),
+                    w.line.end_point(),
+                    s / l,
+                );
+                return (p.0, w.normal());
             }
             s -= l;
+            last = Some(w);
         }
-        let w = per.last().expect("perimeter has walls");
+        let w = last.expect("perimeter has walls");
         (w.line.end, w.normal())
     }
 
     /// Project a point onto the perimeter: (arc length of the closest point, distance).
+    ///
+    /// Per wall, geo's `LineLocatePoint` gives the clamped fraction t of the foot point; the
+    /// arc length is accumulated here in metres (geo's `LineString` form returns a fraction
+    /// of the total instead, with different rounding). A non-finite point matches no wall.
     pub fn project_to_perimeter(&self, p: Coord<f64>) -> (f64, f64) {
         let mut best = (0.0, f64::INFINITY);
         let mut s0 = 0.0;
-        for w in self.walls.iter().filter(|w| w.kind == WallKind::Perimeter) {
+        for w in self.perimeter_walls() {
             let d = w.line.delta();
-            let l2 = d.x * d.x + d.y * d.y;
-            let t = (((p.x - w.line.start.x) * d.x + (p.y - w.line.start.y) * d.y) / l2)
-                .clamp(0.0, 1.0);
-            let q = w.line.start + d * t;
-            let dist = (p.x - q.x).hypot(p.y - q.y);
-            if dist < best.1 {
-                best = (s0 + t * l2.sqrt(), dist);
+            // √(dx² + dy²), not `Wall::length`'s hypot: the arc lengths stay bit-for-bit
+            let l = (d.x * d.x + d.y * d.y).sqrt();
+            if let Some(t) = w.line.line_locate_point(&Point::from(p)) {
+                let q =
+                    Euclidean.point_at_ratio_between(w.line.start_point(), w.line.end_point(), t);
+                let dist = (p.x - q.x()).hypot(p.y - q.y());
+                if dist < best.1 {
+                    best = (s0 + t * l, dist);
+                }
             }
-            s0 += l2.sqrt();
+            s0 += l;
         }
         best
     }
@@ -490,6 +509,149 @@ mod tests {
                 (s2 - s).abs() < 1e-9 && (d - 0.2).abs() < 1e-9,
                 "{s}: {s2} {d}"
             );
+        }
+    }
+
+    /// Values of the hand-written projection this module had before it used geo's
+    /// `LineLocatePoint` / Euclidean interpolation, on a skewed pentagon and the corridor.
+    #[test]
+    #[allow(clippy::approx_constant)] // recorded values, not constants
+    fn perimeter_matches_the_hand_written_projection() {
+        const PENTAGON: &str = r#"{"type":"FeatureCollection","features":[
+          {"type":"Feature","properties":{"role":"perimeter"},
+           "geometry":{"type":"Polygon","coordinates":[[[0,0],[3.7,0.4],[4.2,2.9],[1.3,3.6],[-0.5,1.8],[0,0]]]}}]}"#;
+        type Points = &'static [(f64, [f64; 4])];
+        type Projections = &'static [([f64; 2], f64, f64)];
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+        let corridor = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/corridor/layout.geojson");
+        let cases: [(Layout, f64, Points, Projections); 2] = [
+            (
+                Layout::from_geojson(PENTAGON, Path::new("t.geojson")).unwrap(),
+                13.668093929515843,
+                &[
+                    (0.0, [0.0, 0.0, -0.10748184298009182, 0.9942070475658493]),
+                    (
+                        0.3,
+                        [
+                            0.29826211426975474,
+                            0.03224455289402754,
+                            -0.10748184298009182,
+                            0.9942070475658493,
+                        ],
+                    ),
+                    (
+                        2.5,
+                        [
+                            2.4855176189146233,
+                            0.26870460745022956,
+                            -0.10748184298009182,
+                            0.9942070475658493,
+                        ],
+                    ),
+                    (
+                        3.7185,
+                        [
+                            3.6969589063736104,
+                            0.3996712331214714,
+                            -0.10748184298009182,
+                            0.9942070475658493,
+                        ],
+                    ),
+                    (
+                        5.0,
+                        [
+                            3.950722944559498,
+                            1.6536147227974887,
+                            -0.9805806756909202,
+                            0.19611613513818404,
+                        ],
+                    ),
+                    (
+                        7.7,
+                        [
+                            2.8109611796083867,
+                            3.2352852325083203,
+                            -0.23464053310389685,
+                            -0.9720822085732869,
+                        ],
+                    ),
+                    (
+                        11.0,
+                        [
+                            0.06564282904102381,
+                            2.3656428290410236,
+                            0.7071067811865476,
+                            -0.7071067811865476,
+                        ],
+                    ),
+                    (
+                        13.9,
+                        [
+                            0.23056264964865203,
+                            0.02492569185390833,
+                            -0.10748184298009182,
+                            0.9942070475658493,
+                        ],
+                    ),
+                    (
+                        -1.2,
+                        [
+                            -0.3211726365433132,
+                            1.1562214915559275,
+                            0.9635179096299405,
+                            0.2676438637860946,
+                        ],
+                    ),
+                ],
+                &[
+                    ([1.0, 1.0], 1.101688890545941, 0.8867252045857574),
+                    ([2.0, 0.5], 2.0421550166217446, 0.282139837822741),
+                    ([3.9, 2.0], 5.3297111213187875, 0.11766968108291044),
+                    ([-1.0, -1.0], 0.0, 1.4142135623730951),
+                    ([0.7, 3.0], 10.102883485441188, 1.1102230246251565e-16),
+                    ([5.0, 5.0], 6.271068569982072, 2.247220505424423),
+                ],
+            ),
+            (
+                Layout::load(&corridor).unwrap(),
+                31.700000000000003,
+                &[
+                    (0.0, [-1.0, -1.0, -0.0, 1.0]),
+                    (0.3, [-0.7, -1.0, -0.0, 1.0]),
+                    (2.5, [1.5, -1.0, -0.0, 1.0]),
+                    (3.7185, [2.7185, -1.0, -0.0, 1.0]),
+                    (5.0, [4.0, -1.0, -0.0, 1.0]),
+                    (7.7, [6.7, -1.0, -0.0, 1.0]),
+                    (11.0, [7.5, -3.5, -0.0, 1.0]),
+                    (13.9, [8.6, -1.6999999999999993, -1.0, 0.0]),
+                    (-1.2, [-1.0, 0.19999999999999396, 1.0, 0.0]),
+                ],
+                &[
+                    ([1.0, 1.0], 27.700000000000003, 0.0),
+                    ([2.0, 0.5], 26.700000000000003, 0.5),
+                    ([3.9, 2.0], 24.450000000000003, 0.6499999999999999),
+                    ([-1.0, -1.0], 0.0, 0.0),
+                    ([0.7, 3.0], 28.000000000000004, 2.0),
+                    ([5.0, 5.0], 24.450000000000003, 3.8121516234273787),
+                ],
+            ),
+        ];
+        for (l, total, points, projections) in cases {
+            assert!(close(l.perimeter_length(), total));
+            for &(s, [x, y, nx, ny]) in points {
+                let (p, n) = l.perimeter_point(s);
+                assert!(
+                    close(p.x, x) && close(p.y, y) && close(n.x, nx) && close(n.y, ny),
+                    "perimeter_point({s}) = {p:?}, {n:?}"
+                );
+            }
+            for &([x, y], s, d) in projections {
+                let (s2, d2) = l.project_to_perimeter(Coord { x, y });
+                assert!(
+                    close(s2, s) && close(d2, d),
+                    "project({x}, {y}) = {s2}, {d2}"
+                );
+            }
         }
     }
 

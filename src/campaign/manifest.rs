@@ -6,6 +6,10 @@
 //! read them. The simulator reads them separately ([`crate::campaign::simulate::SceneConfig`]).
 //!
 //! Every validation error names the manifest file and the dotted field.
+//!
+//! The sub-sections' `check` methods (`Band`, `ArrayConfig`, `Directions`, `Processing`, …)
+//! stay inherent: they validate file contents where the manifest is read, not algorithm
+//! parameters, so they are not [`crate::params::ParamGuard`] sets (no `Valid` wrapper).
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
