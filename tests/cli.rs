@@ -1,7 +1,7 @@
 //! End-to-end tests of the `pradar` binary: bad input gives one clear line and a non-zero
 //! exit (never a panic, never a partial output), determinism across thread counts, formats.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};
