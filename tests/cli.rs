@@ -1,7 +1,7 @@
 //! End-to-end tests of the `pradar` binary: bad input gives one clear line and a non-zero
 //! exit (never a panic, never a partial output), determinism across thread counts, formats.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};
@@ -307,7 +307,7 @@ fn energy_parquet_is_read_by_pandas() {
     let out = tmp.path().join("energy.parquet");
     let o = run(&["energy", "--campaign", s(&m), "--out", s(&out)], None);
     assert_eq!(o.code, 0, "{}", o.stderr);
-    let py = Command::new("python3")
+    let py = python()
         .arg(root().join("scripts/read_energy.py"))
         .arg(&out)
         .output();
@@ -318,15 +318,16 @@ fn energy_parquet_is_read_by_pandas() {
             assert!(text.starts_with("ok rows="), "{text}");
             assert!(text.contains("positions=2 directions=37"), "{text}");
         }
-        Ok(r) if std::env::var("PRADAR_SKIP_PYTHON").is_ok() => {
-            eprintln!("skipped (PRADAR_SKIP_PYTHON): {}", String::from_utf8_lossy(&r.stderr));
+        Ok(r) if skip_python() => {
+            eprintln!("skipped (PRADAR_SKIP_PYTHON=1): {}", String::from_utf8_lossy(&r.stderr));
         }
+        Err(e) if skip_python() => eprintln!("skipped (PRADAR_SKIP_PYTHON=1): {e}"),
         Ok(r) => panic!(
-            "pandas could not read the energy table (install numpy pandas pyarrow, or set PRADAR_SKIP_PYTHON): {}{}",
+            "pandas could not read the energy table (run scripts/test, which makes a venv with numpy pandas pyarrow; or set PRADAR_PYTHON, or PRADAR_SKIP_PYTHON=1): {}{}",
             String::from_utf8_lossy(&r.stdout),
             String::from_utf8_lossy(&r.stderr)
         ),
-        Err(e) => panic!("python3 not available: {e}"),
+        Err(e) => panic!("no Python interpreter (PRADAR_PYTHON or python3; run scripts/test): {e}"),
     }
 }
 

@@ -23,7 +23,7 @@
 //! about 10 %). So even synth's truth reads d_c 7.1/9.6/11.2 m, and the chain's d_c is
 //! scored against a model value the draw itself misses by more than 15 % in set 3.
 
-mod common;
+use crate::common;
 
 use pradar::campaign::manifest::Campaign;
 use pradar::campaign::modelfile::ModelConfig;

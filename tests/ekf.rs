@@ -5,7 +5,7 @@
 
 #![allow(clippy::needless_range_loop)] // the textbook EKF is written with indices on purpose
 
-mod common;
+use crate::common;
 
 use common::*;
 use pradar::campaign::layout::{CellClass, GridSpec};

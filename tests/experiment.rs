@@ -1,7 +1,7 @@
 //! `pradar experiment`: the paper's mapping experiments end to end on the built-in corridor
 //! (fig6 at full size, the others with one seed), their files, and bad input.
 
-mod common;
+use crate::common;
 
 use common::assert_one_line_error;
 use serde_json::Value;

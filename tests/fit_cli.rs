@@ -1,6 +1,6 @@
 //! `pradar fit` end to end: never reads the ground truth, clear errors, model round trip.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::Path;

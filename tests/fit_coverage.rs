@@ -7,7 +7,7 @@
 //! bias on data that follow the model, without extraction or clustering (the chain's
 //! closed loop is `tests/closed_loop.rs` and `scripts/closed-loop`).
 
-mod common;
+use crate::common;
 
 use pradar::campaign::manifest::Campaign;
 use pradar::campaign::modelfile::{ModelConfig, Quantity};

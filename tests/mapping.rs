@@ -2,7 +2,7 @@
 //! reader, the side-lobe ghost, the corridor at N = 16 and 100, fusion of two trajectories,
 //! determinism across thread counts and bad input. Every figure asserted is printed.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat};

@@ -1,6 +1,6 @@
 //! MPC extraction against the simulator's ground truth (issue: MPC extraction & clustering).
 
-mod common;
+use crate::common;
 
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat, C0};

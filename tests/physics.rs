@@ -1,6 +1,6 @@
 //! Physics checks of the simulator + energy chain against closed forms (issue: foundation).
 
-mod common;
+use crate::common;
 
 use common::*;
 use num_complex::Complex64;

@@ -1,7 +1,7 @@
 //! `pradar synth` (the statistical channel model): agreement with `simulate` on a single
 //! scatterer, energy-detector statistics, determinism, model-file round trip and errors.
 
-mod common;
+use crate::common;
 
 use common::{fixture, set, write_campaign};
 use geo::Coord;

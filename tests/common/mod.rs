@@ -8,6 +8,19 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The Python interpreter of the cross-checks: `$PRADAR_PYTHON` (set by `scripts/test` to
+/// its venv, which has numpy, pandas and pyarrow), else `python3` from the `PATH`.
+pub fn python() -> std::process::Command {
+    let exe = std::env::var_os("PRADAR_PYTHON").unwrap_or_else(|| "python3".into());
+    std::process::Command::new(exe)
+}
+
+/// Whether the Python cross-checks may pass without running: only when
+/// `PRADAR_SKIP_PYTHON=1` is set explicitly (they fail loudly otherwise).
+pub fn skip_python() -> bool {
+    std::env::var("PRADAR_SKIP_PYTHON").is_ok_and(|v| v == "1")
+}
+
 /// Load a fixture manifest as a TOML table.
 pub fn fixture(name: &str) -> toml::Table {
     let text = std::fs::read_to_string(root().join("data").join(name)).unwrap();
