@@ -406,7 +406,8 @@ fn clutter_clusters(
             // drawn for the reference ray too (keeps the stream)
             let lap = laplace(rng, b);
             let lap = if r == 0 { 0.0 } else { lap };
-            let depth = crate::units::range_m(tau);
+            // c₀·τ/2 in the scene's own operation order (its draws stay bit-for-bit)
+            let depth = crate::units::C0 * tau * 1e-9 / 2.0;
             let lateral = d_ref * lap.tan();
             let pos = Coord {
                 x: centre.x - nrm.x * depth + tangent.x * lateral,
