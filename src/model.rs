@@ -186,7 +186,8 @@ impl ChannelModel {
             }
             let mean_depth_m = rays
                 .iter()
-                .map(|r| crate::units::range_m(r.excess_ns))
+                // c₀·τ/2 in the original operation order (bit-identical cluster locations)
+                .map(|r| crate::units::C0 * r.excess_ns * 1e-9 / 2.0)
                 .sum::<f64>()
                 / n as f64;
             clusters.push(ModelCluster {
