@@ -338,11 +338,11 @@ fn run(cli: Cli) -> Result<()> {
                 c.set_elements(n)?;
             }
             let m = pradar::campaign::modelfile::ModelConfig::load(&model)?;
-            let p = pradar::model::SynthParams {
+            let p = pradar::params::ParamGuard::check(&pradar::model::SynthParams {
                 seed,
                 truth_dir: truth,
                 ..Default::default()
-            };
+            })?;
             let pb = bar(quiet, "synth", c.manifest.positions());
             let r = pradar::model::synth(&c, &m, &out, &p, &|d, _| pb.set_position(d as u64))?;
             pb.finish_and_clear();
@@ -528,7 +528,8 @@ fn run(cli: Cli) -> Result<()> {
             truth,
         } => {
             let c = Campaign::load(&campaign)?;
-            let params = pradar::fit::channel::FitParams { bootstrap, seed };
+            let params =
+                pradar::params::ParamGuard::check(&pradar::fit::FitParams { bootstrap, seed })?;
             let f = pradar::fit::channel::fit_channel(&clusters, &c, &params)?;
             let t = match &truth {
                 Some(dir) => Some(pradar::fit::channel::fit_truth(dir, &c, &params)?),
@@ -537,8 +538,14 @@ fn run(cli: Cli) -> Result<()> {
             f.model.save(&out)?;
             pradar::fit::channel::write_table1(&table, &f, t.as_ref())?;
             if !quiet {
-                for r in pradar::fit::channel::table1_rows(&f, t.as_ref()) {
-                    println!("{:<38} {:<60} {:<20} truth {}", r[0], r[1], r[2], r[7]);
+                for r in pradar::fit::table1::rows(&f, t.as_ref()) {
+                    println!(
+                        "{:<38} {:<60} {:<20} truth {}",
+                        r.parameter,
+                        r.value_shown,
+                        r.interval_shown(),
+                        r.truth_shown()
+                    );
                 }
             }
         }

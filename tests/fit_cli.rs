@@ -177,3 +177,30 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
     );
     assert!(!tmp.path().join("m.toml").exists());
 }
+
+#[test]
+fn zero_bootstrap_is_one_clear_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let man = write_campaign(&tmp.path().join("in"), &corridor());
+    let (code, err) = pradar(&[
+        "fit",
+        "--clusters",
+        s(&tmp.path().join("clusters.parquet")),
+        "--campaign",
+        s(&man),
+        "--out",
+        s(&tmp.path().join("m.toml")),
+        "--table",
+        s(&tmp.path().join("t.md")),
+        "--bootstrap",
+        "0",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("--bootstrap must be at least 1")
+            && !err.contains("panicked")
+            && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    assert!(!tmp.path().join("m.toml").exists());
+}

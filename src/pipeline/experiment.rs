@@ -486,6 +486,7 @@ impl<'a> Lab<'a> {
         let sp = SynthParams::default()
             .seed(seed)
             .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")));
+        let sp = crate::params::ParamGuard::check(&sp)?;
         synth(&c, &self.model, &path, &sp, &|_, _| {})?;
         self.synth_cache.insert((elements, seed), path.clone());
         Ok(path)
