@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Write data/fit/scipy_fixtures.json: samples and the maximum-likelihood fits and KS
-statistics scipy computes for them, so the Rust estimators in src/fit.rs are checked against
-an independent implementation. Re-run to regenerate (deterministic seed)."""
+statistics scipy computes for them, and the fitted pdf at a few points of each sample, so
+the Rust estimators in src/fit/estimators.rs are checked against an independent
+implementation. Re-run to regenerate (deterministic seed)."""
 import json
 import os
 
@@ -46,6 +47,30 @@ x = rng.rayleigh(0.8, size=150)
 loc, scale = stats.rayleigh.fit(x, floc=0)
 out["cases"].append({"family": "rayleigh", "data": x.tolist(), "sigma": scale,
                      "ks": stats.kstest(x, "rayleigh", args=(0, scale)).statistic})
+
+# the fitted pdf at the sample's 5 %, 25 %, 50 %, 75 % and 95 % quantiles (scipy's own fits)
+def frozen(c):
+    f = c["family"]
+    if f == "exponential":
+        return stats.expon(0, 1 / c["rate"])
+    if f == "shifted_exponential":
+        return stats.expon(c["delta"], 1 / c["rate"])
+    if f == "laplacian":
+        return stats.laplace(c["location"], c["scale"])
+    if f == "gaussian":
+        return stats.norm(c["mean"], c["std"])
+    if f == "lognormal":
+        return stats.lognorm(c["sigma"], 0, np.exp(c["mu"]))
+    if f == "gamma":
+        return stats.gamma(c["shape"], 0, 1 / c["rate"])
+    if f == "rayleigh":
+        return stats.rayleigh(0, c["sigma"])
+    raise ValueError(f)
+
+
+for c in out["cases"]:
+    xs = np.quantile(c["data"], [0.05, 0.25, 0.5, 0.75, 0.95])
+    c["pdf"] = [[float(x), float(frozen(c).pdf(x))] for x in xs]
 
 path = os.path.join(os.path.dirname(__file__), "..", "data", "fit", "scipy_fixtures.json")
 with open(path, "w") as f:

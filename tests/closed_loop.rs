@@ -28,6 +28,7 @@ use crate::common;
 use pradar::campaign::manifest::Campaign;
 use pradar::campaign::modelfile::ModelConfig;
 use pradar::fit::channel::{fit_truth, FitParams};
+use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
@@ -154,7 +155,9 @@ fn closed_loop_recovers_the_model_at_three_parameter_sets() {
             &FitParams {
                 bootstrap: 100,
                 seed: 1,
-            },
+            }
+            .check()
+            .unwrap(),
         )
         .unwrap()
         .model;

@@ -159,23 +159,39 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
     let cl = tmp.path().join("clusters.parquet");
     pradar::cluster::write(&cl, &c).unwrap();
     let man = write_campaign(&tmp.path().join("in"), &corridor());
-    let (code, err) = pradar(&[
+    fit_fails_with_one_line(tmp.path(), &cl, &man, &[], "inter_cluster_rate");
+}
+
+/// `pradar fit` of `clusters` on campaign `man` (outputs in `dir`, `extra` flags added)
+/// exits 1 with one line of error holding `want`, no panic, no model written.
+fn fit_fails_with_one_line(dir: &Path, clusters: &Path, man: &Path, extra: &[&str], want: &str) {
+    let (m, t) = (dir.join("m.toml"), dir.join("t.md"));
+    let mut args = vec![
         "fit",
         "--clusters",
-        s(&cl),
+        s(clusters),
         "--campaign",
-        s(&man),
+        s(man),
         "--out",
-        s(&tmp.path().join("m.toml")),
+        s(&m),
         "--table",
-        s(&tmp.path().join("t.md")),
-    ]);
-    assert_ne!(code, 0);
+        s(&t),
+    ];
+    args.extend_from_slice(extra);
+    let (code, err) = pradar(&args);
+    assert_eq!(code, 1, "{err}");
     assert!(
-        err.contains("inter_cluster_rate")
-            && !err.contains("panicked")
-            && err.trim().lines().count() == 1,
+        err.contains(want) && !err.contains("panicked") && err.trim().lines().count() == 1,
         "{err}"
     );
-    assert!(!tmp.path().join("m.toml").exists());
+    assert!(!m.exists());
+}
+
+#[test]
+fn zero_bootstrap_is_one_clear_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let man = write_campaign(&tmp.path().join("in"), &corridor());
+    let cl = tmp.path().join("clusters.parquet");
+    let want = "--bootstrap must be at least 1";
+    fit_fails_with_one_line(tmp.path(), &cl, &man, &["--bootstrap", "0"], want);
 }

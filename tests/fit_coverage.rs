@@ -13,6 +13,7 @@ use pradar::campaign::manifest::Campaign;
 use pradar::campaign::modelfile::{ModelConfig, Quantity};
 use pradar::fit::channel::{fit_truth, FitParams};
 use pradar::model::{synth, SynthParams};
+use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -77,7 +78,11 @@ fn bootstrap_intervals_cover_the_true_values_in_88_percent_of_50_repetitions() {
     for r in 0..reps {
         let out = tmp.path().join(format!("e{r}.parquet"));
         let tdir = tmp.path().join(format!("t{r}"));
-        let params = SynthParams::default().seed(r as u64 + 1).truth_dir(&tdir);
+        let params = SynthParams::default()
+            .seed(r as u64 + 1)
+            .truth_dir(&tdir)
+            .check()
+            .unwrap();
         synth(&c, &truth, &out, &params, &|_, _| {}).unwrap();
         let fit = fit_truth(
             &tdir,
@@ -85,7 +90,9 @@ fn bootstrap_intervals_cover_the_true_values_in_88_percent_of_50_repetitions() {
             &FitParams {
                 bootstrap: 200,
                 seed: 1,
-            },
+            }
+            .check()
+            .unwrap(),
         )
         .unwrap();
         for (k, (_, pick)) in picks.iter().enumerate() {

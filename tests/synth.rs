@@ -10,6 +10,7 @@ use pradar::campaign::modelfile::ModelConfig;
 use pradar::campaign::Campaign;
 use pradar::energy::EnergyMatrix;
 use pradar::model::{synth, synth_channel, ChannelModel, ModelCluster, ModelRay, SynthParams};
+use pradar::params::ParamGuard;
 use std::process::Command;
 
 fn pradar() -> Command {
@@ -61,7 +62,7 @@ fn synth_agrees_with_simulate_on_a_single_scatterer() {
             &c,
             &single(Coord { x: tx, y: ty }, rrcs * rrcs),
             &out,
-            &SynthParams::default(),
+            &SynthParams::default().check().unwrap(),
             &|_, _| {},
         )
         .unwrap();
@@ -136,7 +137,14 @@ fn energy_detector_noise_has_the_detector_mean_and_variance() {
         clusters: vec![],
     };
     let out = tmp.path().join("noise.parquet");
-    synth_channel(&c, &empty, &out, &SynthParams::default(), &|_, _| {}).unwrap();
+    synth_channel(
+        &c,
+        &empty,
+        &out,
+        &SynthParams::default().check().unwrap(),
+        &|_, _| {},
+    )
+    .unwrap();
     let em = EnergyMatrix::read(&out).unwrap();
     let mu = em.meta.noise_mean();
     let n0 = em.meta.n0;
@@ -318,7 +326,7 @@ fn synth_library_seed_changes_the_draw() {
         &c,
         &m,
         &tmp.path().join("a.parquet"),
-        &SynthParams::default().seed(3),
+        &SynthParams::default().seed(3).check().unwrap(),
         &|_, _| {},
     )
     .unwrap();

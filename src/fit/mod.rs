@@ -1,8 +1,21 @@
-//! Channel fitting (DESIGN §2 "Fitting"): estimators ([`estimators`]) and the campaign fit
-//! ([`channel`]): Table 1 quantities from clustered MPCs, the fitted model file and the
-//! Table 1 comparison.
+//! Channel fitting (DESIGN §2 "Fitting"): from clustered MPCs to the fitted model file and
+//! Table 1.
+//!
+//! * [`estimators`] — maximum-likelihood fits of the candidate families, AIC, KS with its
+//!   parametric-bootstrap p-value, the position (block) bootstrap;
+//! * [`params`] — [`FitParams`] and its checked form [`FitValid`];
+//! * [`geometry`] — cluster locations, perimeter offsets and spacings, the observed
+//!   stretches of perimeter and the scan's interior;
+//! * [`quantities`] — each quantity from its samples: value, interval, KS, AIC ranking;
+//! * [`channel`] — the campaign fit ([`channel::fit_channel`], [`channel::fit_truth`]);
+//! * [`table1`] — Table 1 as one [`Table`](crate::export::Table) (Markdown, CSV, HTML).
 
 pub mod channel;
 pub mod estimators;
+pub mod geometry;
+pub mod params;
+pub mod quantities;
+pub mod table1;
 
 pub use estimators::*;
+pub use params::{FitParams, FitValid};

@@ -243,7 +243,7 @@ impl fmt::Display for SynthSummary {
 pub fn synth(cmd: &Synth, progress: StepProgress) -> Result<SynthSummary> {
     let c = load_campaign(&cmd.campaign, cmd.elements)?;
     let m = ModelConfig::load(&cmd.model)?;
-    let report = crate::model::synth(&c, &m, &cmd.out, &cmd.params, progress)?;
+    let report = crate::model::synth(&c, &m, &cmd.out, &cmd.params.check()?, progress)?;
     Ok(SynthSummary {
         report,
         out: cmd.out.clone(),
@@ -466,12 +466,19 @@ pub struct FitSummary {
 impl fmt::Display for FitSummary {
     /// One line per Table 1 row: parameter, value, interval, truth.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let rows = crate::fit::channel::table1_rows(&self.fit, self.truth.as_ref());
+        let rows = crate::fit::table1::rows(&self.fit, self.truth.as_ref());
         for (i, r) in rows.iter().enumerate() {
             if i > 0 {
                 writeln!(f)?;
             }
-            write!(f, "{:<38} {:<60} {:<20} truth {}", r[0], r[1], r[2], r[7])?;
+            write!(
+                f,
+                "{:<38} {:<60} {:<20} truth {}",
+                r.parameter,
+                r.value_shown,
+                r.interval_shown(),
+                r.truth_shown()
+            )?;
         }
         Ok(())
     }
@@ -482,9 +489,10 @@ impl fmt::Display for FitSummary {
 /// Table 1.
 pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     let c = Campaign::load(&cmd.campaign)?;
-    let fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &cmd.params)?;
+    let params = cmd.params.check()?;
+    let fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
     let truth = match &cmd.truth {
-        Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &cmd.params)?),
+        Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),
         None => None,
     };
     fit.model.save(&cmd.out)?;

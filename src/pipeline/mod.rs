@@ -51,14 +51,5 @@ fn table1_html_rows(
     f: &crate::fit::channel::ChannelFit,
     truth: Option<&crate::fit::channel::ChannelFit>,
 ) -> String {
-    let mut h = String::from("<table><tr><th>parameter</th><th>pradar</th><th>95% interval</th><th>family</th><th>KS p</th><th>best by AIC</th><th>paper</th><th>simulator truth (same estimators)</th></tr>\n");
-    for r in crate::fit::channel::table1_rows(f, truth) {
-        h.push_str("<tr>");
-        for c in r.iter() {
-            h.push_str(&format!("<td>{}</td>", report::html_escape(c)));
-        }
-        h.push_str("</tr>\n");
-    }
-    h.push_str("</table>\n");
-    h
+    report::html_table(&crate::fit::table1::table(f, truth))
 }

@@ -21,6 +21,7 @@ use crate::export::{Cell, Column, Table};
 use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, PoseNoise};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::{synth, SynthParams};
+use crate::params::ParamGuard;
 use crate::report::{self, MapTile, Section};
 use serde::Serialize;
 use std::collections::HashMap;
@@ -247,7 +248,8 @@ impl<'a> Lab<'a> {
         c.set_elements(elements)?;
         let sp = SynthParams::default()
             .seed(seed)
-            .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")));
+            .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")))
+            .check()?;
         synth(&c, &self.model, &path, &sp, &|_, _| {})?;
         self.synth_cache.insert((elements, seed), path.clone());
         Ok(path)

@@ -1,0 +1,237 @@
+//! Table 1 of the paper, as the campaign fit reads it: one row per quantity with our
+//! estimate, its 95 % position-bootstrap interval, the family, the KS p-value, the best
+//! family by AIC, the paper's value and, when given, the same estimators on the
+//! simulator's truth.
+//!
+//! Takes a [`ChannelFit`] (and the truth's); gives the rows with named fields
+//! ([`rows`], [`Table1Row`]), one [`Table`] ([`table`]) that every rendering uses —
+//! `table1.md` and `table1.csv` ([`write_table1`]) and the report's HTML
+//! (`report::html_table`) — so the three agree.
+//!
+//! * Markdown and HTML show the values as text with their unit (3 decimals); d_c is shown
+//!   as its mean spacing (the model value, the censored estimate Σ L / Σ k) in m and as ns
+//!   one-way (m/c) and round-trip (2m/c), with the standard deviation of the complete gaps.
+//! * The CSV has numeric columns so a script reads it back: `parameter, value, unit, lo,
+//!   hi, family, ks_p, best_aic, paper, truth`; numbers at full precision, empty where
+//!   missing; `paper` and `truth` in the value's unit. The paper's d_c, 5.02 ns, is read
+//!   one-way as metres (1.505 m, as [`ModelConfig::table1_defaults`]).
+//!
+//! [`ModelConfig::table1_defaults`]: crate::campaign::modelfile::ModelConfig::table1_defaults
+
+use crate::campaign::modelfile::Quantity;
+use crate::error::Result;
+use crate::export::{Cell, Column, Table};
+use crate::fit::channel::ChannelFit;
+use crate::units::C0;
+use std::path::Path;
+
+/// One row of Table 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table1Row {
+    /// The quantity's name in the table.
+    pub parameter: &'static str,
+    /// Our estimate, in `unit`.
+    pub value: f64,
+    /// Its unit.
+    pub unit: String,
+    /// The estimate as the table shows it (with its unit; d_c also in ns and with its std).
+    pub value_shown: String,
+    /// 95 % position-bootstrap interval.
+    pub interval: Option<[f64; 2]>,
+    /// The family of the model file.
+    pub family: String,
+    /// KS parametric-bootstrap p-value.
+    pub ks_p: Option<f64>,
+    /// Best family by AIC (empty where none was ranked).
+    pub best_aic: String,
+    /// The paper's value in `unit` and as the table shows it.
+    pub paper: Option<(f64, &'static str)>,
+    /// The same estimators on the simulator's truth: its value and its shown text.
+    pub truth: Option<(f64, String)>,
+}
+
+impl Table1Row {
+    /// The interval as shown: `[lo, hi]` with 3 decimals, or "—".
+    pub fn interval_shown(&self) -> String {
+        self.interval
+            .map(|[a, b]| format!("[{a:.3}, {b:.3}]"))
+            .unwrap_or_else(|| "—".into())
+    }
+
+    /// The truth's value as shown, or "—".
+    pub fn truth_shown(&self) -> &str {
+        self.truth.as_ref().map_or("—", |t| t.1.as_str())
+    }
+
+    fn cells(&self) -> Vec<Cell> {
+        let opt = |v: Option<f64>| v.map_or(Cell::missing(""), |v| Cell::num(v, ""));
+        vec![
+            Cell::text(self.parameter),
+            Cell::num(self.value, self.value_shown.clone()),
+            Cell::text(self.unit.clone()),
+            match self.interval {
+                Some([lo, hi]) => Cell::interval(lo, hi, self.interval_shown()),
+                None => Cell::missing("—"),
+            },
+            opt(self.interval.map(|i| i[0])),
+            opt(self.interval.map(|i| i[1])),
+            Cell::text(self.family.clone()),
+            self.ks_p
+                .map_or(Cell::missing("—"), |p| Cell::num(p, format!("{p:.3}"))),
+            Cell::text(self.best_aic.clone()),
+            self.paper
+                .map_or(Cell::missing("—"), |(v, shown)| Cell::num(v, shown)),
+            self.truth
+                .as_ref()
+                .map_or(Cell::missing("—"), |(v, shown)| {
+                    Cell::num(*v, shown.clone())
+                }),
+        ]
+    }
+}
+
+/// The columns of Table 1 (Markdown headers, the report's shorter HTML headers, CSV names).
+fn columns() -> Vec<Column> {
+    vec![
+        Column::new("parameter", "parameter"),
+        Column::new("pradar", "value"),
+        Column::new("unit", "unit").csv_only(),
+        Column::new("95% interval (positions bootstrap)", "interval")
+            .html("95% interval")
+            .display_only(),
+        Column::new("lo", "lo").csv_only(),
+        Column::new("hi", "hi").csv_only(),
+        Column::new("family", "family"),
+        Column::new("KS p (param. bootstrap)", "ks_p").html("KS p"),
+        Column::new("best family by AIC", "best_aic").html("best by AIC"),
+        Column::new("paper Table 1", "paper").html("paper"),
+        Column::new("simulator truth (same estimators)", "truth"),
+    ]
+}
+
+/// Table 1 as one [`Table`]: `t.to_markdown()` is the table of `table1.md`, `t.to_csv()`
+/// is `table1.csv`, `report::html_table(&t)` the report's.
+pub fn table(f: &ChannelFit, truth: Option<&ChannelFit>) -> Table {
+    let mut t = Table::new(columns());
+    for r in rows(f, truth) {
+        t.push(r.cells());
+    }
+    t
+}
+
+/// Table 1's rows, with the truth's values beside ours when given.
+pub fn rows(f: &ChannelFit, truth: Option<&ChannelFit>) -> Vec<Table1Row> {
+    let mut rows = ours(f);
+    if let Some(t) = truth {
+        for (r, t) in rows.iter_mut().zip(ours(t)) {
+            r.truth = Some((t.value, t.value_shown));
+        }
+    }
+    rows
+}
+
+/// Write table1.md and table1.csv (beside `md`).
+pub fn write_table1(md: &Path, f: &ChannelFit, truth: Option<&ChannelFit>) -> Result<()> {
+    let t = table(f, truth);
+    let mut s = String::from("# Table 1: corridor channel parameters\n\n");
+    s.push_str(&t.to_markdown());
+    s.push_str("\nThe paper's values are printed beside ours for comparison; nothing is tuned toward them.\n");
+    crate::io::write_bytes(md, s.as_bytes())?;
+    crate::io::write_bytes(&md.with_extension("csv"), t.to_csv().as_bytes())
+}
+
+/// The rows of one fit (no truth).
+fn ours(f: &ChannelFit) -> Vec<Table1Row> {
+    let m = &f.model;
+    let best = |k: &str| {
+        f.details
+            .get(k)
+            .and_then(|d| d.aic.first())
+            .map(|a| a.0.clone())
+            .unwrap_or_default()
+    };
+    let row = |parameter, q: &Quantity, best_aic: String, paper| Table1Row {
+        parameter,
+        value: q.value,
+        unit: q.unit.clone(),
+        value_shown: format!("{:.3} {}", q.value, q.unit),
+        interval: q.interval,
+        family: q.family.clone(),
+        ks_p: q.ks_p,
+        best_aic,
+        paper,
+        truth: None,
+    };
+    let ns1 = 1e9 / C0;
+    let spacing = Table1Row {
+        value_shown: spacing_shown(f),
+        paper: Some((5.02 / ns1, "5.02 ns (\"standard deviation\")")),
+        ..row(
+            "inter-cluster perimeter distance d_c",
+            &m.perimeter_spacing,
+            best("perimeter_spacing"),
+            None,
+        )
+    };
+    vec![
+        row(
+            "inter-cluster arrival rate Λ",
+            &m.inter_cluster_rate,
+            best("inter_cluster_rate"),
+            Some((0.21, "0.21 1/ns")),
+        ),
+        spacing,
+        row(
+            "intra-cluster arrival rate λ",
+            &m.intra_cluster_rate,
+            best("intra_cluster_rate"),
+            Some((0.43, "0.43 1/ns")),
+        ),
+        row(
+            "intra-cluster AoA (Laplacian std)",
+            &m.intra_cluster_aoa,
+            best("intra_cluster_aoa"),
+            Some((16.9, "16.9 deg")),
+        ),
+        row(
+            "perimeter offset d_p",
+            &m.perimeter_offset,
+            best("perimeter_offset"),
+            None,
+        ),
+        row(
+            "cluster power decay Γ",
+            &m.cluster_decay,
+            String::new(),
+            None,
+        ),
+        row("ray power decay γ", &m.ray_decay, String::new(), None),
+    ]
+}
+
+/// d_c as shown: the mean spacing (the model value, the censored estimate) in m and ns
+/// one-way / round-trip, and the std of the complete gaps.
+fn spacing_shown(f: &ChannelFit) -> String {
+    let dc = &f.dc_m;
+    let n = dc.len().max(1) as f64;
+    let dc_mean = f.model.perimeter_spacing.value;
+    let gap_mean = dc.iter().sum::<f64>() / n;
+    let dc_std = (dc.iter().map(|x| (x - gap_mean).powi(2)).sum::<f64>() / n).sqrt();
+    let ns1 = 1e9 / C0;
+    format!(
+        "mean {:.3} m = {:.2} ns one-way / {:.2} ns round-trip; std {}",
+        dc_mean,
+        dc_mean * ns1,
+        2.0 * dc_mean * ns1,
+        if dc.len() >= 2 {
+            format!(
+                "{:.3} m = {:.2} / {:.2} ns",
+                dc_std,
+                dc_std * ns1,
+                2.0 * dc_std * ns1
+            )
+        } else {
+            "— (fewer than 2 complete gaps)".to_string()
+        }
+    )
+}

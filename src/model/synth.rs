@@ -1,0 +1,338 @@
+//! The synth run: the drawn channel seen from every pose, through the array and the
+//! energy stage's kernel, with the energy detector's noise, written as an energy table
+//! and its truth.
+//!
+//! Per pose: the seen rays ([`ChannelModel::rays_from`]); per direction: the CIR on the
+//! energy stage's oversampled grid (rays add coherently; samples inside the coupling gate
+//! zeroed; rays weaker than `cull` × the mean noise-bin energy skipped), the bin energy
+//! E_s (mean of |h|² over the bin's L samples), and the detector's draw
+//! E = N0/(2N_p)·[χ²(2TW·N_p − 1) + (Z + √(2N_p·E_s/N0))²] (mean N0·TW + E_s, variance
+//! (N0²·TW + 2·N0·E_s)/N_p, DESIGN §2). N0 comes from the campaign's `[noise]` floor
+//! through the window (as the energy stage's N0), TW from the window; neighbouring bins are
+//! drawn independently. The noise streams are keyed by (seed, position, direction), so the
+//! bytes do not depend on the thread count.
+
+use super::channel::{ChannelModel, SeenRay};
+use super::params::SynthValid;
+use super::response::{BandPattern, Kernel, KERNEL_BINS};
+use crate::campaign::layout::Layout;
+use crate::campaign::manifest::{Campaign, CouplingRemoval, Steering};
+use crate::campaign::modelfile::ModelConfig;
+use crate::campaign::pattern::ArrayPattern;
+use crate::campaign::simulate::{truth_rays_frame, write_truth_clusters, TruthCluster, TruthRay};
+use crate::energy::{self, EnergyProcessor};
+use crate::error::{Error, Result};
+use crate::table;
+use crate::units::{wrap_rad, C0};
+use geo::Coord;
+use num_complex::Complex64;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Gamma, StandardNormal};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+/// Frequency knots of the band-averaged pattern.
+const KNOTS: usize = 33;
+
+/// What `synth` produced.
+#[derive(Debug, Clone)]
+pub struct SynthReport {
+    /// Profiles written (positions × directions).
+    pub profiles: usize,
+    /// Clusters of the drawn model.
+    pub clusters: usize,
+    /// Mean rays seen per position (all angles).
+    pub rays_per_position: f64,
+    /// The truth folder.
+    pub truth_dir: PathBuf,
+}
+
+/// Default truth folder for an output table: `<stem>_truth` beside it.
+pub fn default_truth_dir(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "synth".into());
+    out.with_file_name(format!("{stem}_truth"))
+}
+
+/// Run the statistical channel model over a campaign and write the energy table to `out`
+/// and the truth beside it. `progress` is called after each position with (done, total).
+///
+/// ```no_run
+/// use pradar::campaign::manifest::Campaign;
+/// use pradar::campaign::modelfile::ModelConfig;
+/// use pradar::model::{synth, SynthParams};
+/// use pradar::params::ParamGuard;
+/// use std::path::Path;
+/// # fn main() -> pradar::error::Result<()> {
+/// let c = Campaign::load(Path::new("campaign.toml"))?;
+/// let model = ModelConfig::load(Path::new("fitted_model.toml"))?;
+/// let p = SynthParams::default().seed(7).check()?;
+/// let r = synth(&c, &model, Path::new("synth.parquet"), &p, &|_, _| {})?;
+/// println!("{} profiles, truth in {}", r.profiles, r.truth_dir.display());
+/// # Ok(())
+/// # }
+/// ```
+pub fn synth(
+    c: &Campaign,
+    model: &ModelConfig,
+    out: &Path,
+    params: &SynthValid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<SynthReport> {
+    let layout = Layout::load(&c.layout_path())?;
+    let seed = params.seed.unwrap_or(c.manifest.seed);
+    let channel = ChannelModel::draw(&layout, model, seed)?;
+    synth_channel(c, &channel, out, params, progress)
+}
+
+/// [`synth`] for an already drawn (or hand-built) channel, in steps: set up the response
+/// and detector (`Response::new`), then per pose the seen rays, their energy profiles
+/// (`Response::position`) and their truth rows; last the truth clusters, the model and
+/// the energy table.
+pub fn synth_channel(
+    c: &Campaign,
+    channel: &ChannelModel,
+    out: &Path,
+    params: &SynthValid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<SynthReport> {
+    let m = &c.manifest;
+    let layout = Layout::load(&c.layout_path())?;
+    let seed = params.seed.unwrap_or(m.seed);
+    let resp = Response::new(c, params.cull)?;
+    let truth_dir = params
+        .truth_dir
+        .clone()
+        .unwrap_or_else(|| default_truth_dir(out));
+    std::fs::create_dir_all(&truth_dir).map_err(|e| Error::io(&truth_dir, e))?;
+    let rays_path = truth_dir.join("rays.parquet");
+    let mut rays_out = table::ParquetStream::create(&rays_path)?;
+    let (np, nd, nb) = (m.positions(), resp.angles.len(), resp.proc.nbins());
+    let mut energies = vec![0.0; np * nd * nb];
+    let mut seen_total = 0usize;
+    for p in 0..np {
+        let pose = m.poses[p];
+        let at = Coord {
+            x: pose.x_m,
+            y: pose.y_m,
+        };
+        let rays = channel.rays_from(&layout, at, pose.heading_deg);
+        seen_total += rays.len();
+        let profiles = &mut energies[p * nd * nb..(p + 1) * nd * nb];
+        resp.position(p, pose.heading_deg.to_radians(), &rays, seed, profiles);
+        let rows = resp.truth_rows(&rays);
+        rays_out.write(&truth_rays_frame(&rays_path, p, pose.heading_deg, &rows)?)?;
+        progress(p + 1, np);
+    }
+    rays_out.finish(None)?;
+    write_truth(&truth_dir, channel)?;
+    let mut meta = energy::table_metadata(m, &resp.proc, resp.n0, resp.noise_mean);
+    meta.push(("source".into(), "synth".into()));
+    meta.push(("seed".into(), seed.to_string()));
+    energy::write_table(out, m, nb, &energies, meta)?;
+    Ok(SynthReport {
+        profiles: np * nd,
+        clusters: channel.clusters.len(),
+        rays_per_position: seen_total as f64 / np.max(1) as f64,
+        truth_dir,
+    })
+}
+
+/// The truth clusters (`clusters.csv`) and the model as read (`model.toml`).
+fn write_truth(truth_dir: &Path, channel: &ChannelModel) -> Result<()> {
+    let truth_clusters: Vec<TruthCluster> = channel
+        .clusters
+        .iter()
+        .map(|c| TruthCluster {
+            centre: c.centre,
+            arc_m: c.arc_m,
+            offset_m: c.offset_m,
+            rays: c.rays.len(),
+            sigma_m2: c.sigma_m2,
+        })
+        .collect();
+    write_truth_clusters(truth_dir, &truth_clusters)?;
+    channel.config.save(&truth_dir.join("model.toml"))
+}
+
+/// Everything a profile needs beyond the rays: the campaign's scan, array response, delay
+/// grid, kernel and detector.
+struct Response {
+    proc: EnergyProcessor,
+    kernel: Kernel,
+    steering: Steering,
+    /// Scan directions, degrees.
+    angles: Vec<f64>,
+    /// One band pattern (mechanical steering) or one per direction (electronic).
+    bands: Vec<BandPattern>,
+    /// Oversampling L and the sample offset of bin 0, (L − 1)/2.
+    l: usize,
+    half: i64,
+    /// Sample step T_b/L, s.
+    dt: f64,
+    /// Centre frequency, Hz.
+    fc: f64,
+    /// Coupling gate, s (0 without one).
+    gate: f64,
+    /// Noise per sample and the mean noise-bin energy N0·TW.
+    n0: f64,
+    noise_mean: f64,
+    /// Pulses N_p and the χ² law of 2TW·N_p − 1 degrees of freedom.
+    pulses: f64,
+    chi: Gamma<f64>,
+    /// The kernel's half-width, s.
+    kernel_reach: f64,
+    /// Broadside gain and wavelength at the centre frequency (truth powers).
+    g0: f64,
+    lc: f64,
+    cull: f64,
+}
+
+impl Response {
+    fn new(c: &Campaign, cull: f64) -> Result<Response> {
+        let m = &c.manifest;
+        let proc = EnergyProcessor::new(m.band, m.processing)
+            .map_err(|e| Error::input(&c.path, e.to_string()))?;
+        let kernel = Kernel::new(&proc);
+        let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
+        let angles = m.directions.angles_deg();
+        let bands: Vec<BandPattern> = match m.array.steering {
+            Steering::Mechanical => {
+                let t = &pattern.tables(&[0.0], &m.band, KNOTS)[0];
+                vec![BandPattern::new(t, m.processing.window)]
+            }
+            Steering::Electronic => pattern
+                .tables(&angles, &m.band, KNOTS)
+                .iter()
+                .map(|t| BandPattern::new(t, m.processing.window))
+                .collect(),
+        };
+        let l = m.processing.oversample;
+        let tb = proc.bin_width_ns() * 1e-9;
+        let fc = m.band.center_hz();
+        let gate = if m.processing.coupling == CouplingRemoval::Gate {
+            m.processing.gate_ns * 1e-9
+        } else {
+            0.0
+        };
+        let n0 = proc.noise_per_sample(m.noise.s21_variance()) / proc.tw();
+        let noise_mean = n0 * proc.tw();
+        let pulses = m.pulses as f64;
+        let dof = 2.0 * proc.tw() * pulses - 1.0;
+        let chi = Gamma::new(dof / 2.0, 2.0).map_err(|e| Error::input(&c.path, e.to_string()))?;
+        Ok(Response {
+            kernel,
+            steering: m.array.steering,
+            angles,
+            bands,
+            l,
+            half: (l - 1) as i64 / 2,
+            dt: tb / l as f64,
+            fc,
+            gate,
+            n0,
+            noise_mean,
+            pulses,
+            chi,
+            kernel_reach: KERNEL_BINS as f64 * tb,
+            g0: pattern.gain(0.0, 0.0, fc),
+            lc: C0 / fc,
+            cull,
+            proc,
+        })
+    }
+
+    /// The energy profiles of position `p` (heading in rad), one per direction, into
+    /// `out` (directions × bins), in parallel over directions.
+    fn position(&self, p: usize, heading: f64, rays: &[SeenRay], seed: u64, out: &mut [f64]) {
+        out.par_chunks_mut(self.proc.nbins())
+            .enumerate()
+            .for_each(|(d, prof)| {
+                let h = self.cir(d, heading, rays);
+                let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(seed, p, d));
+                self.detect(&h, prof, &mut rng);
+            });
+    }
+
+    /// The CIR h(t_n) of direction `d` on the oversampled grid (from bin 0, sample −half).
+    fn cir(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<Complex64> {
+        let nb = self.proc.nbins();
+        let (l, half, dt) = (self.l, self.half, self.dt);
+        let bp = &self.bands[if self.bands.len() == 1 { 0 } else { d }];
+        let theta_s = self.angles[d].to_radians();
+        let mut h = vec![Complex64::new(0.0, 0.0); nb * l];
+        for r in rays {
+            let th = match self.steering {
+                Steering::Mechanical => r.theta - heading - theta_s,
+                Steering::Electronic => r.theta - heading,
+            };
+            let Some((g, tau_g)) = bp.at(wrap_rad(th)) else {
+                continue;
+            };
+            let a2 = g * g * r.amp2;
+            if a2 < self.cull * self.noise_mean {
+                continue;
+            }
+            let tau = r.tau_s + tau_g;
+            let a = Complex64::from_polar(a2.sqrt(), -2.0 * PI * (self.fc * tau).fract());
+            // samples n·dt within the kernel's reach, from bin 0 (sample −half)
+            let lo = ((tau - self.kernel_reach) / dt).ceil().max(-(half as f64)) as i64;
+            let hi = ((tau + self.kernel_reach) / dt).floor() as i64;
+            let hi = hi.min((nb * l) as i64 - half - 1);
+            for n in lo..=hi {
+                let t = n as f64 * dt;
+                if t.abs() < self.gate {
+                    continue;
+                }
+                h[(n + half) as usize] += a * self.kernel.at(t - tau);
+            }
+        }
+        h
+    }
+
+    /// Each bin's detector energy: E_s the mean |h|² over its L samples, then the scaled
+    /// non-central χ² draw.
+    fn detect(&self, h: &[Complex64], prof: &mut [f64], rng: &mut ChaCha8Rng) {
+        let (l, pulses, n0) = (self.l, self.pulses, self.n0);
+        for (b, e) in prof.iter_mut().enumerate() {
+            let es = h[b * l..(b + 1) * l]
+                .iter()
+                .map(|v| v.norm_sqr())
+                .sum::<f64>()
+                / l as f64;
+            let z: f64 = StandardNormal.sample(rng);
+            let x = self.chi.sample(rng);
+            let nc = (2.0 * pulses * es / n0).sqrt();
+            *e = n0 / (2.0 * pulses) * (x + (z + nc).powi(2));
+        }
+    }
+
+    /// The truth rows of the seen rays (power through the broadside gain).
+    fn truth_rows(&self, rays: &[SeenRay]) -> Vec<TruthRay> {
+        let (g0, lc) = (self.g0, self.lc);
+        rays.iter()
+            .map(|r| TruthRay {
+                scatterer_id: -1,
+                kind: "clutter",
+                cluster_id: r.cluster as i64,
+                pos: r.pos,
+                delay_ns: r.tau_s * 1e9,
+                angle_global_deg: r.theta.to_degrees(),
+                power_db: 10.0 * (g0 * g0 * lc * lc * r.amp2).log10(),
+            })
+            .collect()
+    }
+}
+
+fn noise_seed(seed: u64, p: usize, d: usize) -> u64 {
+    let mut x = seed ^ 0x9e37_79b9_7f4a_7c15;
+    for v in [p as u64, d as u64, 0x73796e] {
+        x = (x ^ v).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        x ^= x >> 31;
+    }
+    x
+}
