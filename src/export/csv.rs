@@ -1,4 +1,4 @@
-//! CSV rendering of a [`Table`](super::Table) (RFC 4180): a header line of the columns' CSV
+//! CSV rendering of a [`Table`] (RFC 4180): a header line of the columns' CSV
 //! names, fields quoted when they hold a comma, quote or line break (quotes doubled),
 //! numbers at full precision (shortest round-trip), missing values empty, intervals as two
 //! fields `<name>_lo`, `<name>_hi`.

@@ -1,4 +1,4 @@
-//! Markdown rendering of a [`Table`](super::Table): `| a | b |`, a `|---|---|` rule, one
+//! Markdown rendering of a [`Table`]: `| a | b |`, a `|---|---|` rule, one
 //! line per row; a `|` inside a cell is escaped as `\|`.
 
 use super::Table;
