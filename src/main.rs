@@ -416,10 +416,11 @@ fn run(cli: Cli) -> Result<()> {
                 },
             };
             let pb = bar(quiet, "map", 0);
-            let r = pradar::mapping::run_map(&opts, &|d, t| {
-                pb.set_length(t as u64);
-                pb.set_position(d as u64)
-            })?;
+            let r =
+                pradar::mapping::run_map(&pradar::params::ParamGuard::check(&opts)?, &|d, t| {
+                    pb.set_length(t as u64);
+                    pb.set_position(d as u64)
+                })?;
             pb.finish_and_clear();
             if !quiet {
                 let m = &r.metrics.observable;

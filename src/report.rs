@@ -4,6 +4,8 @@
 //! Takes energy matrices, campaign summaries and stage timings; gives per-position heat maps
 //! (range vs direction, dB relative to the position's peak) and the index page.
 
+pub mod maps;
+
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use plotters::prelude::*;

@@ -61,7 +61,8 @@
 
 use crate::energy::{EnergyMatrix, EnergyMeta};
 use crate::error::{Error, Result};
-use crate::mapping::grid::{Beam, ObservationModel};
+use crate::mapping::grid::{Beam, ObservationModel, PoseGeometry};
+use crate::params::{ParamGuard, Valid};
 use rayon::prelude::*;
 use statrs::distribution::{ContinuousCDF, Gamma};
 use std::time::Instant;
@@ -153,9 +154,16 @@ pub fn sigmoid(l: f64) -> f64 {
     1.0 / (1.0 + (-l).exp())
 }
 
-impl OgParams {
-    /// Validate.
-    pub fn check(&self) -> Result<()> {
+/// Occupancy-grid parameters that passed [`ParamGuard::check`].
+pub type OgValid = Valid<OgParams>;
+
+impl ParamGuard for OgParams {
+    type Checked = OgValid;
+
+    /// Prior in (0, 1) with log-odds inside the clamp, P_fa in (0, 0.5], p_occ in
+    /// (0.5, 1), p_free in (0, 0.5), clamp > 0, masking margin ≥ 0 dB, free level ≤ 0 dB,
+    /// side-lobe margin finite, passes in 1..=10.
+    fn check(&self) -> Result<OgValid> {
         let open01 = |v: f64| v.is_finite() && v > 0.0 && v < 1.0;
         if !open01(self.prior) {
             return Err(Error::param("prior", "must be in (0, 1)"));
@@ -187,8 +195,11 @@ impl OgParams {
         if logit(self.prior).abs() >= self.clamp {
             return Err(Error::param("prior", "prior log-odds beyond the clamp"));
         }
-        Ok(())
+        Ok(Valid::new(*self))
     }
+}
+
+impl OgParams {
     /// Prior log-odds l0.
     pub fn l0(&self) -> f64 {
         logit(self.prior)
@@ -497,7 +508,7 @@ fn scan_boresight(
 pub fn og_map(
     model: &ObservationModel,
     em: &EnergyMatrix,
-    params: &OgParams,
+    params: &OgValid,
     method: Method,
     detector: &Detector,
     progress: &(dyn Fn(usize, usize) + Sync),
@@ -509,12 +520,11 @@ pub fn og_map(
 pub fn og_map_stats(
     model: &ObservationModel,
     em: &EnergyMatrix,
-    params: &OgParams,
+    params: &OgValid,
     method: Method,
     detector: &Detector,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(LogOddsMap, OgStats)> {
-    params.check()?;
     if method == Method::Ekf {
         return Err(Error::param(
             "method",
@@ -535,25 +545,13 @@ pub fn og_map_stats(
     }
     let t0 = Instant::now();
     let spec = model.spec;
-    let (l_occ, l_free, clamp) = (params.l_occ(), params.l_free(), params.clamp);
-    let main_w = model.params.main_weight() as f32;
-    let free_w = 10f64.powf(params.free_db / 10.0) as f32;
-    let min_bin = model.min_bin.max(detector.min_bin);
+    let ctx = ScanContext::new(model, em, params, method, detector);
     let mut stats = OgStats::default();
     let passes = if method == Method::Og {
         params.passes
     } else {
         1
     };
-    let side_margin = 10f64.powf(params.side_db / 10.0);
-    // cross[d][d'] = two-way weight of direction d towards the boresight of direction d'
-    let cross: Vec<Vec<f64>> = (0..nd)
-        .map(|d| {
-            (0..nd)
-                .map(|d2| model.weight(d, model.direction_rad(d2)))
-                .collect()
-        })
-        .collect();
     let mut map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
     // belief of the previous pass (pass ≥ 2 uses it, fixed, for the responsibilities)
     let mut fixed_belief: Option<Vec<f32>> = None;
@@ -584,68 +582,8 @@ pub fn og_map_stats(
                         .collect_into_vec(&mut belief);
                 }
                 let bel: &[f32] = fixed_belief.as_deref().unwrap_or(&belief);
-                let dets: Vec<Vec<bool>> = (0..nd)
-                    .into_par_iter()
-                    .map(|d| {
-                        let mut det = Vec::new();
-                        detector.detect(em.profile(p, d), &mut det);
-                        det
-                    })
-                    .collect();
-                let scans: Vec<ScanResult> = (0..nd)
-                    .into_par_iter()
-                    .map(|d| {
-                        let det = &dets[d];
-                        let mut out = Vec::new();
-                        let entries;
-                        let dets = match (&geom, method) {
-                            (Some(g), Method::Og) => {
-                                let beam = model.beam(g, d);
-                                entries = beam.len() as u64;
-                                let side = side_lobe_flags(
-                                    em,
-                                    p,
-                                    d,
-                                    det,
-                                    &cross,
-                                    side_margin,
-                                    main_w as f64,
-                                );
-                                out.reserve(beam.len() / 2);
-                                scan_og(
-                                    &beam,
-                                    det,
-                                    em.profile(p, d),
-                                    &side,
-                                    min_bin,
-                                    bel,
-                                    l_occ,
-                                    l_free,
-                                    main_w,
-                                    free_w,
-                                    &mut out,
-                                )
-                            }
-                            _ => {
-                                let ray = model.boresight_ray(p, d);
-                                entries = ray.len() as u64;
-                                scan_boresight(&ray, det, min_bin, l_occ, l_free, &mut out)
-                            }
-                        };
-                        (out, dets, entries)
-                    })
-                    .collect();
-                for (inc, dets, entries) in scans {
-                    stats.scans += 1;
-                    stats.entries += entries;
-                    stats.detections += dets;
-                    stats.cell_updates += inc.len() as u64;
-                    for (c, dl) in inc {
-                        let c = c as usize;
-                        map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
-                        map.observed[c] = true;
-                    }
-                }
+                let scans = ctx.scan_pose(p, geom.as_ref(), bel);
+                apply_scans(&mut map, &mut stats, scans, ctx.clamp);
                 progress(pass * np + p + 1, passes * np);
             }
             p0 = p1;
@@ -653,6 +591,139 @@ pub fn og_map_stats(
     }
     stats.seconds = t0.elapsed().as_secs_f64();
     Ok((map, stats))
+}
+
+/// What the scans of a run share: the model, the energy, the detector and the inverse
+/// sensor model's constants.
+struct ScanContext<'a> {
+    model: &'a ObservationModel,
+    em: &'a EnergyMatrix,
+    detector: &'a Detector,
+    method: Method,
+    l_occ: f64,
+    l_free: f64,
+    clamp: f64,
+    main_w: f32,
+    free_w: f32,
+    min_bin: usize,
+    side_margin: f64,
+    /// cross[d][d'] = two-way weight of direction d towards the boresight of direction d'.
+    cross: Vec<Vec<f64>>,
+}
+
+impl<'a> ScanContext<'a> {
+    fn new(
+        model: &'a ObservationModel,
+        em: &'a EnergyMatrix,
+        params: &OgValid,
+        method: Method,
+        detector: &'a Detector,
+    ) -> ScanContext<'a> {
+        let nd = model.directions();
+        ScanContext {
+            model,
+            em,
+            detector,
+            method,
+            l_occ: params.l_occ(),
+            l_free: params.l_free(),
+            clamp: params.clamp,
+            main_w: model.params.main_weight() as f32,
+            free_w: 10f64.powf(params.free_db / 10.0) as f32,
+            min_bin: model.min_bin.max(detector.min_bin),
+            side_margin: 10f64.powf(params.side_db / 10.0),
+            cross: (0..nd)
+                .map(|d| {
+                    (0..nd)
+                        .map(|d2| model.weight(d, model.direction_rad(d2)))
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+
+    /// The increments of every direction of pose `p` (in parallel, in direction order)
+    /// from the beliefs `bel` (`geom`: the pose's geometry, for `og`).
+    fn scan_pose(&self, p: usize, geom: Option<&PoseGeometry>, bel: &[f32]) -> Vec<ScanResult> {
+        let nd = self.model.directions();
+        let dets: Vec<Vec<bool>> = (0..nd)
+            .into_par_iter()
+            .map(|d| {
+                let mut det = Vec::new();
+                self.detector.detect(self.em.profile(p, d), &mut det);
+                det
+            })
+            .collect();
+        (0..nd)
+            .into_par_iter()
+            .map(|d| self.scan_direction(p, d, &dets[d], geom, bel))
+            .collect()
+    }
+
+    /// The increments of (pose `p`, direction `d`) with detections `det`.
+    fn scan_direction(
+        &self,
+        p: usize,
+        d: usize,
+        det: &[bool],
+        geom: Option<&PoseGeometry>,
+        bel: &[f32],
+    ) -> ScanResult {
+        let (em, model) = (self.em, self.model);
+        let mut out = Vec::new();
+        let entries;
+        let dets = match (geom, self.method) {
+            (Some(g), Method::Og) => {
+                let beam = model.beam(g, d);
+                entries = beam.len() as u64;
+                let side = side_lobe_flags(
+                    em,
+                    p,
+                    d,
+                    det,
+                    &self.cross,
+                    self.side_margin,
+                    self.main_w as f64,
+                );
+                out.reserve(beam.len() / 2);
+                scan_og(
+                    &beam,
+                    det,
+                    em.profile(p, d),
+                    &side,
+                    self.min_bin,
+                    bel,
+                    self.l_occ,
+                    self.l_free,
+                    self.main_w,
+                    self.free_w,
+                    &mut out,
+                )
+            }
+            _ => {
+                let ray = model.boresight_ray(p, d);
+                entries = ray.len() as u64;
+                scan_boresight(&ray, det, self.min_bin, self.l_occ, self.l_free, &mut out)
+            }
+        };
+        (out, dets, entries)
+    }
+}
+
+/// Add a pose's scans to the map in direction order (log-odds clamped to ±`clamp` after
+/// every increment) and count them.
+fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>, clamp: f64) {
+    for (inc, dets, entries) in scans {
+        stats.scans += 1;
+        stats.entries += entries;
+        stats.detections += dets;
+        stats.cell_updates += inc.len() as u64;
+        for (c, dl) in inc {
+            let c = c as usize;
+            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
+            map.observed[c] = true;
+        }
+    }
 }
 
 /// Fuse runs mapped on the same grid: l = l0 + Σ_runs (l_run − l0) (runs in order).

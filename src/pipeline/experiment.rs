@@ -55,6 +55,7 @@ use crate::error::{Error, Result};
 use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, PoseNoise};
 use crate::mapping::{EkfParams, GridParams, Method, OgParams};
 use crate::model::{synth, SynthParams};
+use crate::params::ParamGuard;
 use crate::report::{self, html_escape, LineChart, MapTile, Section};
 use serde::Serialize;
 use std::collections::HashMap;
@@ -546,7 +547,7 @@ impl<'a> Lab<'a> {
             },
             pose_noise: case.pose_noise,
         };
-        let r = run_map(&opts, &|_, _| {})?;
+        let r = run_map(&opts.check()?, &|_, _| {})?;
         self.map_cache.insert(key.clone(), r.clone());
         Ok((key, r))
     }
