@@ -689,6 +689,54 @@ mod tests {
     use super::*;
 
     #[test]
+    fn grid_params_are_checked() {
+        assert!(GridParams::default().check().is_ok());
+        for (bad, field) in [
+            (
+                GridParams {
+                    cell_m: 0.0,
+                    ..Default::default()
+                },
+                "cell_m",
+            ),
+            (
+                GridParams {
+                    cell_m: f64::INFINITY,
+                    ..Default::default()
+                },
+                "cell_m",
+            ),
+            (
+                GridParams {
+                    margin_m: -1.0,
+                    ..Default::default()
+                },
+                "margin_m",
+            ),
+            (
+                GridParams {
+                    main_lobe_db: -50.0,
+                    ..Default::default()
+                },
+                "main_lobe_db",
+            ),
+            (
+                GridParams {
+                    subsamples: 0,
+                    ..Default::default()
+                },
+                "subsamples",
+            ),
+        ] {
+            let e = bad.check().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("`{field}`")) && e.contains("must be"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
     fn wrap_is_in_range() {
         for a in [-7.0, -PI, -1.0, 0.0, PI, 4.0, 10.0] {
             let w = wrap_rad(a);

@@ -36,18 +36,9 @@ pub fn cholesky(a: &mut [f64], m: usize) -> Result<()> {
     }
 }
 
-/// Temporary switch for the benchmark: `PRADAR_EKF_LINALG=hand` uses the hand-written code.
-fn hand_written() -> bool {
-    static H: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *H.get_or_init(|| std::env::var("PRADAR_EKF_LINALG").is_ok_and(|v| v == "hand"))
-}
-
 /// Cholesky factorisation in place (lower triangle, upper zeroed); false when the matrix is
 /// not numerically positive definite (then `a` may be left unchanged or overwritten).
 pub(crate) fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
-    if hand_written() {
-        return hand::cholesky_in_place(a, m);
-    }
     let Some(ch) = nalgebra::Cholesky::new(DMatrix::from_row_slice(m, m, a)) else {
         return false;
     };
@@ -66,9 +57,6 @@ pub(crate) fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
 /// Solve L·X = B in place for B (m × w, row-major), L lower m × m; columns in parallel
 /// chunks of 256.
 pub(crate) fn forward_solve(l: &[f64], m: usize, b: &mut [f64], w: usize) {
-    if hand_written() {
-        return hand::forward_solve(l, m, b, w);
-    }
     if w == 0 || m == 0 {
         return;
     }
@@ -96,27 +84,18 @@ pub(crate) fn forward_solve(l: &[f64], m: usize, b: &mut [f64], w: usize) {
 
 /// Solve L·y = v (vector).
 pub(crate) fn forward_solve_vec(l: &[f64], m: usize, v: &mut [f64]) {
-    if hand_written() {
-        return hand::forward_solve_vec(l, m, v);
-    }
     let u = DMatrixView::from_slice(&l[..m * m], m, m);
     u.tr_solve_upper_triangular_mut(&mut DVectorViewMut::from_slice(&mut v[..m], m));
 }
 
 /// Solve Lᵀ·y = v (vector).
 pub(crate) fn backward_solve_vec(l: &[f64], m: usize, v: &mut [f64]) {
-    if hand_written() {
-        return hand::backward_solve_vec(l, m, v);
-    }
     let u = DMatrixView::from_slice(&l[..m * m], m, m);
     u.solve_upper_triangular_mut(&mut DVectorViewMut::from_slice(&mut v[..m], m));
 }
 
 /// L⁻¹ of a lower-triangular m × m factor (row-major).
 pub(crate) fn lower_inverse(l: &[f64], m: usize) -> Vec<f64> {
-    if hand_written() {
-        return hand::lower_inverse(l, m);
-    }
     // (L⁻¹)ᵀ = U⁻¹ solves U·X = I; its column-major storage is L⁻¹ row-major
     let u = DMatrixView::from_slice(&l[..m * m], m, m);
     let mut x = DMatrix::<f64>::identity(m, m);
@@ -127,9 +106,6 @@ pub(crate) fn lower_inverse(l: &[f64], m: usize) -> Vec<f64> {
 
 /// A⁻¹ = L⁻ᵀ·L⁻¹ from the Cholesky factor L of A (m × m, row-major).
 pub(crate) fn inverse_from_cholesky(l: &[f64], m: usize) -> Vec<f64> {
-    if hand_written() {
-        return hand::inverse_from_cholesky(l, m);
-    }
     let linv = lower_inverse(l, m);
     // row-major L⁻¹ read column-major is L⁻ᵀ; A⁻¹ = L⁻ᵀ·L⁻¹ is symmetric, so its
     // column-major storage is its row-major storage
@@ -137,126 +113,6 @@ pub(crate) fn inverse_from_cholesky(l: &[f64], m: usize) -> Vec<f64> {
     let mut out = DMatrix::<f64>::zeros(m, m);
     out.gemm(1.0, &lt, &lt.transpose(), 0.0);
     out.as_slice().to_vec()
-}
-
-mod hand {
-    use super::*;
-
-    /// Cholesky factorisation in place (lower triangle, upper zeroed); false when the matrix is
-    /// not numerically positive definite (then `a` is partly overwritten).
-    pub(super) fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
-        for j in 0..m {
-            let mut d = a[j * m + j];
-            for k in 0..j {
-                d -= a[j * m + k] * a[j * m + k];
-            }
-            if !(d.is_finite() && d > 0.0) {
-                return false;
-            }
-            let d = d.sqrt();
-            a[j * m + j] = d;
-            let (head, tail) = a.split_at_mut((j + 1) * m);
-            let rj = &head[j * m..j * m + j];
-            for i in (j + 1)..m {
-                let ri = &mut tail[(i - j - 1) * m..(i - j) * m];
-                let mut s = ri[j];
-                for k in 0..j {
-                    s -= ri[k] * rj[k];
-                }
-                ri[j] = s / d;
-            }
-            for k in (j + 1)..m {
-                head[j * m + k] = 0.0;
-            }
-        }
-        true
-    }
-
-    /// Solve L·X = B in place for B (m × w, row-major), L lower m × m; columns in parallel
-    /// chunks of 256.
-    pub(super) fn forward_solve(l: &[f64], m: usize, b: &mut [f64], w: usize) {
-        if w == 0 || m == 0 {
-            return;
-        }
-        const CH: usize = 256;
-        let chunks = w.div_ceil(CH);
-        // transpose-free: process column chunks independently (copy out, solve, copy back)
-        let solved: Vec<Vec<f64>> = (0..chunks)
-            .into_par_iter()
-            .map(|c| {
-                let c0 = c * CH;
-                let cw = CH.min(w - c0);
-                let mut x = vec![0.0; m * cw];
-                for i in 0..m {
-                    x[i * cw..(i + 1) * cw].copy_from_slice(&b[i * w + c0..i * w + c0 + cw]);
-                }
-                for i in 0..m {
-                    let (done, rest) = x.split_at_mut(i * cw);
-                    let xi = &mut rest[..cw];
-                    for k in 0..i {
-                        let lik = l[i * m + k];
-                        if lik != 0.0 {
-                            let xk = &done[k * cw..(k + 1) * cw];
-                            for (a, b) in xi.iter_mut().zip(xk) {
-                                *a -= lik * b;
-                            }
-                        }
-                    }
-                    let inv = 1.0 / l[i * m + i];
-                    xi.iter_mut().for_each(|v| *v *= inv);
-                }
-                x
-            })
-            .collect();
-        for (c, x) in solved.into_iter().enumerate() {
-            let c0 = c * CH;
-            let cw = CH.min(w - c0);
-            for i in 0..m {
-                b[i * w + c0..i * w + c0 + cw].copy_from_slice(&x[i * cw..(i + 1) * cw]);
-            }
-        }
-    }
-
-    /// Solve L·y = v (vector).
-    pub(super) fn forward_solve_vec(l: &[f64], m: usize, v: &mut [f64]) {
-        for i in 0..m {
-            let mut s = v[i];
-            for k in 0..i {
-                s -= l[i * m + k] * v[k];
-            }
-            v[i] = s / l[i * m + i];
-        }
-    }
-
-    /// Solve Lᵀ·y = v (vector).
-    pub(super) fn backward_solve_vec(l: &[f64], m: usize, v: &mut [f64]) {
-        for i in (0..m).rev() {
-            let mut s = v[i];
-            for k in (i + 1)..m {
-                s -= l[k * m + i] * v[k];
-            }
-            v[i] = s / l[i * m + i];
-        }
-    }
-
-    /// L⁻¹ of a lower-triangular m × m factor (row-major).
-    pub(super) fn lower_inverse(l: &[f64], m: usize) -> Vec<f64> {
-        let mut inv = vec![0.0; m * m];
-        for a in 0..m {
-            inv[a * m + a] = 1.0;
-        }
-        forward_solve(l, m, &mut inv, m);
-        inv
-    }
-
-    /// A⁻¹ = L⁻ᵀ·L⁻¹ from the Cholesky factor L of A (m × m, row-major).
-    pub(super) fn inverse_from_cholesky(l: &[f64], m: usize) -> Vec<f64> {
-        let linv = lower_inverse(l, m);
-        let li = ArrayView2::from_shape((m, m), &linv).expect("shape");
-        let mut out = ndarray::Array2::<f64>::zeros((m, m));
-        general_mat_mul(1.0, &li.t(), &li, 0.0, &mut out);
-        out.into_raw_vec_and_offset().0
-    }
 }
 
 /// M·Y for M (r × r) and Y (r × n), row-major; columns in parallel blocks of 256.

@@ -430,6 +430,38 @@ mod tests {
     }
 
     #[test]
+    fn map_options_are_checked_once_with_every_part() {
+        let ok = MapOptions {
+            method: Method::Og,
+            runs: vec![MapRun::parse("c.toml=e.parquet").unwrap()],
+            out: PathBuf::from("out"),
+            elements: None,
+            grid: Default::default(),
+            og: Default::default(),
+            ekf: Default::default(),
+            pose_noise: Default::default(),
+        };
+        let v = ok.check().unwrap();
+        assert_eq!(v.grid().cell_m, 0.1);
+        let field = |o: MapOptions| o.check().unwrap_err().to_string();
+        let mut o = ok.clone();
+        o.grid.cell_m = 0.0;
+        assert!(field(o).contains("`cell_m`"));
+        let mut o = ok.clone();
+        o.og.pfa = 2.0;
+        assert!(field(o).contains("`pfa`"));
+        let mut o = ok.clone();
+        o.ekf.sigma0 = 0.0;
+        assert!(field(o).contains("`sigma0`"));
+        let mut o = ok.clone();
+        o.runs.clear();
+        assert!(field(o).contains("`--run`"));
+        let mut o = ok;
+        o.pose_noise.position_m = -1.0;
+        assert!(field(o).contains("`pose_noise.position_m`"));
+    }
+
+    #[test]
     fn no_pose_noise_keeps_the_poses() {
         let p = line(5);
         assert_eq!(PoseNoise::default().apply(&p, 0), p);
