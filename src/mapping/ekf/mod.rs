@@ -1,6 +1,6 @@
 //! EKF mapper over the root radar cross section (DESIGN §2 "Mapping").
 //!
-//! Takes an [`ObservationModel`], a run's [`EnergyMatrix`] (profiles and `n0`, `tw`,
+//! Takes an [`ObservationModel`](crate::mapping::grid::ObservationModel), a run's [`EnergyMatrix`](crate::energy::EnergyMatrix) (profiles and `n0`, `tw`,
 //! `pulses` metadata), the run's window kernel and [`EkfParams`]; gives per cell the
 //! posterior mean of the RRCS x_i (m), its standard deviation, a soft map
 //! p_i = P(x_i > μ0 | data) and a binary map ([`EkfMap`]).

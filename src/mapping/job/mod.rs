@@ -13,7 +13,7 @@
 //!   figures for the first n runs, n = 1..R (metrics vs number of runs).
 //!
 //! Choices:
-//! * the grid is the reference raster's ([`Layout::rasterize`]: cell 0.1 m, margin 0.5 m);
+//! * the grid is the reference raster's ([`Layout::rasterize`](crate::campaign::layout::Layout::rasterize): cell 0.1 m, margin 0.5 m);
 //!   fused runs must share the layout's grid;
 //! * observable region = cells inside the −3 dB main lobe of at least one (pose, direction)
 //!   of any run, within the usable bins (coupling gate to the last bin), and not `Outside` in
@@ -28,7 +28,7 @@
 
 //!
 //! Layout: [`load`] (runs → [`LoadedRun`]s on one grid, the first usable bin, the window
-//! kernel), [`score`] (metrics against the reference, observable region, the metrics
+//! kernel), [`score`](mod@score) (metrics against the reference, observable region, the metrics
 //! table), [`ekf`] (the `--method ekf` job); this file holds the options, the occupancy-grid
 //! job and the report written to `metrics.json`. The report page is assembled by
 //! `report::maps`.

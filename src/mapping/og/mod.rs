@@ -2,7 +2,7 @@
 //! side-lobe-aware inverse sensor model (`og`) and the classic boresight-only baseline
 //! (`og-boresight`).
 //!
-//! Takes an [`ObservationModel`], the run's [`EnergyMatrix`] and [`OgParams`]; gives a
+//! Takes an [`ObservationModel`](crate::mapping::grid::ObservationModel), the run's [`EnergyMatrix`](crate::energy::EnergyMatrix) and [`OgParams`]; gives a
 //! [`LogOddsMap`] (log-odds per cell, the cells that got evidence) and [`OgStats`].
 //!
 //! Equations and choices:
