@@ -20,6 +20,7 @@ use pradar::mapping::ekf::{
     RrcsFilter, TiledEkf,
 };
 use pradar::mapping::grid::{GridParams, ObservationModel};
+use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Gamma};
 use std::path::Path;
@@ -227,7 +228,7 @@ fn main() {
     let min_bin = 2 + (c.manifest.processing.gate_ns / em.meta.bin_width_ns).ceil() as usize;
     let model = ObservationModel::new(
         spec,
-        gp,
+        &gp.check().unwrap(),
         &c.manifest,
         em.bins,
         em.meta.bin_width_ns,
@@ -239,7 +240,7 @@ fn main() {
     let base = peak_mb();
     match mode {
         "scalable" => {
-            let p = EkfParams::default();
+            let p = EkfParams::default().check().unwrap();
             let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
             let mut f = TiledEkf::new(spec.rows, spec.cols, p.tile, &p).unwrap();
             let st = ekf_run(&model, &em, &kernel, &p, &noise, &mut f, &|_, _| {}).unwrap();
@@ -262,7 +263,9 @@ fn main() {
             let p = EkfParams {
                 variant: EkfVariant::Dense,
                 ..Default::default()
-            };
+            }
+            .check()
+            .unwrap();
             let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
             let mut f = match DenseEkf::new(n, &p) {
                 Ok(f) => f,
@@ -312,7 +315,9 @@ fn main() {
             let p = EkfParams {
                 variant: EkfVariant::Dense,
                 ..Default::default()
-            };
+            }
+            .check()
+            .unwrap();
             let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
             let mut f = DenseEkf::new(n, &p).unwrap();
             let kern = truncate_kernel(&kernel, p.kernel_floor_db);

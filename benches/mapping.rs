@@ -13,6 +13,7 @@ use pradar::energy::{EnergyMatrix, EnergyMeta, EnergyProcessor};
 use pradar::mapping::grid::{GridParams, ObservationModel};
 use pradar::mapping::job::{load_run, MapRun};
 use pradar::mapping::og::{og_map_stats, Detector, LogOddsMap, Method, OgParams, OgStats};
+use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Gamma};
 use std::path::Path;
@@ -165,7 +166,15 @@ fn run(
     det: &Detector,
     method: Method,
 ) -> (LogOddsMap, OgStats) {
-    og_map_stats(model, em, &OgParams::default(), method, det, &|_, _| {}).unwrap()
+    og_map_stats(
+        model,
+        em,
+        &OgParams::default().check().unwrap(),
+        method,
+        det,
+        &|_, _| {},
+    )
+    .unwrap()
 }
 
 fn main() {
@@ -203,8 +212,8 @@ fn corridor(dir: &Path, crit: &mut Criterion) {
             energy: e.clone(),
         },
         None,
-        &GridParams::default(),
-        &OgParams::default(),
+        &GridParams::default().check().unwrap(),
+        &OgParams::default().check().unwrap(),
         None,
     )
     .unwrap();
@@ -247,7 +256,7 @@ fn floor(dir: &Path) {
     let spec = pradar::campaign::layout::GridSpec::covering(layout.bbox(), 0.1, 0.0);
     let model = ObservationModel::new(
         spec,
-        grid,
+        &grid.check().unwrap(),
         &fc.manifest,
         em.bins,
         em.meta.bin_width_ns,

@@ -8,6 +8,8 @@
 //! [`export::Table`](crate::export::Table), [`kv_table`], [`write_index`]) in this file; the
 //! `reproduce` page in [`reproduce`], the experiments' sections and page in [`experiments`].
 
+pub mod maps;
+
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use plotters::prelude::*;

@@ -17,6 +17,7 @@ use pradar::mapping::ekf::{
 use pradar::mapping::grid::{GridParams, ObservationModel};
 use pradar::mapping::job::{load_run, observable_region, score_binary, window_kernel, MapRun};
 use pradar::mapping::metrics::evaluate;
+use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -44,7 +45,14 @@ fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::mapping::job::LoadedRun {
         cell_m,
         ..Default::default()
     };
-    load_run(&run, None, &grid, &Default::default(), None).unwrap()
+    load_run(
+        &run,
+        None,
+        &grid.check().unwrap(),
+        &pradar::mapping::OgParams::default().check().unwrap(),
+        None,
+    )
+    .unwrap()
 }
 
 fn noise_of(l: &pradar::mapping::job::LoadedRun, p: &EkfParams) -> NoiseModel {
@@ -279,12 +287,19 @@ fn prediction_matches_the_simulated_point_echo() {
         ..Default::default()
     };
     let mb = pradar::mapping::job::min_bin(&em);
-    let model =
-        ObservationModel::new(spec, gp, &c.manifest, em.bins, em.meta.bin_width_ns, mb).unwrap();
+    let model = ObservationModel::new(
+        spec,
+        &gp.check().unwrap(),
+        &c.manifest,
+        em.bins,
+        em.meta.bin_width_ns,
+        mb,
+    )
+    .unwrap();
     let geom = model.pose_geometry(0);
     let d = 22; // 20°
     let beam = model.beam(&geom, d);
-    let params = EkfParams::default();
+    let params = EkfParams::default().check().unwrap();
     let kernel =
         pradar::mapping::ekf::truncate_kernel(&window_kernel(&c).unwrap(), params.kernel_floor_db);
     let prof = em.profile(0, d);
@@ -331,7 +346,7 @@ fn prediction_matches_the_simulated_point_echo() {
 fn dense_update_equals_a_textbook_ekf_on_a_tiny_grid() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let n = 49; // 7 × 7
-    let params = EkfParams::default();
+    let params = EkfParams::default().check().unwrap();
     let noise = NoiseModel {
         n0: 1e-10,
         tw: 1.3,
@@ -386,9 +401,16 @@ fn dense_update_equals_a_textbook_ekf_on_a_real_beam() {
         ..Default::default()
     };
     let mb = pradar::mapping::job::min_bin(&em);
-    let model =
-        ObservationModel::new(spec, gp, &c.manifest, em.bins, em.meta.bin_width_ns, mb).unwrap();
-    let params = EkfParams::default();
+    let model = ObservationModel::new(
+        spec,
+        &gp.check().unwrap(),
+        &c.manifest,
+        em.bins,
+        em.meta.bin_width_ns,
+        mb,
+    )
+    .unwrap();
+    let params = EkfParams::default().check().unwrap();
     let kernel =
         pradar::mapping::ekf::truncate_kernel(&window_kernel(&c).unwrap(), params.kernel_floor_db);
     let noise = NoiseModel::new(&em.meta, params.model_error, Path::new("e")).unwrap();
@@ -428,7 +450,7 @@ fn dense_update_equals_a_textbook_ekf_on_a_real_beam() {
 /// Run a filter over a loaded run.
 fn run_filter(
     l: &pradar::mapping::job::LoadedRun,
-    params: &EkfParams,
+    params: &pradar::mapping::EkfValid,
     f: &mut dyn RrcsFilter,
 ) -> pradar::mapping::ekf::EkfStats {
     let kernel = window_kernel(&l.campaign).unwrap();
@@ -452,7 +474,9 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
     let params = EkfParams {
         variant: EkfVariant::Dense,
         ..Default::default()
-    };
+    }
+    .check()
+    .unwrap();
     let mut f = DenseEkf::new(n, &params).unwrap();
     let kernel = window_kernel(&l.campaign).unwrap();
     let noise = noise_of(&l, &params);
@@ -510,8 +534,10 @@ fn scalable_matches_dense_on_a_coarse_corridor() {
     let dp = EkfParams {
         variant: EkfVariant::Dense,
         ..Default::default()
-    };
-    let sp = EkfParams::default();
+    }
+    .check()
+    .unwrap();
+    let sp = EkfParams::default().check().unwrap();
     let mut dense = DenseEkf::new(n, &dp).unwrap();
     let t0 = std::time::Instant::now();
     run_filter(&l, &dp, &mut dense);

@@ -12,6 +12,7 @@ use pradar::mapping::job::{load_run, observable_region, score, LoadedRun, MapRun
 use pradar::mapping::metrics::{evaluate, psi};
 use pradar::mapping::og::{fuse, og_map, sigmoid, LogOddsMap, Method, OgParams};
 use pradar::mapping::output::{soft_grey, write_map_files};
+use pradar::params::ParamGuard;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
@@ -41,14 +42,21 @@ fn load(c: &Path, e: &Path) -> LoadedRun {
         campaign: c.to_path_buf(),
         energy: e.to_path_buf(),
     };
-    load_run(&run, None, &Default::default(), &OgParams::default(), None).unwrap()
+    load_run(
+        &run,
+        None,
+        &pradar::mapping::GridParams::default().check().unwrap(),
+        &OgParams::default().check().unwrap(),
+        None,
+    )
+    .unwrap()
 }
 
 fn map(l: &LoadedRun, method: Method) -> LogOddsMap {
     og_map(
         &l.model,
         &l.energy,
-        &OgParams::default(),
+        &OgParams::default().check().unwrap(),
         method,
         &l.detector,
         &|_, _| {},

@@ -35,6 +35,7 @@ use crate::campaign::layout::GridSpec;
 use crate::campaign::manifest::{Manifest, Pose, Steering};
 use crate::campaign::pattern::ArrayPattern;
 use crate::error::{Error, Result};
+use crate::params::{ParamGuard, Valid};
 use crate::units::{wrap_rad, C0};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -66,9 +67,15 @@ impl Default for GridParams {
     }
 }
 
-impl GridParams {
-    /// Validate.
-    pub fn check(&self) -> Result<()> {
+/// Grid parameters that passed [`ParamGuard::check`].
+pub type GridValid = Valid<GridParams>;
+
+impl ParamGuard for GridParams {
+    type Checked = GridValid;
+
+    /// Cell side in [0.005, 10] m, margin ≥ 0, lobe floor < 0 dB, main-lobe level in
+    /// [lobe floor, 0) dB, sub-samples in 1..=16.
+    fn check(&self) -> Result<GridValid> {
         if !(self.cell_m.is_finite() && self.cell_m >= 0.005 && self.cell_m <= 10.0) {
             return Err(Error::param("cell_m", "must be in [0.005, 10] m"));
         }
@@ -90,8 +97,11 @@ impl GridParams {
         if self.subsamples == 0 || self.subsamples > 16 {
             return Err(Error::param("subsamples", "must be in 1..=16"));
         }
-        Ok(())
+        Ok(Valid::new(*self))
     }
+}
+
+impl GridParams {
     /// Lowest kept two-way weight, linear.
     pub fn floor_weight(&self) -> f64 {
         10f64.powf(self.lobe_floor_db / 10.0)
@@ -294,7 +304,7 @@ pub struct ObservationModel {
     /// Grid geometry.
     pub spec: GridSpec,
     /// Parameters.
-    pub params: GridParams,
+    pub params: GridValid,
     /// Poses of the run.
     pub poses: Vec<Pose>,
     /// Bins per profile.
@@ -313,13 +323,12 @@ impl ObservationModel {
     /// bin layout (`bins` bins of `bin_width_ns`, usable from `min_bin`).
     pub fn new(
         spec: GridSpec,
-        params: GridParams,
+        params: &GridValid,
         manifest: &Manifest,
         bins: usize,
         bin_width_ns: f64,
         min_bin: usize,
     ) -> Result<ObservationModel> {
-        params.check()?;
         if !(bin_width_ns.is_finite() && bin_width_ns > 0.0) {
             return Err(Error::param("bin_width_ns", "must be > 0"));
         }
@@ -329,7 +338,7 @@ impl ObservationModel {
         let gain = GainModel::new(manifest, params.floor_weight())?;
         Ok(ObservationModel {
             spec,
-            params,
+            params: params.clone(),
             poses: manifest.poses.clone(),
             bins,
             min_bin: min_bin.min(bins),
@@ -367,6 +376,13 @@ impl ObservationModel {
 
     /// The cells in range of pose `p` with bearings and bin shares.
     pub fn pose_geometry(&self, p: usize) -> PoseGeometry {
+        let (items, flat) = self.cells_in_range(p);
+        bucket_by_bearing(&items, &flat)
+    }
+
+    /// Every cell within the usable ranges of pose `p` that has a sub-sample in a usable
+    /// bin, in row-major order, with its bin shares (concatenated in `flat`).
+    fn cells_in_range(&self, p: usize) -> (Vec<CellItem>, Vec<(u32, f32)>) {
         let pose = self.poses[p];
         let spec = &self.spec;
         let rmax = self.max_range_m();
@@ -375,20 +391,21 @@ impl ObservationModel {
         );
         let heading = pose.heading_deg.to_radians();
         let s = self.params.subsamples;
-        let inv = 1.0 / (s * s) as f64;
         let half_diag = spec.cell_m * std::f64::consts::FRAC_1_SQRT_2;
-        // (bearing, cell, range, start in flat, count)
-        let mut items: Vec<(f64, u32, f64, u32, u32)> = Vec::new();
+        let mut items: Vec<CellItem> = Vec::new();
         let mut flat: Vec<(u32, f32)> = Vec::new();
         let (c_lo, c_hi) = col_span(spec, pose.x_m, rmax);
         let (r_lo, r_hi) = row_span(spec, pose.y_m, rmax);
-        let mut hist: Vec<(u32, f32)> = Vec::with_capacity(16);
-        let off: Vec<f64> = (0..s)
-            .map(|a| ((a as f64 + 0.5) / s as f64 - 0.5) * spec.cell_m)
-            .collect();
-        let scale = 2.0 / (C0 * self.bin_width_s);
-        let mut ks = vec![0i64; s * s];
-        let mut counts = [0u32; 64];
+        let mut sub = SubSampler {
+            off: (0..s)
+                .map(|a| ((a as f64 + 0.5) / s as f64 - 0.5) * spec.cell_m)
+                .collect(),
+            inv: 1.0 / (s * s) as f64,
+            scale: 2.0 / (C0 * self.bin_width_s),
+            ks: vec![0i64; s * s],
+            counts: [0u32; 64],
+            hist: Vec::with_capacity(16),
+        };
         for row in r_lo..r_hi {
             for col in c_lo..c_hi {
                 let c = spec.center(row, col);
@@ -397,107 +414,23 @@ impl ObservationModel {
                 if r + half_diag < rmin || r - half_diag > rmax || r < 1e-6 {
                     continue;
                 }
-                hist.clear();
-                // sub-point bins: exact ranges near the pose, first-order ranges beyond 2 m
-                // (error ≤ δ²/2r ≈ 1 mm for 0.1 m cells, against 2.5 cm bins)
-                let mut n = 0;
-                if r > 2.0 {
-                    let (ux, uy) = (dx / r, dy / r);
-                    for &oa in &off {
-                        let ra = r + ux * oa;
-                        for &ob in &off {
-                            ks[n] = ((ra + uy * ob) * scale).round() as i64;
-                            n += 1;
-                        }
-                    }
-                } else {
-                    for &oa in &off {
-                        let x = dx + oa;
-                        for &ob in &off {
-                            let y = dy + ob;
-                            ks[n] = ((x * x + y * y).sqrt() * scale).round() as i64;
-                            n += 1;
-                        }
-                    }
-                }
-                let kmin = *ks[..n].iter().min().unwrap_or(&0);
-                let kmax = *ks[..n].iter().max().unwrap_or(&0);
-                let span = (kmax - kmin + 1) as usize;
-                if span <= counts.len() {
-                    counts[..span].iter_mut().for_each(|c| *c = 0);
-                    for &k in &ks[..n] {
-                        counts[(k - kmin) as usize] += 1;
-                    }
-                    for (j, &cnt) in counts[..span].iter().enumerate() {
-                        let k = kmin + j as i64;
-                        if cnt > 0 && k >= self.min_bin as i64 && k < self.bins as i64 {
-                            hist.push((k as u32, (cnt as f64 * inv) as f32));
-                        }
-                    }
-                } else {
-                    for &k in &ks[..n] {
-                        if k < self.min_bin as i64 || k >= self.bins as i64 {
-                            continue;
-                        }
-                        let k = k as u32;
-                        match hist.iter_mut().find(|e| e.0 == k) {
-                            Some(e) => e.1 += inv as f32,
-                            None => hist.push((k, inv as f32)),
-                        }
-                    }
-                }
-                if hist.is_empty() {
+                sub.bin_shares(dx, dy, r, self.min_bin, self.bins);
+                if sub.hist.is_empty() {
                     continue;
                 }
-                hist.sort_by_key(|e| e.0);
+                sub.hist.sort_by_key(|e| e.0);
                 let th = wrap_rad(dy.atan2(dx) - heading);
                 items.push((
                     th,
                     (row * spec.cols + col) as u32,
                     r,
                     flat.len() as u32,
-                    hist.len() as u32,
+                    sub.hist.len() as u32,
                 ));
-                flat.extend_from_slice(&hist);
+                flat.extend_from_slice(&sub.hist);
             }
         }
-        // counting sort by bearing bucket (stable: row-major within a bucket)
-        let mut bucket = vec![0u32; BUCKETS + 1];
-        for it in &items {
-            bucket[bucket_of(it.0) + 1] += 1;
-        }
-        for b in 0..BUCKETS {
-            bucket[b + 1] += bucket[b];
-        }
-        let mut order = vec![0u32; items.len()];
-        let mut next = bucket.clone();
-        for (i, it) in items.iter().enumerate() {
-            let b = bucket_of(it.0);
-            order[next[b] as usize] = i as u32;
-            next[b] += 1;
-        }
-        let mut g = PoseGeometry {
-            ptr: Vec::with_capacity(items.len() + 1),
-            cell: Vec::with_capacity(items.len()),
-            bucket,
-            theta: Vec::with_capacity(items.len()),
-            range: Vec::with_capacity(items.len()),
-            bin: Vec::with_capacity(flat.len()),
-            share: Vec::with_capacity(flat.len()),
-        };
-        g.ptr.push(0);
-        for &o in &order {
-            let (th, cell, r, start, n) = items[o as usize];
-            g.cell.push(cell);
-            g.theta.push(th);
-            g.range.push(r);
-            for &(k, sh) in &flat[start as usize..(start + n) as usize] {
-                g.bin.push(k);
-                g.share.push(sh);
-            }
-            g.ptr.push(g.bin.len() as u32);
-        }
-        g
+        (items, flat)
     }
 
     /// The beam of direction `d` from a pose's geometry.
@@ -621,6 +554,124 @@ impl ObservationModel {
     }
 }
 
+/// A cell of [`ObservationModel::cells_in_range`]: (bearing, cell, range, start of its
+/// bin shares in `flat`, their count).
+type CellItem = (f64, u32, f64, u32, u32);
+
+/// The sub-sampling of one cell into bins (buffers reused from cell to cell).
+struct SubSampler {
+    /// Sub-point offsets from the cell centre along one axis, m.
+    off: Vec<f64>,
+    /// Share of one sub-point, 1/S².
+    inv: f64,
+    /// Bins per metre of range, 2/(c·T_b).
+    scale: f64,
+    /// Bin of each sub-point.
+    ks: Vec<i64>,
+    /// Histogram of a narrow bin span.
+    counts: [u32; 64],
+    /// The cell's (bin, share) pairs in usable bins [min_bin, bins), unsorted.
+    hist: Vec<(u32, f32)>,
+}
+
+impl SubSampler {
+    /// Bin shares of the cell at offset (dx, dy), range r from the pose into `hist`:
+    /// sub-point bins from exact ranges near the pose, first-order ranges beyond 2 m (error
+    /// ≤ δ²/2r ≈ 1 mm for 0.1 m cells, against 2.5 cm bins).
+    fn bin_shares(&mut self, dx: f64, dy: f64, r: f64, min_bin: usize, bins: usize) {
+        let (ks, off, scale, inv) = (&mut self.ks, &self.off, self.scale, self.inv);
+        self.hist.clear();
+        let mut n = 0;
+        if r > 2.0 {
+            let (ux, uy) = (dx / r, dy / r);
+            for &oa in off {
+                let ra = r + ux * oa;
+                for &ob in off {
+                    ks[n] = ((ra + uy * ob) * scale).round() as i64;
+                    n += 1;
+                }
+            }
+        } else {
+            for &oa in off {
+                let x = dx + oa;
+                for &ob in off {
+                    let y = dy + ob;
+                    ks[n] = ((x * x + y * y).sqrt() * scale).round() as i64;
+                    n += 1;
+                }
+            }
+        }
+        let kmin = *ks[..n].iter().min().unwrap_or(&0);
+        let kmax = *ks[..n].iter().max().unwrap_or(&0);
+        let span = (kmax - kmin + 1) as usize;
+        if span <= self.counts.len() {
+            let counts = &mut self.counts;
+            counts[..span].iter_mut().for_each(|c| *c = 0);
+            for &k in &ks[..n] {
+                counts[(k - kmin) as usize] += 1;
+            }
+            for (j, &cnt) in counts[..span].iter().enumerate() {
+                let k = kmin + j as i64;
+                if cnt > 0 && k >= min_bin as i64 && k < bins as i64 {
+                    self.hist.push((k as u32, (cnt as f64 * inv) as f32));
+                }
+            }
+        } else {
+            for &k in &ks[..n] {
+                if k < min_bin as i64 || k >= bins as i64 {
+                    continue;
+                }
+                let k = k as u32;
+                match self.hist.iter_mut().find(|e| e.0 == k) {
+                    Some(e) => e.1 += inv as f32,
+                    None => self.hist.push((k, inv as f32)),
+                }
+            }
+        }
+    }
+}
+
+/// Counting sort of the cells by bearing bucket (stable: row-major within a bucket) into a
+/// [`PoseGeometry`].
+fn bucket_by_bearing(items: &[CellItem], flat: &[(u32, f32)]) -> PoseGeometry {
+    let mut bucket = vec![0u32; BUCKETS + 1];
+    for it in items {
+        bucket[bucket_of(it.0) + 1] += 1;
+    }
+    for b in 0..BUCKETS {
+        bucket[b + 1] += bucket[b];
+    }
+    let mut order = vec![0u32; items.len()];
+    let mut next = bucket.clone();
+    for (i, it) in items.iter().enumerate() {
+        let b = bucket_of(it.0);
+        order[next[b] as usize] = i as u32;
+        next[b] += 1;
+    }
+    let mut g = PoseGeometry {
+        ptr: Vec::with_capacity(items.len() + 1),
+        cell: Vec::with_capacity(items.len()),
+        bucket,
+        theta: Vec::with_capacity(items.len()),
+        range: Vec::with_capacity(items.len()),
+        bin: Vec::with_capacity(flat.len()),
+        share: Vec::with_capacity(flat.len()),
+    };
+    g.ptr.push(0);
+    for &o in &order {
+        let (th, cell, r, start, n) = items[o as usize];
+        g.cell.push(cell);
+        g.theta.push(th);
+        g.range.push(r);
+        for &(k, sh) in &flat[start as usize..(start + n) as usize] {
+            g.bin.push(k);
+            g.share.push(sh);
+        }
+        g.ptr.push(g.bin.len() as u32);
+    }
+    g
+}
+
 fn col_span(spec: &GridSpec, x: f64, r: f64) -> (usize, usize) {
     let lo = ((x - r - spec.x0_m) / spec.cell_m).floor().max(0.0) as usize;
     let hi = (((x + r - spec.x0_m) / spec.cell_m).ceil() + 1.0).max(0.0) as usize;
@@ -636,6 +687,54 @@ fn row_span(spec: &GridSpec, y: f64, r: f64) -> (usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn grid_params_are_checked() {
+        assert!(GridParams::default().check().is_ok());
+        for (bad, field) in [
+            (
+                GridParams {
+                    cell_m: 0.0,
+                    ..Default::default()
+                },
+                "cell_m",
+            ),
+            (
+                GridParams {
+                    cell_m: f64::INFINITY,
+                    ..Default::default()
+                },
+                "cell_m",
+            ),
+            (
+                GridParams {
+                    margin_m: -1.0,
+                    ..Default::default()
+                },
+                "margin_m",
+            ),
+            (
+                GridParams {
+                    main_lobe_db: -50.0,
+                    ..Default::default()
+                },
+                "main_lobe_db",
+            ),
+            (
+                GridParams {
+                    subsamples: 0,
+                    ..Default::default()
+                },
+                "subsamples",
+            ),
+        ] {
+            let e = bad.check().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("`{field}`")) && e.contains("must be"),
+                "{e}"
+            );
+        }
+    }
 
     #[test]
     fn wrap_is_in_range() {

@@ -14,7 +14,13 @@
 //! * [`metrics`]: ψ (Birk & Carpin 2006), wrong-cell rate, occupied precision/recall/F1
 //!   (exact and within one cell);
 //! * [`output`]: PNG, PGM + YAML (ROS map_server);
-//! * [`job`]: the `pradar map` command (runs, fusion, observable region, metrics.json).
+//! * [`job`]: the `pradar map` command (runs, fusion, observable region, metrics.json; it
+//!   uses [`ekf`] and [`og`], never the other way).
+//!
+//! Parameters are checked once, by type ([`crate::params::ParamGuard`]): [`GridParams`] →
+//! [`GridValid`], [`OgParams`] → [`OgValid`], [`EkfParams`] → [`EkfValid`] and the whole
+//! [`MapOptions`] → [`MapValid`]; the algorithms take only the checked types. The report
+//! page of the maps is `report::maps`. Measurements: `docs/mapping.md`.
 
 pub mod ekf;
 pub mod grid;
@@ -23,7 +29,7 @@ pub mod metrics;
 pub mod og;
 pub mod output;
 
-pub use ekf::{EkfParams, EkfVariant};
-pub use grid::{Beam, GridParams, ObservationModel};
-pub use job::{run_map, MapOptions, MapReport, MapRun};
-pub use og::{fuse, og_map, LogOddsMap, Method, OgParams};
+pub use ekf::{EkfParams, EkfValid, EkfVariant};
+pub use grid::{Beam, GridParams, GridValid, ObservationModel};
+pub use job::{run_map, MapOptions, MapReport, MapRun, MapValid};
+pub use og::{fuse, og_map, LogOddsMap, Method, OgParams, OgValid};

@@ -293,7 +293,7 @@ pub fn map(cmd: &Map, progress: StepProgress) -> Result<MapSummary> {
     for r in &cmd.run_specs {
         opts.runs.push(MapRun::parse(r)?);
     }
-    let report = crate::mapping::run_map(&opts, progress)?;
+    let report = crate::mapping::run_map(&opts.check()?, progress)?;
     Ok(MapSummary {
         report,
         out: opts.out,

@@ -130,7 +130,7 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
     })?;
     timings.time("report plots", || write_plots(&s, &a, out, progress))?;
     let maps = timings.time("maps (OG, OG boresight, EKF)", || {
-        crate::mapping::job::report_section(&s.sim.manifest, &s.energy_path, out, "maps")
+        crate::report::maps::report_section(&s.sim.manifest, &s.energy_path, out, "maps")
     })?;
     let experiments = if opts.experiments {
         timings.time(

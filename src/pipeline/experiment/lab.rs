@@ -310,7 +310,7 @@ impl<'a> Lab<'a> {
             },
             pose_noise: case.pose_noise,
         };
-        let r = run_map(&opts, &|_, _| {})?;
+        let r = run_map(&opts.check()?, &|_, _| {})?;
         self.map_cache.insert(key.clone(), r.clone());
         Ok((key, r))
     }

@@ -1,0 +1,148 @@
+//! EKF mapper over the root radar cross section (DESIGN §2 "Mapping").
+//!
+//! Takes an [`ObservationModel`](crate::mapping::grid::ObservationModel), a run's [`EnergyMatrix`](crate::energy::EnergyMatrix) (profiles and `n0`, `tw`,
+//! `pulses` metadata), the run's window kernel and [`EkfParams`]; gives per cell the
+//! posterior mean of the RRCS x_i (m), its standard deviation, a soft map
+//! p_i = P(x_i > μ0 | data) and a binary map ([`EkfMap`]).
+//!
+//! State and prior: x_i = RRCS of cell i (x = √σ), independent Gaussian prior N(μ0, σ0²),
+//! μ0 > 0 because the Jacobian 2·c·x vanishes at x = 0 (a cell started at 0 would never be
+//! updated). Defaults μ0 = 0.01 m (σ = 1e-4 m², −40 dBsm: a weak cell, about a tenth of the
+//! RRCS of a 0.1 m stretch of diffuse wall) and σ0 = 0.1 m (a wall cell, x ≈ 0.05, lies
+//! within one σ0 and a corner, x ≈ 0.7, within 7 σ0).
+//!
+//! Observation of (pose, direction): the energy vector over the usable bins k ≥ `min_bin`
+//! that have at least one illuminated cell (main and side lobes down to the observation
+//! model's floor; soft input, no detection step). Prediction
+//!   h_k(x) = Σ_i c̃_{k,i}·x_i² + N0·TW,
+//!   c̃_{k,i} = Σ_m c_{m,i}·K(k − m),
+//! c_{m,i} the observation model's radar-equation coefficient of cell i in bin m (share of its
+//! sub-samples whose delay rounds to bin m) and K(j) the bin-averaged energy of a unit point
+//! echo at the centre of a bin, j bins away (`mapping::job::window_kernel`, the
+//! simulator's and `energy`'s own window, IFFT and bin integration), kept for |j| ≤ J where
+//! K(j) ≥ `kernel_floor_db` relative to K(0) (−30 dB: the Hann kernel's main lobe). So a point
+//! target of RRCS x at the centre of bin m predicts exactly `point_echo_energy(c·x², τ_m)`,
+//! which is what `energy` computes from a simulated point echo (checked in the tests).
+//! Jacobian H_{k,i} = 2·c̃_{k,i}·x_i over every illuminated cell. Measurement noise R
+//! diagonal from the energy-detector statistics of a bin averaged over N_p pulses
+//! (`energy`'s module docs), with the predicted signal energy Ê_k = Σ_i c̃_{k,i}·x_i²:
+//!   R_k = (N0²·TW + 2·N0·Ê_k)/N_p + (ε·Ê_k)²,
+//! ε = `model_error` (relative standard deviation of the model error of a bin's energy:
+//! speckle of a cell holding several scatterers, the centre-frequency pattern; default 0.5;
+//! 0 gives the detector statistics alone).
+//!
+//! Update of one (pose, direction), linearised once at the mean x⁻ before it (standard EKF):
+//!   ν = z − h(x⁻), S = H P Hᵀ + R, K = P Hᵀ S⁻¹, x⁺ = x⁻ + K ν, P⁺ = P − K S Kᵀ.
+//! After each update the sign symmetry of the model (h depends on x²) is used: a cell whose
+//! mean went negative is reflected, x_i → −x_i with row and column i of P negated (an exact
+//! change of variables, not an approximation), and means are kept ≥ 1e-3·μ0 so the
+//! Jacobian never vanishes ([`RrcsFilter::project_positive`]).
+//!
+//! Two implementations of [`RrcsFilter`]:
+//! * [`DenseEkf`] — exact, full n × n covariance (row-major, 8n² bytes: the reference up to a
+//!   few thousand cells; refused above `max_dense_cells`). Only the na illuminated cells have
+//!   nonzero columns of H (m rows = bins), so with Y = P[A, :] the update is done as a
+//!   rank-r downdate, r = min(m, na):
+//!   - m ≤ na: Uᵀ = H_A·Y (sparse rows of H times rows of P), S = Uᵀ[:, A]·H_Aᵀ + R,
+//!     S = L·Lᵀ (Cholesky), Wᵀ = L⁻¹Uᵀ, x += Wᵀᵀ·L⁻¹ν, P −= W·Wᵀ;
+//!   - m > na: M = H_Aᵀ·S⁻¹·H_A (na × na) without forming the m × m matrix S, by the
+//!     push-through identity H_Aᵀ(H_A P_AA H_Aᵀ + R)⁻¹H_A = G(I + P_AA G)⁻¹,
+//!     G = H_Aᵀ R⁻¹ H_A (R diagonal). In a symmetric, well-conditioned form: P_AA = L·Lᵀ,
+//!     C = I + Lᵀ·G·L (eigenvalues ≥ 1), M = L⁻ᵀ·(I − C⁻¹)·L⁻¹, and the gain applied to
+//!     ν is Yᵀ·L⁻ᵀ·C⁻¹·Lᵀ·H_Aᵀ R⁻¹ ν; then P −= Yᵀ·(M·Y). Cost O(nnz + na³) instead of
+//!     O(m³ + m²·na) (timings: `docs/mapping.md`). If P_AA or C is not
+//!     numerically positive definite the update goes through S instead:
+//!     S = H_A·P_AA·H_Aᵀ + R, V = L⁻¹H_A, M = VᵀV, x += Yᵀ·Vᵀ·L⁻¹ν, P −= Yᵀ·(M·Y).
+//!
+//!   All bins of the observation are processed together (one batch per (pose, direction)).
+//!   The downdate is computed on the upper triangle in blocks of 64 rows (matrix products of
+//!   `ndarray`/matrixmultiply, blocks in parallel) and mirrored, so P is exactly symmetric
+//!   (the symmetric form P − W·Wᵀ rather than the Joseph form, whose cost is n³ per update);
+//!   S is symmetrised before its Cholesky factorisation.
+//! * [`TiledEkf`] — scalable: the covariance is kept block-diagonal over square tiles of
+//!   `tile` × `tile` cells (4 × 4 by default): the covariances among neighbouring cells (the
+//!   ones a range ring couples most strongly and that shape a wall's outline) are kept, the
+//!   cross-tile ones are dropped. The bins of an observation are processed one at a time as
+//!   scalar measurements of the same linearisation (frozen at x⁻: innovation
+//!   ν'_k = z_k − h_k(x⁻) − H_k·(x − x⁻)), which for a full covariance is exactly the batch
+//!   update above (R is diagonal); per bin: g_T = P_T·H_{k,T}ᵀ for every tile T the bin
+//!   touches, s = Σ_T H_{k,T}·g_T + R_k, x_T += g_T·ν'_k/s, P_T −= g_T·g_Tᵀ/s, and the
+//!   cross-tile terms g_T·g_T'ᵀ/s are dropped. The cost per bin is Σ_T (|T|·nnz + |T|²), so a
+//!   campaign costs O(nnz(H)·tile²) and memory O(n·tile²). With one tile covering the grid
+//!   it equals [`DenseEkf`] (tested). Dropping cross-tile covariances makes the filter
+//!   somewhat overconfident about cells coupled through a range ring but in different tiles.
+//!
+//! Order and determinism: runs, poses and directions in order; the observations of a pose's
+//! directions are built in parallel (beam, kernel convolution) and applied in direction
+//! order; the dense products split P in fixed blocks, so maps are identical for any number
+//! of threads.
+//!
+//! Binary map: occupied when x̂_i − κ·σ̂_i > μ0 (the data raised the cell above the prior
+//! mean by κ posterior standard deviations; κ = 2 by default), i.e. p_i > η = Φ(κ) with
+//! p_i = Φ((x̂_i − μ0)/σ̂_i). The rule uses the prior and the posterior only, never the
+//! reference map; cells never illuminated stay at the prior and read as free.
+//!
+//! Layout: [`params`] ([`EkfParams`] → [`EkfValid`]), [`observation`] (noise model, kernel,
+//! [`Observation`], [`Linearized`]), [`dense`] ([`DenseEkf`]) over [`linalg`], [`tiled`]
+//! ([`TiledEkf`]), [`run`] ([`ekf_run`], [`EkfMap`]). The `map --method ekf` job that
+//! writes the files is `mapping::job` (it uses this module, never the other way).
+//!
+//! ```
+//! use pradar::mapping::ekf::{DenseEkf, EkfParams, Linearized, NoiseModel, Observation, RrcsFilter};
+//! use pradar::params::ParamGuard;
+//! let params = EkfParams::default().check().unwrap();
+//! let mut f = DenseEkf::new(2, &params).unwrap();
+//! // one bin seeing both cells (c̃ = 1e-3), measured energy well above the prediction
+//! let obs = Observation { bin: vec![10], z: vec![1e-6], ptr: vec![0, 2], cell: vec![0, 1], coef: vec![1e-3, 1e-3] };
+//! let noise = NoiseModel { n0: 1e-9, tw: 1.0, pulses: 1.0, model_error: 0.5 };
+//! let lin = Linearized::new(&obs, f.mean(), &noise);
+//! f.update(&obs, &lin).unwrap();
+//! assert!(f.mean()[0] > params.mu0 && f.variances()[0] < params.sigma0.powi(2));
+//! ```
+
+pub mod dense;
+pub mod linalg;
+pub mod observation;
+pub mod params;
+pub mod run;
+pub mod tiled;
+
+pub use dense::DenseEkf;
+pub use linalg::cholesky;
+pub use observation::{truncate_kernel, Linearized, NoiseModel, Observation};
+pub use params::{normal_cdf, EkfParams, EkfValid, EkfVariant};
+pub use run::{ekf_run, mean_grey, std_grey, EkfMap, EkfReport, EkfStats};
+pub use tiled::TiledEkf;
+
+use crate::error::Result;
+
+/// The interface of both EKF implementations.
+pub trait RrcsFilter: Send {
+    /// Cells.
+    fn len(&self) -> usize;
+    /// True for an empty grid.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Posterior means.
+    fn mean(&self) -> &[f64];
+    /// Posterior variances P_ii.
+    fn variances(&self) -> Vec<f64>;
+    /// Covariance P_ij if the filter keeps it (always for the dense filter).
+    fn covariance(&self, i: usize, j: usize) -> Option<f64>;
+    /// One EKF update with an observation linearised at the current mean.
+    fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()>;
+    /// Reflect negative means (x_i → −x_i, row/column i of P negated) and keep means
+    /// ≥ `x_min`; returns the cells reflected.
+    fn project_positive(&mut self, x_min: f64) -> usize;
+    /// Name (`dense`, `scalable`).
+    fn name(&self) -> &'static str;
+}
+
+/// Build the filter of `params.variant` for `cells` cells in a `rows` × `cols` grid.
+pub fn new_filter(params: &EkfValid, rows: usize, cols: usize) -> Result<Box<dyn RrcsFilter>> {
+    Ok(match params.variant {
+        EkfVariant::Dense => Box::new(DenseEkf::new(rows * cols, params)?),
+        EkfVariant::Scalable => Box::new(TiledEkf::new(rows, cols, params.tile, params)?),
+    })
+}

@@ -1,0 +1,204 @@
+//! One (pose, direction) observation of the EKF: the energy-detector noise model
+//! ([`NoiseModel`]), the truncated window kernel ([`truncate_kernel`]), the observation
+//! with kernel-folded coefficients ([`Observation`]) and its linearisation at the current
+//! mean ([`Linearized`]).
+//!
+//! Takes a [`Beam`] (c_{m,i} by bin), the measured profile and the kernel; gives the rows
+//! k ≥ `min_bin` with at least one illuminated cell, CSR over cells, with
+//!   c̃_{k,i} = Σ_m c_{m,i}·K(k − m),
+//! and at the mean x⁻: h_k = Σ_i c̃_{k,i}·x_i² + N0·TW, ν_k = z_k − h_k, H_{k,i} = 2·c̃_{k,i}·x_i
+//! and R_k = (N0²·TW + 2·N0·Ê_k)/N_p + (ε·Ê_k)² (Ê_k = Σ_i c̃_{k,i}·x_i², the predicted
+//! signal energy; the detector statistics of `energy`'s module docs plus a relative model
+//! error ε).
+
+use crate::energy::EnergyMeta;
+use crate::error::{Error, Result};
+use crate::mapping::grid::Beam;
+
+/// Energy-detector noise statistics of a run (from [`EnergyMeta`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NoiseModel {
+    /// N0.
+    pub n0: f64,
+    /// TW (equivalent independent samples per bin).
+    pub tw: f64,
+    /// Pulses averaged N_p.
+    pub pulses: f64,
+    /// Relative model error ε.
+    pub model_error: f64,
+}
+
+impl NoiseModel {
+    /// From an energy table's metadata (`file` names it in errors).
+    pub fn new(meta: &EnergyMeta, model_error: f64, file: &std::path::Path) -> Result<Self> {
+        if !(meta.n0.is_finite() && meta.n0 > 0.0) {
+            return Err(Error::input(
+                file,
+                "metadata `n0` must be a positive number",
+            ));
+        }
+        if !(meta.tw.is_finite() && meta.tw > 0.0) || meta.pulses == 0 {
+            return Err(Error::input(
+                file,
+                "metadata `tw`/`pulses` must be positive",
+            ));
+        }
+        Ok(NoiseModel {
+            n0: meta.n0,
+            tw: meta.tw,
+            pulses: meta.pulses as f64,
+            model_error,
+        })
+    }
+    /// Mean energy of a noise-only bin N0·TW.
+    pub fn mean(&self) -> f64 {
+        self.n0 * self.tw
+    }
+    /// Variance of a bin with signal energy `es` (≥ 0).
+    pub fn variance(&self, es: f64) -> f64 {
+        let es = es.max(0.0);
+        (self.n0 * self.n0 * self.tw + 2.0 * self.n0 * es) / self.pulses
+            + (self.model_error * es).powi(2)
+    }
+}
+
+/// Window kernel K(0..=J) truncated at `floor_db` below K(0).
+pub fn truncate_kernel(kernel: &[f64], floor_db: f64) -> Vec<f64> {
+    let k0 = kernel.first().copied().unwrap_or(0.0);
+    let floor = k0 * 10f64.powf(floor_db / 10.0);
+    let mut j = 0;
+    while j + 1 < kernel.len() && kernel[j + 1] >= floor {
+        j += 1;
+    }
+    kernel[..=j.min(kernel.len().saturating_sub(1))].to_vec()
+}
+
+/// One (pose, direction) observation: rows = bins, CSR over cells with the kernel-folded
+/// coefficients c̃ (cells ascending within a row).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Observation {
+    /// Bin of each row.
+    pub bin: Vec<u32>,
+    /// Measured energy of each row.
+    pub z: Vec<f64>,
+    /// `ptr[j]..ptr[j+1]` are the entries of row j.
+    pub ptr: Vec<usize>,
+    /// Cell of each entry.
+    pub cell: Vec<u32>,
+    /// c̃ of each entry.
+    pub coef: Vec<f64>,
+}
+
+impl Observation {
+    /// Rows (bins).
+    pub fn rows(&self) -> usize {
+        self.bin.len()
+    }
+    /// Build from a beam (c_{m,i} by bin), the measured profile, the truncated kernel
+    /// K(0..=J) and the usable bins `[min_bin, profile.len())`. `scratch` must hold one
+    /// f64 per grid cell, all zero (it is left zero).
+    pub fn build(
+        beam: &Beam,
+        profile: &[f64],
+        kernel: &[f64],
+        min_bin: usize,
+        scratch: &mut [f64],
+    ) -> Observation {
+        let bins = profile.len().min(beam.ptr.len().saturating_sub(1));
+        let jmax = kernel.len().saturating_sub(1);
+        let mut o = Observation {
+            ptr: vec![0],
+            ..Default::default()
+        };
+        let mut touched: Vec<u32> = Vec::new();
+        for k in min_bin..bins {
+            let lo = k.saturating_sub(jmax);
+            let hi = (k + jmax).min(bins - 1);
+            for m in lo..=hi {
+                let kv = kernel[k.abs_diff(m)];
+                for e in beam.bin_range(m) {
+                    let c = beam.cell[e];
+                    let v = &mut scratch[c as usize];
+                    if *v == 0.0 {
+                        touched.push(c);
+                    }
+                    *v += beam.coef[e] as f64 * kv;
+                }
+            }
+            if touched.is_empty() {
+                continue;
+            }
+            touched.sort_unstable();
+            for &c in &touched {
+                let v = std::mem::take(&mut scratch[c as usize]);
+                if v > 0.0 {
+                    o.cell.push(c);
+                    o.coef.push(v);
+                }
+            }
+            touched.clear();
+            if o.cell.len() > *o.ptr.last().unwrap_or(&0) {
+                o.bin.push(k as u32);
+                o.z.push(profile[k]);
+                o.ptr.push(o.cell.len());
+            }
+        }
+        o
+    }
+}
+
+/// An observation linearised at the mean x⁻: per row the predicted energy h (with the noise
+/// mean), the innovation ν = z − h and R; per entry H = 2·c̃·x⁻ and x⁻.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Linearized {
+    /// Predicted energy h_k(x⁻) (signal + noise mean).
+    pub h: Vec<f64>,
+    /// Innovation ν_k.
+    pub nu: Vec<f64>,
+    /// Measurement variance R_k.
+    pub r: Vec<f64>,
+    /// Jacobian entry H_{k,i} (aligned with the observation's entries).
+    pub hval: Vec<f64>,
+    /// x⁻_i of each entry.
+    pub x0: Vec<f64>,
+}
+
+impl Linearized {
+    /// Linearise `obs` at `x` with the noise model.
+    pub fn new(obs: &Observation, x: &[f64], noise: &NoiseModel) -> Linearized {
+        let n = obs.cell.len();
+        let mut l = Linearized {
+            h: Vec::with_capacity(obs.rows()),
+            nu: Vec::with_capacity(obs.rows()),
+            r: Vec::with_capacity(obs.rows()),
+            hval: Vec::with_capacity(n),
+            x0: Vec::with_capacity(n),
+        };
+        for j in 0..obs.rows() {
+            let mut es = 0.0;
+            for e in obs.ptr[j]..obs.ptr[j + 1] {
+                let xi = x[obs.cell[e] as usize];
+                let c = obs.coef[e];
+                es += c * xi * xi;
+                l.hval.push(2.0 * c * xi);
+                l.x0.push(xi);
+            }
+            let h = es + noise.mean();
+            l.h.push(h);
+            l.nu.push(obs.z[j] - h);
+            l.r.push(noise.variance(es));
+        }
+        l
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kernel_is_truncated_at_the_floor() {
+        let k = [1.0, 0.5, 0.01, 0.0005, 0.0001];
+        assert_eq!(truncate_kernel(&k, -30.0), vec![1.0, 0.5, 0.01]);
+    }
+}

@@ -1,0 +1,218 @@
+//! The `pradar map --method ekf` job: the runs filtered in order by one EKF
+//! ([`crate::mapping::ekf`]), its maps written and scored.
+//!
+//! Fusion = the same filter continued over the next run; the fusion table snapshots the map
+//! after each run; with several runs each run is also mapped alone by a fresh filter.
+//! Files: `ekf.*` (soft map p, YAML thresholds η and 1 − η), `ekf_binary.*`, `ekf_mean.*`
+//! ([`mean_grey`]), `ekf_std.*` ([`std_grey`]), `ekf_rrcs.csv` (row, col, x_m, y_m, mean_m,
+//! std_m, p, occupied), `reference.*` and `metrics.json` (with the EKF section
+//! [`EkfReport`]: parameters, η, kernel half-width, work statistics per run, covariance
+//! bytes).
+
+use super::{
+    load_runs, runs_region, score_binary, write_metrics_json, write_reference, FusionRow,
+    LoadedRun, MapReport, MapValid, MetricsPair, RunSummary,
+};
+use crate::campaign::layout::{GridSpec, ReferenceMap};
+use crate::error::{Error, Result};
+use crate::mapping::ekf::{
+    ekf_run, mean_grey, new_filter, std_grey, truncate_kernel, EkfMap, EkfReport, EkfStats,
+    EkfValid, EkfVariant, NoiseModel, RrcsFilter,
+};
+use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
+use std::path::Path;
+
+/// The runs with their window kernels and noise models.
+struct EkfInputs {
+    loaded: Vec<LoadedRun>,
+    reference: ReferenceMap,
+    region: Vec<bool>,
+    kernels: Vec<Vec<f64>>,
+    noises: Vec<NoiseModel>,
+}
+
+/// What filtering the runs gave: the fused filter, its statistics per run, the fusion
+/// table and each run's figures alone.
+struct Filtered {
+    filter: Box<dyn RrcsFilter>,
+    stats: Vec<EkfStats>,
+    fusion: Vec<FusionRow>,
+    alone: Vec<MetricsPair>,
+}
+
+/// `pradar map --method ekf` (see the module docs).
+pub fn run_map_ekf(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
+    let params = opts.ekf();
+    let inputs = ekf_inputs(opts, &params)?;
+    let spec = inputs.reference.spec;
+    let f = filter_runs(&inputs, &params, progress)?;
+    let map = EkfMap::from_filter(f.filter.as_ref(), spec.rows, spec.cols, &params);
+    let bin = map.binary();
+    let metrics = score_binary(&bin, &inputs.reference, &inputs.region);
+    let eta = params.eta();
+    write_ekf_files(&opts.out, &spec, &map, &params)?;
+    write_reference(&opts.out, &inputs.reference)?;
+    let runs = inputs
+        .loaded
+        .iter()
+        .zip(&f.alone)
+        .map(|(l, m)| RunSummary {
+            campaign: l.campaign.path.display().to_string(),
+            energy: l.energy_path.display().to_string(),
+            threshold: l.detector.threshold,
+            stats: Default::default(),
+            metrics: *m,
+        })
+        .collect();
+    let report = MapReport {
+        method: "ekf".into(),
+        rows: spec.rows,
+        cols: spec.cols,
+        cell_m: spec.cell_m,
+        eta,
+        observable_cells: inputs.region.iter().filter(|&&v| v).count(),
+        metrics,
+        runs,
+        fusion: f.fusion,
+        ekf: Some(EkfReport {
+            params: *params.params(),
+            eta,
+            kernel_half_width: truncate_kernel(&inputs.kernels[0], params.kernel_floor_db).len()
+                - 1,
+            stats: f.stats,
+            covariance_bytes: covariance_bytes(&params, &spec),
+        }),
+        pose_noise: opts.pose_noise,
+        binary: bin,
+    };
+    write_metrics_json(&opts.out, &report)?;
+    Ok(report)
+}
+
+/// Load the runs, their observable region, window kernels and noise models.
+fn ekf_inputs(opts: &MapValid, params: &EkfValid) -> Result<EkfInputs> {
+    let (loaded, reference) = load_runs(opts)?;
+    let region = runs_region(&loaded, &reference);
+    let mut kernels = Vec::new();
+    let mut noises = Vec::new();
+    for l in &loaded {
+        kernels.push(super::window_kernel(&l.campaign)?);
+        noises.push(NoiseModel::new(
+            &l.energy.meta,
+            params.model_error,
+            &l.energy_path,
+        )?);
+    }
+    Ok(EkfInputs {
+        loaded,
+        reference,
+        region,
+        kernels,
+        noises,
+    })
+}
+
+/// Filter the runs in order with one filter (scored after each run), then, with several
+/// runs, each run alone.
+fn filter_runs(
+    inp: &EkfInputs,
+    params: &EkfValid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Filtered> {
+    let spec = inp.reference.spec;
+    let total: usize = inp.loaded.iter().map(|l| l.model.poses.len()).sum();
+    let mut filter = new_filter(params, spec.rows, spec.cols)?;
+    let mut done = 0;
+    let mut stats = Vec::new();
+    let mut fusion = Vec::new();
+    let mut alone = Vec::new();
+    for (i, l) in inp.loaded.iter().enumerate() {
+        let base = done;
+        let st = ekf_run(
+            &l.model,
+            &l.energy,
+            &inp.kernels[i],
+            params,
+            &inp.noises[i],
+            filter.as_mut(),
+            &|d, _| progress(base + d, total),
+        )?;
+        done += l.model.poses.len();
+        stats.push(st);
+        let snap = EkfMap::from_filter(filter.as_ref(), spec.rows, spec.cols, params);
+        let m = score_binary(&snap.binary(), &inp.reference, &inp.region);
+        fusion.push(FusionRow {
+            runs: i + 1,
+            metrics: m,
+        });
+        if inp.loaded.len() == 1 {
+            alone.push(m);
+        }
+    }
+    if inp.loaded.len() > 1 {
+        for (i, l) in inp.loaded.iter().enumerate() {
+            let mut f = new_filter(params, spec.rows, spec.cols)?;
+            ekf_run(
+                &l.model,
+                &l.energy,
+                &inp.kernels[i],
+                params,
+                &inp.noises[i],
+                f.as_mut(),
+                &|_, _| {},
+            )?;
+            let snap = EkfMap::from_filter(f.as_ref(), spec.rows, spec.cols, params);
+            alone.push(score_binary(&snap.binary(), &inp.reference, &inp.region));
+        }
+    }
+    Ok(Filtered {
+        filter,
+        stats,
+        fusion,
+        alone,
+    })
+}
+
+/// Write `ekf.*`, `ekf_binary.*`, `ekf_mean.*`, `ekf_std.*` and `ekf_rrcs.csv`.
+fn write_ekf_files(out: &Path, spec: &GridSpec, map: &EkfMap, params: &EkfValid) -> Result<()> {
+    let (probs, bin, eta) = (map.probs(), map.binary(), params.eta());
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let soft: Vec<u8> = probs.iter().map(|&p| soft_grey(p)).collect();
+    output::write_map_files(out, "ekf", spec, &soft, eta, 1.0 - eta)?;
+    let bgrey: Vec<u8> = bin
+        .iter()
+        .map(|&o| if o { GREY_OCCUPIED } else { GREY_FREE })
+        .collect();
+    output::write_map_files(out, "ekf_binary", spec, &bgrey, 0.5, 0.45)?;
+    let mg: Vec<u8> = map.mean.iter().map(|&x| mean_grey(x, params.mu0)).collect();
+    output::write_map_files(out, "ekf_mean", spec, &mg, 0.65, 0.196)?;
+    let sg: Vec<u8> = map
+        .std
+        .iter()
+        .map(|&s| std_grey(s, params.sigma0))
+        .collect();
+    output::write_map_files(out, "ekf_std", spec, &sg, 0.65, 0.196)?;
+    let mut csv = String::from("row,col,x_m,y_m,mean_m,std_m,p,occupied\n");
+    for r in 0..spec.rows {
+        for c in 0..spec.cols {
+            let i = r * spec.cols + c;
+            let ctr = spec.center(r, c);
+            csv.push_str(&format!(
+                "{r},{c},{:.4},{:.4},{:.6e},{:.6e},{:.6},{}\n",
+                ctr.x, ctr.y, map.mean[i], map.std[i], probs[i], bin[i] as u8
+            ));
+        }
+    }
+    crate::io::write_bytes(&out.join("ekf_rrcs.csv"), csv.as_bytes())
+}
+
+/// Peak covariance storage of the filter, bytes.
+fn covariance_bytes(params: &EkfValid, spec: &GridSpec) -> usize {
+    match params.variant {
+        EkfVariant::Dense => spec.len() * spec.len() * 8,
+        EkfVariant::Scalable => {
+            let t = params.tile;
+            spec.rows.div_ceil(t) * spec.cols.div_ceil(t) * t * t * t * t * 8
+        }
+    }
+}

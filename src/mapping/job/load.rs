@@ -1,0 +1,134 @@
+//! Loading the runs of a map job: campaign, layout and energy table checked against each
+//! other, the run's detector and observation model on one grid.
+//!
+//! Takes [`MapRun`]s (campaign + energy paths) and checked grid and occupancy-grid
+//! parameters; gives [`LoadedRun`]s and the reference map rasterised from the first run's
+//! layout on the same grid. The first usable bin ([`min_bin`]) is the coupling gate plus
+//! 2 bins (the Hann kernel's half-width), never before bin 2; [`window_kernel`] is the
+//! bin-averaged energy of a unit point echo computed by the run's own `energy` processing.
+
+use super::{MapRun, MapValid};
+use crate::campaign::layout::{GridSpec, Layout, ReferenceMap};
+use crate::campaign::manifest::{Campaign, Pose};
+use crate::energy::EnergyMatrix;
+use crate::error::{Error, Result};
+use crate::mapping::grid::{GridValid, ObservationModel};
+use crate::mapping::og::{detection_threshold, Detector, OgValid};
+use std::path::PathBuf;
+
+/// A loaded, checked run ready to map.
+#[derive(Debug)]
+pub struct LoadedRun {
+    /// The campaign.
+    pub campaign: Campaign,
+    /// Its layout.
+    pub layout: Layout,
+    /// The energy matrix.
+    pub energy: EnergyMatrix,
+    /// Its path.
+    pub energy_path: PathBuf,
+    /// The observation model.
+    pub model: ObservationModel,
+    /// The run's detector.
+    pub detector: Detector,
+    /// The poses the data were recorded at (the manifest's; `model.poses` holds the poses
+    /// the mapper believes, which differ under [`super::PoseNoise`]).
+    pub true_poses: Vec<Pose>,
+}
+
+/// First usable bin of an energy table (see the module docs).
+pub fn min_bin(em: &EnergyMatrix) -> usize {
+    let gate = em.meta.gate_ns();
+    let g = (gate.max(0.0) / em.meta.bin_width_ns).ceil() as usize;
+    (g + 2).max(2)
+}
+
+/// Bin-averaged window kernel of a point echo, K(m) for m = 0..=32 bins from its peak (the
+/// run's band and processing; any scale).
+pub fn window_kernel(c: &Campaign) -> Result<Vec<f64>> {
+    let m = &c.manifest;
+    let proc = crate::energy::EnergyProcessor::new(m.band, m.processing)
+        .map_err(|e| Error::input(&c.path, e.to_string()))?;
+    let tb = proc.bin_width_ns() * 1e-9;
+    let nb = proc.nbins();
+    let centre = (nb / 2).min(200);
+    let e = proc.point_echo_energy(1.0, centre as f64 * tb);
+    Ok((0..=32)
+        .map(|j| {
+            let a = e.get(centre + j).copied().unwrap_or(0.0);
+            let b = centre
+                .checked_sub(j)
+                .and_then(|i| e.get(i))
+                .copied()
+                .unwrap_or(a);
+            a.max(b)
+        })
+        .collect())
+}
+
+/// Load and check one run on the grid `spec` (None: the run's own reference grid).
+pub fn load_run(
+    run: &MapRun,
+    elements: Option<usize>,
+    grid: &GridValid,
+    og: &OgValid,
+    spec: Option<GridSpec>,
+) -> Result<LoadedRun> {
+    let mut c = Campaign::load(&run.campaign)?;
+    if let Some(n) = elements {
+        c.set_elements(n)?;
+    }
+    let layout = Layout::load(&c.layout_path())?;
+    let energy = EnergyMatrix::read(&run.energy)?;
+    crate::energy::check_campaign(&c, &energy, &run.energy)?;
+    let threshold = detection_threshold(&energy.meta, og.pfa, &run.energy)?;
+    let detector = Detector::new(threshold, &window_kernel(&c)?, og.mask_db, min_bin(&energy));
+    let own = GridSpec::covering(layout.bbox(), grid.cell_m, grid.margin_m);
+    let spec = match spec {
+        Some(s) => {
+            if s != own {
+                return Err(Error::input(
+                    &run.campaign,
+                    "layout differs from the first run's (fused runs must share one area)",
+                ));
+            }
+            s
+        }
+        None => own,
+    };
+    let model = ObservationModel::new(
+        spec,
+        grid,
+        &c.manifest,
+        energy.bins,
+        energy.meta.bin_width_ns,
+        min_bin(&energy),
+    )?;
+    Ok(LoadedRun {
+        true_poses: c.manifest.poses.clone(),
+        campaign: c,
+        layout,
+        energy,
+        energy_path: run.energy.clone(),
+        model,
+        detector,
+    })
+}
+
+/// Load and check every run of `opts` on one grid, with the reference map rasterised from
+/// the first run's layout on the same grid.
+pub fn load_runs(opts: &MapValid) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
+    let (grid, og) = (opts.grid(), opts.og());
+    let mut loaded: Vec<LoadedRun> = Vec::new();
+    for (i, r) in opts.runs.iter().enumerate() {
+        let spec = loaded.first().map(|l| l.model.spec);
+        let mut l = load_run(r, opts.elements, &grid, &og, spec)?;
+        l.model.poses = opts.pose_noise.apply(&l.true_poses, i);
+        loaded.push(l);
+    }
+    let reference = loaded[0].layout.rasterize(grid.cell_m, grid.margin_m);
+    if reference.spec != loaded[0].model.spec {
+        return Err(Error::param("cell_m", "reference grid mismatch"));
+    }
+    Ok((loaded, reference))
+}

@@ -1,0 +1,506 @@
+//! The `pradar map` job: one or several runs (campaign + energy table) → one occupancy map,
+//! its files and its metrics against the reference map.
+//!
+//! Takes [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
+//! gives in the output folder, for method `<m>` (`og` or `og-boresight`):
+//! * `<m>.png/.pgm/.yaml` — the soft map (grey = 1 − p), YAML `occupied_thresh` = η = 0.5,
+//!   `free_thresh` = 0.45 (cells left at the prior read as unknown in map_server);
+//! * `<m>_binary.png/.pgm/.yaml` — the binary map (p > η = 0.5);
+//! * `reference.png/.pgm/.yaml` — the reference map rasterised from the layout on the same
+//!   grid (occupied 0, free 254, outside 205);
+//! * `metrics.json` — figures on the observable region and on the whole map, each beside the
+//!   all-free map's; with several runs also every single run's figures and the fused map's
+//!   figures for the first n runs, n = 1..R (metrics vs number of runs).
+//!
+//! Choices:
+//! * the grid is the reference raster's ([`Layout::rasterize`](crate::campaign::layout::Layout::rasterize): cell 0.1 m, margin 0.5 m);
+//!   fused runs must share the layout's grid;
+//! * observable region = cells inside the −3 dB main lobe of at least one (pose, direction)
+//!   of any run, within the usable bins (coupling gate to the last bin), and not `Outside` in
+//!   the reference (mapper-independent, so all methods are scored on the same cells);
+//! * whole map = every cell of the grid, `Outside` reference cells counted as free;
+//! * usable bins start after the coupling gate (`gate_ns` from the energy metadata when the
+//!   coupling removal was `gate`) plus 2 bins (the Hann kernel's half-width), and never
+//!   before bin 2;
+//! * the energy table must match the campaign: positions = poses, directions and their
+//!   angles, headings, bin width = 1/B, and (when the metadata records it) the element count
+//!   (`--elements` overrides the manifest's).
+
+//!
+//! Layout: [`load`] (runs → [`LoadedRun`]s on one grid, the first usable bin, the window
+//! kernel), [`score`](mod@score) (metrics against the reference, observable region, the metrics
+//! table), [`ekf`] (the `--method ekf` job); this file holds the options, the occupancy-grid
+//! job and the report written to `metrics.json`. The report page is assembled by
+//! `report::maps`.
+//!
+//! ```no_run
+//! use pradar::mapping::{run_map, MapOptions, MapRun, Method};
+//! use pradar::params::ParamGuard;
+//! let opts = MapOptions {
+//!     method: Method::Og,
+//!     runs: vec![MapRun::parse("campaign.toml=energy.parquet")?],
+//!     out: "maps".into(),
+//!     elements: None,
+//!     grid: Default::default(),
+//!     og: Default::default(),
+//!     ekf: Default::default(),
+//!     pose_noise: Default::default(),
+//! };
+//! let report = run_map(&opts.check()?, &|_, _| {})?;
+//! println!("psi {:.3}", report.metrics.observable.psi);
+//! # Ok::<(), pradar::error::Error>(())
+//! ```
+
+pub mod ekf;
+pub mod load;
+pub mod score;
+
+pub use ekf::run_map_ekf;
+pub use load::{load_run, load_runs, min_bin, window_kernel, LoadedRun};
+pub use score::{metrics_table, observable_region, runs_region, score, score_binary, MetricsPair};
+
+use crate::campaign::layout::{CellClass, ReferenceMap};
+use crate::campaign::manifest::Pose;
+use crate::error::{Error, Result};
+use crate::mapping::ekf::{EkfParams, EkfReport, EkfValid};
+use crate::mapping::grid::{GridParams, GridValid};
+use crate::mapping::og::{fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats, OgValid};
+use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
+use crate::params::{ParamGuard, Valid};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// One run: a campaign manifest and its energy table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapRun {
+    /// `campaign.toml`.
+    pub campaign: PathBuf,
+    /// Energy Parquet.
+    pub energy: PathBuf,
+}
+
+impl MapRun {
+    /// Parse `campaign.toml=energy.parquet`.
+    pub fn parse(s: &str) -> Result<MapRun> {
+        let (c, e) = s.split_once('=').ok_or_else(|| {
+            Error::param(
+                "--run",
+                format!("`{s}`: expected campaign.toml=energy.parquet"),
+            )
+        })?;
+        if c.is_empty() || e.is_empty() {
+            return Err(Error::param(
+                "--run",
+                format!("`{s}`: expected campaign.toml=energy.parquet"),
+            ));
+        }
+        Ok(MapRun {
+            campaign: PathBuf::from(c),
+            energy: PathBuf::from(e),
+        })
+    }
+}
+
+/// Options of `pradar map`.
+#[derive(Debug, Clone)]
+pub struct MapOptions {
+    /// Inverse sensor model.
+    pub method: Method,
+    /// Runs (one, or several to fuse).
+    pub runs: Vec<MapRun>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// `--elements` override of every run's `[array] elements`.
+    pub elements: Option<usize>,
+    /// Grid / observation model parameters.
+    pub grid: GridParams,
+    /// Occupancy-grid parameters.
+    pub og: OgParams,
+    /// EKF parameters (method `ekf`).
+    pub ekf: EkfParams,
+    /// Pose noise given to the mapper (none by default).
+    pub pose_noise: PoseNoise,
+}
+
+/// Map options that passed [`ParamGuard::check`] (every run given, every parameter set in
+/// range).
+pub type MapValid = Valid<MapOptions>;
+
+impl ParamGuard for MapOptions {
+    type Checked = MapValid;
+
+    /// At least one run; the grid, occupancy-grid, EKF and pose-noise parameters each in
+    /// range (their own checks, in that order).
+    fn check(&self) -> Result<MapValid> {
+        self.grid.check()?;
+        self.og.check()?;
+        self.ekf.check()?;
+        if self.runs.is_empty() {
+            return Err(Error::param(
+                "--run",
+                "give --campaign and --energy, or at least one --run campaign.toml=energy.parquet",
+            ));
+        }
+        self.pose_noise.check()?;
+        Ok(Valid::new(self.clone()))
+    }
+}
+
+// The parameter sets inside checked options were checked with them: these hand them out
+// as their checked types without checking again.
+impl Valid<MapOptions> {
+    /// The grid parameters (checked).
+    pub fn grid(&self) -> GridValid {
+        Valid::new(self.params().grid)
+    }
+    /// The occupancy-grid parameters (checked).
+    pub fn og(&self) -> OgValid {
+        Valid::new(self.params().og)
+    }
+    /// The EKF parameters (checked).
+    pub fn ekf(&self) -> EkfValid {
+        Valid::new(self.params().ekf)
+    }
+}
+
+/// Pose noise of the mapper: the energy was recorded at the manifest's poses, the mapper is
+/// given x̃ = x + N(0, σ_p²), ỹ = y + N(0, σ_p²), h̃ = h + N(0, σ_h²), drawn independently
+/// per pose (no drift) from a ChaCha stream keyed by (`seed`, run index). The observable
+/// region and the reference stay those of the true poses, so maps with and without noise are
+/// scored on the same cells.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct PoseNoise {
+    /// Position standard deviation per axis, m.
+    pub position_m: f64,
+    /// Heading standard deviation, degrees.
+    pub heading_deg: f64,
+    /// Seed of the draws.
+    pub seed: u64,
+}
+
+/// Pose noise that passed [`ParamGuard::check`].
+pub type PoseNoiseValid = Valid<PoseNoise>;
+
+impl ParamGuard for PoseNoise {
+    type Checked = PoseNoiseValid;
+
+    /// Both standard deviations finite and ≥ 0.
+    fn check(&self) -> Result<PoseNoiseValid> {
+        if !(self.position_m.is_finite() && self.position_m >= 0.0) {
+            return Err(Error::param("pose_noise.position_m", "must be >= 0"));
+        }
+        if !(self.heading_deg.is_finite() && self.heading_deg >= 0.0) {
+            return Err(Error::param("pose_noise.heading_deg", "must be >= 0"));
+        }
+        Ok(Valid::new(*self))
+    }
+}
+
+impl PoseNoise {
+    /// Whether it changes any pose.
+    pub fn is_none(&self) -> bool {
+        self.position_m == 0.0 && self.heading_deg == 0.0
+    }
+    /// The poses the mapper believes for run `run` (the true poses when there is no noise).
+    pub fn apply(&self, poses: &[Pose], run: usize) -> Vec<Pose> {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        if self.is_none() {
+            return poses.to_vec();
+        }
+        let key = self.seed ^ (run as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(key);
+        poses
+            .iter()
+            .map(|p| {
+                let dx: f64 = StandardNormal.sample(&mut rng);
+                let dy: f64 = StandardNormal.sample(&mut rng);
+                let dh: f64 = StandardNormal.sample(&mut rng);
+                Pose {
+                    x_m: p.x_m + self.position_m * dx,
+                    y_m: p.y_m + self.position_m * dy,
+                    heading_deg: p.heading_deg + self.heading_deg * dh,
+                }
+            })
+            .collect()
+    }
+}
+
+/// One row of the fusion table.
+#[derive(Debug, Clone, Serialize)]
+pub struct FusionRow {
+    /// Runs fused (the first n).
+    pub runs: usize,
+    /// Figures of the fused map.
+    pub metrics: MetricsPair,
+}
+
+/// What `pradar map` wrote and measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapReport {
+    /// Method name.
+    pub method: String,
+    /// Grid rows.
+    pub rows: usize,
+    /// Grid columns.
+    pub cols: usize,
+    /// Cell side, m.
+    pub cell_m: f64,
+    /// Binary threshold η on p.
+    pub eta: f64,
+    /// Observable cells.
+    pub observable_cells: usize,
+    /// Figures of the (fused) map.
+    pub metrics: MetricsPair,
+    /// Per run: campaign, energy, detector threshold, work statistics, figures alone.
+    pub runs: Vec<RunSummary>,
+    /// Figures of the fused map of the first n runs (n = 1..R; one row for a single run).
+    pub fusion: Vec<FusionRow>,
+    /// EKF parameters and work statistics (method `ekf` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ekf: Option<EkfReport>,
+    /// Pose noise given to the mapper.
+    pub pose_noise: PoseNoise,
+    /// The (fused) binary map, row-major from the lowest y (not in metrics.json).
+    #[serde(skip)]
+    pub binary: Vec<bool>,
+}
+
+/// Per-run summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    /// Manifest path.
+    pub campaign: String,
+    /// Energy path.
+    pub energy: String,
+    /// Detector energy threshold.
+    pub threshold: f64,
+    /// Work statistics.
+    pub stats: OgStats,
+    /// This run alone.
+    pub metrics: MetricsPair,
+}
+
+/// Run `pradar map` with checked options; `progress(done, total)` counts poses over all
+/// runs.
+pub fn run_map(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
+    match opts.method {
+        Method::Ekf => ekf::run_map_ekf(opts, progress),
+        Method::Og | Method::OgBoresight => run_map_og(opts, progress),
+    }
+}
+
+/// The occupancy-grid job (`og`, `og-boresight`): each run mapped from the prior, the runs
+/// fused, every run and every prefix of the runs scored; writes `<m>.*`, `<m>_binary.*`,
+/// `reference.*` and `metrics.json`.
+fn run_map_og(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
+    let (loaded, reference) = load_runs(opts)?;
+    let (maps, stats) = og_maps(&loaded, &opts.og(), opts.method, progress)?;
+    let region = runs_region(&loaded, &reference);
+    let fused = fuse(&maps)?;
+    let metrics = score(&fused, &reference, &region);
+    let mut runs = Vec::new();
+    for ((l, m), s) in loaded.iter().zip(&maps).zip(&stats) {
+        runs.push(RunSummary {
+            campaign: l.campaign.path.display().to_string(),
+            energy: l.energy_path.display().to_string(),
+            threshold: l.detector.threshold,
+            stats: *s,
+            metrics: score(m, &reference, &region),
+        });
+    }
+    let mut fusion = Vec::new();
+    for n in 1..=maps.len() {
+        let f = fuse(&maps[..n])?;
+        fusion.push(FusionRow {
+            runs: n,
+            metrics: score(&f, &reference, &region),
+        });
+    }
+    let spec = reference.spec;
+    let name = opts.method.name();
+    write_og_files(&opts.out, name, &fused, &reference)?;
+    let report = MapReport {
+        method: name.to_string(),
+        rows: spec.rows,
+        cols: spec.cols,
+        cell_m: spec.cell_m,
+        eta: 0.5,
+        observable_cells: region.iter().filter(|&&v| v).count(),
+        metrics,
+        runs,
+        fusion,
+        ekf: None,
+        pose_noise: opts.pose_noise,
+        binary: fused.binary(),
+    };
+    write_metrics_json(&opts.out, &report)?;
+    Ok(report)
+}
+
+/// Each run mapped on its own from the prior, with its work statistics.
+fn og_maps(
+    loaded: &[LoadedRun],
+    og: &OgValid,
+    method: Method,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(Vec<LogOddsMap>, Vec<OgStats>)> {
+    let total: usize = loaded.iter().map(|l| l.model.poses.len()).sum();
+    let mut done = 0;
+    let mut maps = Vec::new();
+    let mut stats = Vec::new();
+    for l in loaded {
+        let base = done;
+        let (m, s) = og_map_stats(&l.model, &l.energy, og, method, &l.detector, &|d, _| {
+            progress(base + d, total)
+        })?;
+        done += l.model.poses.len();
+        maps.push(m);
+        stats.push(s);
+    }
+    Ok((maps, stats))
+}
+
+/// Write the soft map `<name>.*`, the binary map `<name>_binary.*` and `reference.*`.
+fn write_og_files(
+    out: &Path,
+    name: &str,
+    fused: &LogOddsMap,
+    reference: &ReferenceMap,
+) -> Result<()> {
+    let spec = reference.spec;
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let soft: Vec<u8> = fused.probs().iter().map(|&p| soft_grey(p)).collect();
+    output::write_map_files(out, name, &spec, &soft, 0.5, 0.45)?;
+    let bin: Vec<u8> = fused
+        .binary()
+        .iter()
+        .map(|&o| if o { GREY_OCCUPIED } else { GREY_FREE })
+        .collect();
+    output::write_map_files(out, &format!("{name}_binary"), &spec, &bin, 0.5, 0.45)?;
+    write_reference(out, reference)
+}
+
+/// Write `metrics.json` (pretty-printed [`MapReport`]).
+pub fn write_metrics_json(out: &Path, report: &MapReport) -> Result<()> {
+    let json =
+        serde_json::to_string_pretty(report).map_err(|e| Error::param("metrics", e.to_string()))?;
+    crate::io::write_bytes(&out.join("metrics.json"), json.as_bytes())
+}
+
+/// Grey values of the reference map (occupied 0, free 254, outside 205).
+pub fn reference_grey(reference: &ReferenceMap) -> Vec<u8> {
+    reference
+        .cells
+        .iter()
+        .map(|c| match c {
+            CellClass::Occupied => GREY_OCCUPIED,
+            CellClass::Free => GREY_FREE,
+            CellClass::Outside => GREY_UNKNOWN,
+        })
+        .collect()
+}
+
+/// Write `reference.png/.pgm/.yaml` (map_server default thresholds 0.65 / 0.196).
+pub fn write_reference(out: &Path, reference: &ReferenceMap) -> Result<()> {
+    output::write_map_files(
+        out,
+        "reference",
+        &reference.spec,
+        &reference_grey(reference),
+        0.65,
+        0.196,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(n: usize) -> Vec<Pose> {
+        (0..n)
+            .map(|i| Pose {
+                x_m: i as f64 * 0.4,
+                y_m: -0.3,
+                heading_deg: 10.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn map_options_are_checked_once_with_every_part() {
+        let ok = MapOptions {
+            method: Method::Og,
+            runs: vec![MapRun::parse("c.toml=e.parquet").unwrap()],
+            out: PathBuf::from("out"),
+            elements: None,
+            grid: Default::default(),
+            og: Default::default(),
+            ekf: Default::default(),
+            pose_noise: Default::default(),
+        };
+        let v = ok.check().unwrap();
+        assert_eq!(v.grid().cell_m, 0.1);
+        let field = |o: MapOptions| o.check().unwrap_err().to_string();
+        let mut o = ok.clone();
+        o.grid.cell_m = 0.0;
+        assert!(field(o).contains("`cell_m`"));
+        let mut o = ok.clone();
+        o.og.pfa = 2.0;
+        assert!(field(o).contains("`pfa`"));
+        let mut o = ok.clone();
+        o.ekf.sigma0 = 0.0;
+        assert!(field(o).contains("`sigma0`"));
+        let mut o = ok.clone();
+        o.runs.clear();
+        assert!(field(o).contains("`--run`"));
+        let mut o = ok;
+        o.pose_noise.position_m = -1.0;
+        assert!(field(o).contains("`pose_noise.position_m`"));
+    }
+
+    #[test]
+    fn no_pose_noise_keeps_the_poses() {
+        let p = line(5);
+        assert_eq!(PoseNoise::default().apply(&p, 0), p);
+    }
+
+    #[test]
+    fn pose_noise_has_the_stated_spread_and_is_seeded() {
+        let p = line(20_000);
+        let n = PoseNoise {
+            position_m: 0.05,
+            heading_deg: 2.0,
+            seed: 7,
+        };
+        let a = n.apply(&p, 0);
+        assert_eq!(a, n.apply(&p, 0), "same seed, same draws");
+        assert_ne!(a, n.apply(&p, 1), "another run, other draws");
+        // mean within 4 standard errors of 0, sample std returned
+        let sd = |f: &dyn Fn(&Pose, &Pose) -> f64, sigma: f64| {
+            let v: Vec<f64> = a.iter().zip(&p).map(|(x, y)| f(x, y)).collect();
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            assert!(m.abs() < 4.0 * sigma / (v.len() as f64).sqrt(), "mean {m}");
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+        };
+        let sx = sd(&|x, y| x.x_m - y.x_m, 0.05);
+        let sy = sd(&|x, y| x.y_m - y.y_m, 0.05);
+        let sh = sd(&|x, y| x.heading_deg - y.heading_deg, 2.0);
+        // 20,000 draws: the sample std is within 2 % of σ (≈ 4 standard errors)
+        assert!((sx / 0.05 - 1.0).abs() < 0.02, "x {sx}");
+        assert!((sy / 0.05 - 1.0).abs() < 0.02, "y {sy}");
+        assert!((sh / 2.0 - 1.0).abs() < 0.02, "heading {sh}");
+        assert!(PoseNoise {
+            position_m: -1.0,
+            ..n
+        }
+        .check()
+        .is_err());
+        assert!(PoseNoise {
+            heading_deg: f64::NAN,
+            ..n
+        }
+        .check()
+        .is_err());
+    }
+}

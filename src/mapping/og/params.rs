@@ -1,0 +1,120 @@
+//! Occupancy-grid parameters ([`OgParams`], checked once into [`OgValid`]) and the
+//! log-odds helpers.
+//!
+//! Log-odds l = ln(p/(1−p)): prior l0 from p0, increments l_occ from p_occ and l_free from
+//! p_free; the inverse is the logistic function [`sigmoid`].
+
+use crate::error::{Error, Result};
+use crate::params::{ParamGuard, Valid};
+
+/// Occupancy-grid parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OgParams {
+    /// Prior occupancy probability p0 (0.5).
+    pub prior: f64,
+    /// Detector false-alarm probability per bin (1e-3).
+    pub pfa: f64,
+    /// Inverse-sensor occupancy probability of a detection (0.9 → l_occ = 2.20).
+    pub p_occ: f64,
+    /// Inverse-sensor probability of a cell in front of the first detection (0.35 →
+    /// l_free = −0.62).
+    pub p_free: f64,
+    /// Log-odds clamp (±10).
+    pub clamp: f64,
+    /// Range-side-lobe masking margin β of the detector, dB (10).
+    pub mask_db: f64,
+    /// Margin of the side-lobe explanation test, dB (0): a detection is explained by a side
+    /// lobe when E_d < 10^(side_db/10)·w_d(θ_d')·E_d'.
+    pub side_db: f64,
+    /// Lowest two-way weight of a cell that gets free evidence, dB (−10); the evidence is
+    /// l_free·s·w (weighted by the two-way pattern).
+    pub free_db: f64,
+    /// Passes of the side-lobe-aware model over the run (1; a pass > 1 restarts from the prior
+    /// and takes its responsibilities from the previous pass's final map).
+    pub passes: usize,
+}
+
+impl Default for OgParams {
+    fn default() -> Self {
+        OgParams {
+            prior: 0.5,
+            pfa: 1e-3,
+            p_occ: 0.9,
+            p_free: 0.35,
+            clamp: 10.0,
+            mask_db: 10.0,
+            passes: 1,
+            side_db: 0.0,
+            free_db: -10.0,
+        }
+    }
+}
+
+fn logit(p: f64) -> f64 {
+    (p / (1.0 - p)).ln()
+}
+
+/// Logistic function p = 1/(1 + e^{−l}).
+pub fn sigmoid(l: f64) -> f64 {
+    1.0 / (1.0 + (-l).exp())
+}
+
+/// Occupancy-grid parameters that passed [`ParamGuard::check`].
+pub type OgValid = Valid<OgParams>;
+
+impl ParamGuard for OgParams {
+    type Checked = OgValid;
+
+    /// Prior in (0, 1) with log-odds inside the clamp, P_fa in (0, 0.5], p_occ in
+    /// (0.5, 1), p_free in (0, 0.5), clamp > 0, masking margin ≥ 0 dB, free level ≤ 0 dB,
+    /// side-lobe margin finite, passes in 1..=10.
+    fn check(&self) -> Result<OgValid> {
+        let open01 = |v: f64| v.is_finite() && v > 0.0 && v < 1.0;
+        if !open01(self.prior) {
+            return Err(Error::param("prior", "must be in (0, 1)"));
+        }
+        if !(open01(self.pfa) && self.pfa <= 0.5) {
+            return Err(Error::param("pfa", "must be in (0, 0.5]"));
+        }
+        if !(open01(self.p_occ) && self.p_occ > 0.5) {
+            return Err(Error::param("p_occ", "must be in (0.5, 1)"));
+        }
+        if !(open01(self.p_free) && self.p_free < 0.5) {
+            return Err(Error::param("p_free", "must be in (0, 0.5)"));
+        }
+        if !(self.clamp.is_finite() && self.clamp > 0.0) {
+            return Err(Error::param("clamp", "must be > 0"));
+        }
+        if !(self.mask_db.is_finite() && self.mask_db >= 0.0) {
+            return Err(Error::param("mask_db", "must be >= 0 dB"));
+        }
+        if !(self.free_db.is_finite() && self.free_db <= 0.0) {
+            return Err(Error::param("free_db", "must be <= 0 dB"));
+        }
+        if !self.side_db.is_finite() {
+            return Err(Error::param("side_db", "must be finite"));
+        }
+        if self.passes == 0 || self.passes > 10 {
+            return Err(Error::param("passes", "must be in 1..=10"));
+        }
+        if logit(self.prior).abs() >= self.clamp {
+            return Err(Error::param("prior", "prior log-odds beyond the clamp"));
+        }
+        Ok(Valid::new(*self))
+    }
+}
+
+impl OgParams {
+    /// Prior log-odds l0.
+    pub fn l0(&self) -> f64 {
+        logit(self.prior)
+    }
+    /// Occupied increment l_occ.
+    pub fn l_occ(&self) -> f64 {
+        logit(self.p_occ)
+    }
+    /// Free increment l_free (negative).
+    pub fn l_free(&self) -> f64 {
+        logit(self.p_free)
+    }
+}
