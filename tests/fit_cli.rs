@@ -192,6 +192,7 @@ fn zero_bootstrap_is_one_clear_line() {
     let tmp = tempfile::tempdir().unwrap();
     let man = write_campaign(&tmp.path().join("in"), &corridor());
     let cl = tmp.path().join("clusters.parquet");
-    let want = "--bootstrap must be at least 1";
+    // refused while the flags are parsed (src/cli/ranges.rs), before any file is read
+    let want = "'--bootstrap <BOOTSTRAP>': must be >= 1";
     fit_fails_with_one_line(tmp.path(), &cl, &man, &["--bootstrap", "0"], want);
 }

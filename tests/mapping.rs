@@ -606,7 +606,7 @@ fn bad_input_gives_one_clear_error() {
         "--run",
     );
     assert!(!out.exists(), "no output on failure");
-    // unknown method: a clap usage error, no panic
+    // unknown method: a bad value, one line, exit 1, no panic
     let o = pradar(
         &[
             "map",
@@ -623,7 +623,7 @@ fn bad_input_gives_one_clear_error() {
     );
     let err = String::from_utf8_lossy(&o.stderr);
     eprintln!("{}", err.lines().next().unwrap_or(""));
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.starts_with("error: ") && err.contains("ekf2") && err.contains("--method"));
     assert!(!err.contains("panicked"));
     assert!(!out.exists());
