@@ -197,17 +197,20 @@ fn write_npy(path: &Path, shape: &[usize], data: &[f64]) {
     std::fs::write(path, out).unwrap();
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .collect();
-    if args.len() < 2 {
-        eprintln!("usage: ekf (scalable|dense|numpy) CELLS [POSES|DIR]");
-        return;
-    }
-    let mode = args[0].as_str();
-    let cells: usize = args[1].parse().unwrap();
+/// The floor campaign, its energy and the observation model at `cells` cells, shared by
+/// the three modes.
+struct Bench {
+    _tmp: tempfile::TempDir,
+    em: EnergyMatrix,
+    spec: GridSpec,
+    model: ObservationModel,
+    kernel: Vec<f64>,
+    n: usize,
+    cell_m: f64,
+    base: f64,
+}
+
+fn bench(cells: usize) -> Bench {
     let tmp = tempfile::tempdir().unwrap();
     let c = floor_manifest(tmp.path());
     let em = floor_energy(&c);
@@ -238,150 +241,210 @@ fn main() {
     let kernel = pradar::mapping::job::window_kernel(&c).unwrap();
     let n = spec.len();
     let base = peak_mb();
-    match mode {
-        "scalable" => {
-            let p = EkfParams::default().check().unwrap();
-            let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
-            let mut f = TiledEkf::new(spec.rows, spec.cols, p.tile, &p).unwrap();
-            let st = ekf_run(&model, &em, &kernel, &p, &noise, &mut f, &|_, _| {}).unwrap();
-            println!(
-                "scalable cells={n} cell_m={cell_m:.3} poses={} updates={} campaign_s={:.2} build_s={:.2} update_s={:.2} per_update_ms={:.3} rows/update={:.0} entries/update={:.0} cov_MB={:.1} peak_MB={:.0} (before filter {base:.0})",
-                model.poses.len(),
-                st.updates,
-                st.seconds,
-                st.build_seconds,
-                st.update_seconds,
-                1e3 * st.update_seconds / st.updates as f64,
-                st.rows as f64 / st.updates as f64,
-                st.entries as f64 / st.updates as f64,
-                f.covariance_bytes() as f64 / 1e6,
-                peak_mb()
-            );
+    Bench {
+        _tmp: tmp,
+        em,
+        spec,
+        model,
+        kernel,
+        n,
+        cell_m,
+        base,
+    }
+}
+
+/// The scalable (tiled) filter over the whole campaign.
+fn scalable(b: &Bench) {
+    let Bench {
+        em,
+        spec,
+        model,
+        kernel,
+        n,
+        cell_m,
+        base,
+        ..
+    } = b;
+    let (n, cell_m, base) = (*n, *cell_m, *base);
+    let p = EkfParams::default().check().unwrap();
+    let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
+    let mut f = TiledEkf::new(spec.rows, spec.cols, p.tile, &p).unwrap();
+    let st = ekf_run(model, em, kernel, &p, &noise, &mut f, &|_, _| {}).unwrap();
+    println!(
+            "scalable cells={n} cell_m={cell_m:.3} poses={} updates={} campaign_s={:.2} build_s={:.2} update_s={:.2} per_update_ms={:.3} rows/update={:.0} entries/update={:.0} cov_MB={:.1} peak_MB={:.0} (before filter {base:.0})",
+            model.poses.len(),
+            st.updates,
+            st.seconds,
+            st.build_seconds,
+            st.update_seconds,
+            1e3 * st.update_seconds / st.updates as f64,
+            st.rows as f64 / st.updates as f64,
+            st.entries as f64 / st.updates as f64,
+            f.covariance_bytes() as f64 / 1e6,
+            peak_mb()
+        );
+}
+
+/// The dense filter over the first `poses` poses, timing the updates.
+fn dense(b: &Bench, poses: usize) {
+    let Bench {
+        em,
+        model,
+        kernel,
+        n,
+        cell_m,
+        ..
+    } = b;
+    let (n, cell_m) = (*n, *cell_m);
+    let p = EkfParams {
+        variant: EkfVariant::Dense,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
+    let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
+    let mut f = match DenseEkf::new(n, &p) {
+        Ok(f) => f,
+        Err(e) => {
+            println!("dense cells={n}: {e}");
+            return;
         }
-        "dense" => {
-            let poses: usize = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(20);
-            let p = EkfParams {
-                variant: EkfVariant::Dense,
-                ..Default::default()
-            }
-            .check()
-            .unwrap();
-            let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
-            let mut f = match DenseEkf::new(n, &p) {
-                Ok(f) => f,
-                Err(e) => {
-                    println!("dense cells={n}: {e}");
-                    return;
-                }
-            };
-            let kern = truncate_kernel(&kernel, p.kernel_floor_db);
-            let t0 = Instant::now();
-            let (mut upd, mut count, mut rows) = (0.0, 0usize, 0usize);
-            for pi in 0..poses.min(model.poses.len()) {
-                let g = model.pose_geometry(pi);
-                for d in 0..model.directions() {
-                    let beam = model.beam(&g, d);
-                    let mut scratch = vec![0.0; n];
-                    let o = Observation::build(
-                        &beam,
-                        &em.profile(pi, d)[..model.bins],
-                        &kern,
-                        model.min_bin,
-                        &mut scratch,
-                    );
-                    let lin = Linearized::new(&o, f.mean(), &noise);
-                    let t = Instant::now();
-                    f.update(&o, &lin).unwrap();
-                    f.project_positive(p.x_min());
-                    upd += t.elapsed().as_secs_f64();
-                    count += 1;
-                    rows += o.rows();
-                }
-            }
-            let total = t0.elapsed().as_secs_f64();
-            let per = upd / count as f64;
-            println!(
-                "dense cells={n} cell_m={cell_m:.3} poses={poses} updates={count} seconds={total:.2} per_update_ms={:.2} rows/update={:.0} campaign_1000_poses_est_s={:.0} cov_MB={:.0} peak_MB={:.0}",
-                1e3 * per,
-                rows as f64 / count as f64,
-                total / poses as f64 * model.poses.len() as f64,
-                (n * n * 8) as f64 / 1e6,
-                peak_mb()
+    };
+    let kern = truncate_kernel(kernel, p.kernel_floor_db);
+    let t0 = Instant::now();
+    let (mut upd, mut count, mut rows) = (0.0, 0usize, 0usize);
+    for pi in 0..poses.min(model.poses.len()) {
+        let g = model.pose_geometry(pi);
+        for d in 0..model.directions() {
+            let beam = model.beam(&g, d);
+            let mut scratch = vec![0.0; n];
+            let o = Observation::build(
+                &beam,
+                &em.profile(pi, d)[..model.bins],
+                &kern,
+                model.min_bin,
+                &mut scratch,
             );
-        }
-        "numpy" => {
-            let dir = Path::new(&args[2]);
-            std::fs::create_dir_all(dir).unwrap();
-            let p = EkfParams {
-                variant: EkfVariant::Dense,
-                ..Default::default()
-            }
-            .check()
-            .unwrap();
-            let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
-            let mut f = DenseEkf::new(n, &p).unwrap();
-            let kern = truncate_kernel(&kernel, p.kernel_floor_db);
-            let warm = 10;
-            let mut pick = None;
-            for pi in 0..=warm {
-                let g = model.pose_geometry(pi);
-                for d in 0..model.directions() {
-                    let beam = model.beam(&g, d);
-                    let mut scratch = vec![0.0; n];
-                    let o = Observation::build(
-                        &beam,
-                        &em.profile(pi, d)[..model.bins],
-                        &kern,
-                        model.min_bin,
-                        &mut scratch,
-                    );
-                    if pi == warm && d == 18 {
-                        pick = Some(o);
-                        break;
-                    }
-                    let lin = Linearized::new(&o, f.mean(), &noise);
-                    f.update(&o, &lin).unwrap();
-                    f.project_positive(p.x_min());
-                }
-            }
-            let o = pick.unwrap();
             let lin = Linearized::new(&o, f.mean(), &noise);
-            let m = o.rows();
-            let mut h = vec![0.0; m * n];
-            for j in 0..m {
-                for e in o.ptr[j]..o.ptr[j + 1] {
-                    h[j * n + o.cell[e] as usize] += lin.hval[e];
-                }
-            }
-            write_npy(&dir.join("x.npy"), &[n], f.mean());
-            write_npy(&dir.join("P.npy"), &[n, n], f.covariance_matrix());
-            write_npy(&dir.join("H.npy"), &[m, n], &h);
-            write_npy(&dir.join("nu.npy"), &[m], &lin.nu);
-            write_npy(&dir.join("R.npy"), &[m], &lin.r);
-            let mut best = f64::INFINITY;
-            let mut after = None;
-            for _ in 0..3 {
-                let mut g = f.clone();
-                let t = Instant::now();
-                g.update(&o, &lin).unwrap();
-                best = best.min(t.elapsed().as_secs_f64());
-                after = Some(g);
-            }
-            let g = after.unwrap();
-            write_npy(&dir.join("x_rust.npy"), &[n], g.mean());
-            write_npy(&dir.join("P_rust.npy"), &[n, n], g.covariance_matrix());
-            let na = {
-                let mut c = o.cell.clone();
-                c.sort_unstable();
-                c.dedup();
-                c.len()
-            };
-            println!(
-                "rust_dense_update cells={n} bins={m} active={na} nnz={} seconds={best:.4} peak_MB={:.0}",
-                o.cell.len(),
-                peak_mb()
-            );
+            let t = Instant::now();
+            f.update(&o, &lin).unwrap();
+            f.project_positive(p.x_min());
+            upd += t.elapsed().as_secs_f64();
+            count += 1;
+            rows += o.rows();
         }
+    }
+    let total = t0.elapsed().as_secs_f64();
+    let per = upd / count as f64;
+    println!(
+            "dense cells={n} cell_m={cell_m:.3} poses={poses} updates={count} seconds={total:.2} per_update_ms={:.2} rows/update={:.0} campaign_1000_poses_est_s={:.0} cov_MB={:.0} peak_MB={:.0}",
+            1e3 * per,
+            rows as f64 / count as f64,
+            total / poses as f64 * model.poses.len() as f64,
+            (n * n * 8) as f64 / 1e6,
+            peak_mb()
+        );
+}
+
+/// One dense update written out for `scripts/ekf_numpy.py` (x, P, H, ν, R before; x, P
+/// after) and timed.
+fn numpy(b: &Bench, dir: &Path) {
+    let Bench {
+        em,
+        model,
+        kernel,
+        n,
+        ..
+    } = b;
+    let n = *n;
+    std::fs::create_dir_all(dir).unwrap();
+    let p = EkfParams {
+        variant: EkfVariant::Dense,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
+    let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
+    let mut f = DenseEkf::new(n, &p).unwrap();
+    let kern = truncate_kernel(kernel, p.kernel_floor_db);
+    let warm = 10;
+    let mut pick = None;
+    for pi in 0..=warm {
+        let g = model.pose_geometry(pi);
+        for d in 0..model.directions() {
+            let beam = model.beam(&g, d);
+            let mut scratch = vec![0.0; n];
+            let o = Observation::build(
+                &beam,
+                &em.profile(pi, d)[..model.bins],
+                &kern,
+                model.min_bin,
+                &mut scratch,
+            );
+            if pi == warm && d == 18 {
+                pick = Some(o);
+                break;
+            }
+            let lin = Linearized::new(&o, f.mean(), &noise);
+            f.update(&o, &lin).unwrap();
+            f.project_positive(p.x_min());
+        }
+    }
+    let o = pick.unwrap();
+    let lin = Linearized::new(&o, f.mean(), &noise);
+    let m = o.rows();
+    let mut h = vec![0.0; m * n];
+    for j in 0..m {
+        for e in o.ptr[j]..o.ptr[j + 1] {
+            h[j * n + o.cell[e] as usize] += lin.hval[e];
+        }
+    }
+    write_npy(&dir.join("x.npy"), &[n], f.mean());
+    write_npy(&dir.join("P.npy"), &[n, n], f.covariance_matrix());
+    write_npy(&dir.join("H.npy"), &[m, n], &h);
+    write_npy(&dir.join("nu.npy"), &[m], &lin.nu);
+    write_npy(&dir.join("R.npy"), &[m], &lin.r);
+    let mut best = f64::INFINITY;
+    let mut after = None;
+    for _ in 0..3 {
+        let mut g = f.clone();
+        let t = Instant::now();
+        g.update(&o, &lin).unwrap();
+        best = best.min(t.elapsed().as_secs_f64());
+        after = Some(g);
+    }
+    let g = after.unwrap();
+    write_npy(&dir.join("x_rust.npy"), &[n], g.mean());
+    write_npy(&dir.join("P_rust.npy"), &[n, n], g.covariance_matrix());
+    let na = {
+        let mut c = o.cell.clone();
+        c.sort_unstable();
+        c.dedup();
+        c.len()
+    };
+    println!(
+        "rust_dense_update cells={n} bins={m} active={na} nnz={} seconds={best:.4} peak_MB={:.0}",
+        o.cell.len(),
+        peak_mb()
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    if args.len() < 2 {
+        eprintln!("usage: ekf (scalable|dense|numpy) CELLS [POSES|DIR]");
+        return;
+    }
+    let mode = args[0].as_str();
+    let cells: usize = args[1].parse().unwrap();
+    let b = bench(cells);
+    match mode {
+        "scalable" => scalable(&b),
+        "dense" => dense(&b, args.get(2).and_then(|v| v.parse().ok()).unwrap_or(20)),
+        "numpy" => numpy(&b, Path::new(&args[2])),
         _ => eprintln!("unknown mode {mode}"),
     }
 }

@@ -31,7 +31,7 @@ use pradar::fit::channel::{fit_truth, FitParams};
 use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Hall length (m) and poses: long enough that the environment synth draws holds many
@@ -77,131 +77,151 @@ fn run(args: &[&str]) {
 
 type Pick = fn(&ModelConfig) -> f64;
 
+/// synth → extract → cluster → fit in `dir` with `model`; returns the fitted model file.
+fn chain(dir: &Path, cpath: &Path, model: &Path, truth: &Path) -> PathBuf {
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (e, mp, cl, f) = (
+        dir.join("e.parquet"),
+        dir.join("m.parquet"),
+        dir.join("c.parquet"),
+        dir.join("f.toml"),
+    );
+    run(&[
+        "synth",
+        "--quiet",
+        "--model",
+        &s(model),
+        "--campaign",
+        &s(cpath),
+        "--out",
+        &s(&e),
+        "--truth",
+        &s(truth),
+    ]);
+    run(&[
+        "extract",
+        "--quiet",
+        "--energy",
+        &s(&e),
+        "--campaign",
+        &s(cpath),
+        "--out",
+        &s(&mp),
+    ]);
+    run(&["cluster", "--quiet", "--mpcs", &s(&mp), "--out", &s(&cl)]);
+    run(&[
+        "fit",
+        "--quiet",
+        "--bootstrap",
+        "100",
+        "--clusters",
+        &s(&cl),
+        "--campaign",
+        &s(cpath),
+        "--out",
+        &s(&f),
+        "--table",
+        &s(&dir.join("t.md")),
+    ]);
+    f
+}
+
+/// Print the environment synth drew (its clusters.csv): one draw's means scatter about the
+/// model's.
+fn print_environment(truth: &Path) {
+    let csv = std::fs::read_to_string(truth.join("clusters.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "offset_m").unwrap();
+    let offsets: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    let perimeter = 2.0 * (HALL_M + 12.0);
+    eprintln!(
+        "environment drawn: {} clusters, mean offset {:.3} m, mean spacing {:.2} m",
+        offsets.len(),
+        offsets.iter().sum::<f64>() / offsets.len() as f64,
+        perimeter / offsets.len() as f64
+    );
+}
+
+const PICKS: [(&str, Pick); 7] = [
+    ("Λ (1/ns)", |m| m.inter_cluster_rate.value),
+    ("λ (1/ns)", |m| m.intra_cluster_rate.value),
+    ("AoA std (deg)", |m| m.intra_cluster_aoa.value),
+    ("d_c (m)", |m| m.perimeter_spacing.value),
+    ("d_p (m)", |m| m.perimeter_offset.value),
+    ("Γ (ns)", |m| m.cluster_decay.value),
+    ("γ (ns)", |m| m.ray_decay.value),
+];
+
+/// Print every pair of set `set` and return the asserted quantities outside 15 % (Λ is
+/// scored against synth's own true cluster delays: it follows from geometry).
+fn score(
+    set: usize,
+    got: &ModelConfig,
+    want: &ModelConfig,
+    truth: &ModelConfig,
+    asserted: &[usize],
+) -> Vec<String> {
+    let mut failures = Vec::new();
+    eprintln!("quantity      | chain    | reference (model; Λ: truth) | truth, same estimators | within 15 %");
+    for (i, (name, pick)) in PICKS.iter().enumerate() {
+        let reference = if i == 0 { pick(truth) } else { pick(want) };
+        let v = pick(got);
+        let rel = (v - reference).abs() / reference;
+        let ok = rel <= 0.15;
+        eprintln!(
+            "{name:13} | {v:8.3} | {reference:8.3} | {:8.3} | {} ({:+.1} %){}",
+            pick(truth),
+            if ok { "yes" } else { "no" },
+            100.0 * (v - reference) / reference,
+            if asserted.contains(&i) {
+                ""
+            } else {
+                "  [not asserted]"
+            }
+        );
+        if asserted.contains(&i) && !ok {
+            failures.push(format!("set {set} {name}: {v:.3} vs {reference:.3}"));
+        }
+    }
+    failures
+}
+
 #[test]
 fn closed_loop_recovers_the_model_at_three_parameter_sets() {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = campaign(tmp.path());
     let c = Campaign::load(&cpath).unwrap();
-    let s = |p: &Path| p.to_str().unwrap().to_string();
-    let picks: [(&str, Pick); 7] = [
-        ("Λ (1/ns)", |m| m.inter_cluster_rate.value),
-        ("λ (1/ns)", |m| m.intra_cluster_rate.value),
-        ("AoA std (deg)", |m| m.intra_cluster_aoa.value),
-        ("d_c (m)", |m| m.perimeter_spacing.value),
-        ("d_p (m)", |m| m.perimeter_offset.value),
-        ("Γ (ns)", |m| m.cluster_decay.value),
-        ("γ (ns)", |m| m.ray_decay.value),
-    ];
-    // per set: the quantities asserted within 15 % (indices into `picks`)
+    // per set: the quantities asserted within 15 % (indices into `PICKS`)
     let sets: [(f64, f64, f64, &[usize]); 3] = [
         (1.0, 8.0, 6.0, &[0, 1, 3, 4, 5, 6]),
         (0.43, 16.9, 8.0, &[1, 5, 6]),
         (0.2, 30.0, 10.0, &[5]),
     ];
+    let fit_params = FitParams {
+        bootstrap: 100,
+        seed: 1,
+    }
+    .check()
+    .unwrap();
     let mut failures = Vec::new();
     for (k, (lambda, aoa, dc, asserted)) in sets.iter().enumerate() {
         let dir = tmp.path().join(format!("set{}", k + 1));
         std::fs::create_dir_all(&dir).unwrap();
         let want = common::hall_model(*lambda, *aoa, *dc);
         want.save(&dir.join("model.toml")).unwrap();
-        let (e, mp, cl, f, t) = (
-            dir.join("e.parquet"),
-            dir.join("m.parquet"),
-            dir.join("c.parquet"),
-            dir.join("f.toml"),
-            dir.join("e_truth"),
-        );
-        run(&[
-            "synth",
-            "--quiet",
-            "--model",
-            &s(&dir.join("model.toml")),
-            "--campaign",
-            &s(&cpath),
-            "--out",
-            &s(&e),
-            "--truth",
-            &s(&t),
-        ]);
-        run(&[
-            "extract",
-            "--quiet",
-            "--energy",
-            &s(&e),
-            "--campaign",
-            &s(&cpath),
-            "--out",
-            &s(&mp),
-        ]);
-        run(&["cluster", "--quiet", "--mpcs", &s(&mp), "--out", &s(&cl)]);
-        run(&[
-            "fit",
-            "--quiet",
-            "--bootstrap",
-            "100",
-            "--clusters",
-            &s(&cl),
-            "--campaign",
-            &s(&cpath),
-            "--out",
-            &s(&f),
-            "--table",
-            &s(&dir.join("t.md")),
-        ]);
+        let t = dir.join("e_truth");
+        let f = chain(&dir, &cpath, &dir.join("model.toml"), &t);
         let got = ModelConfig::load(&f).unwrap();
-        let truth = fit_truth(
-            &t,
-            &c,
-            &FitParams {
-                bootstrap: 100,
-                seed: 1,
-            }
-            .check()
-            .unwrap(),
-        )
-        .unwrap()
-        .model;
+        let truth = fit_truth(&t, &c, &fit_params).unwrap().model;
         eprintln!(
             "== set {}: λ {lambda} /ns, AoA {aoa}°, d_c {dc} m (d_p 0.4 m, Γ 15 ns, γ 4 ns)",
             k + 1
         );
-        // the environment synth drew: one draw's means scatter about the model's
-        let csv = std::fs::read_to_string(t.join("clusters.csv")).unwrap();
-        let mut lines = csv.lines();
-        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let col = header.iter().position(|h| *h == "offset_m").unwrap();
-        let offsets: Vec<f64> = lines
-            .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
-            .collect();
-        let perimeter = 2.0 * (HALL_M + 12.0);
-        eprintln!(
-            "environment drawn: {} clusters, mean offset {:.3} m, mean spacing {:.2} m",
-            offsets.len(),
-            offsets.iter().sum::<f64>() / offsets.len() as f64,
-            perimeter / offsets.len() as f64
-        );
-        eprintln!("quantity      | chain    | reference (model; Λ: truth) | truth, same estimators | within 15 %");
-        for (i, (name, pick)) in picks.iter().enumerate() {
-            // Λ is scored against synth's own true cluster delays (it follows from geometry)
-            let reference = if i == 0 { pick(&truth) } else { pick(&want) };
-            let v = pick(&got);
-            let rel = (v - reference).abs() / reference;
-            let ok = rel <= 0.15;
-            eprintln!(
-                "{name:13} | {v:8.3} | {reference:8.3} | {:8.3} | {} ({:+.1} %){}",
-                pick(&truth),
-                if ok { "yes" } else { "no" },
-                100.0 * (v - reference) / reference,
-                if asserted.contains(&i) {
-                    ""
-                } else {
-                    "  [not asserted]"
-                }
-            );
-            if asserted.contains(&i) && !ok {
-                failures.push(format!("set {} {name}: {v:.3} vs {reference:.3}", k + 1));
-            }
-        }
+        print_environment(&t);
+        failures.extend(score(k + 1, &got, &want, &truth, asserted));
     }
     assert!(failures.is_empty(), "outside 15 %: {failures:?}");
 }

@@ -37,6 +37,24 @@ pub struct EnergyMeta {
 }
 
 impl EnergyMeta {
+    /// The noise statistics a detector or an observation model needs: `n0` a positive
+    /// number, `tw` positive, `pulses` ≥ 1 (`file` names the energy table in errors).
+    pub fn check_noise(&self, file: &Path) -> Result<()> {
+        if !(self.n0.is_finite() && self.n0 > 0.0) {
+            return Err(Error::input(
+                file,
+                "metadata `n0` must be a positive number",
+            ));
+        }
+        if !(self.tw.is_finite() && self.tw > 0.0) || self.pulses == 0 {
+            return Err(Error::input(
+                file,
+                "metadata `tw`/`pulses` must be positive",
+            ));
+        }
+        Ok(())
+    }
+
     /// The coupling gate applied, ns (0 unless `coupling = "gate"`).
     pub fn gate_ns(&self) -> f64 {
         if self.coupling != "gate" {

@@ -239,7 +239,7 @@ impl fmt::Display for SynthSummary {
     }
 }
 
-/// Run `pradar synth` ([`crate::model::synth`]).
+/// Run `pradar synth` ([`crate::model::synth()`]).
 pub fn synth(cmd: &Synth, progress: StepProgress) -> Result<SynthSummary> {
     let c = load_campaign(&cmd.campaign, cmd.elements)?;
     let m = ModelConfig::load(&cmd.model)?;

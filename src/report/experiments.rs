@@ -9,6 +9,7 @@
 use super::{html_escape, html_table, kv_table, write_index as write_page, Section};
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
+use crate::pipeline::experiment::lab::score_columns;
 use crate::pipeline::experiment::{CaseFigures, ExperimentResult};
 use std::path::Path;
 
@@ -37,37 +38,16 @@ pub fn result_html(
 /// The "every map" table: each map linked to its `metrics.json`, with ψ, wrong cells and F1
 /// on the three regions.
 pub fn every_map_table(cases: &[CaseFigures]) -> Table {
-    let col = Column::new;
-    let mut t = Table::new(vec![
-        col("map", "map"),
-        col("ψ whole", "psi_whole"),
-        col("wrong whole", "wrong_whole"),
-        col("F1 whole", "f1_whole"),
-        col("ψ obs.", "psi_observable"),
-        col("wrong obs.", "wrong_observable"),
-        col("F1 obs.", "f1_observable"),
-        col("obs. cells", "observable_cells"),
-        col("ψ interior", "psi_interior"),
-        col("wrong interior", "wrong_interior"),
-        col("F1 interior", "f1_interior"),
-    ]);
+    let mut columns = vec![Column::new("map", "map")];
+    columns.extend(score_columns());
+    let mut t = Table::new(columns);
     for c in cases {
-        t.push(vec![
-            Cell::Link {
-                text: c.key.clone(),
-                href: format!("{{P}}maps/{}/metrics.json", c.key),
-            },
-            Cell::fixed(c.psi_whole, 3),
-            Cell::count(c.wrong_whole),
-            Cell::fixed(c.f1_whole, 3),
-            Cell::fixed(c.psi_observable, 3),
-            Cell::count(c.wrong_observable),
-            Cell::fixed(c.f1_observable, 3),
-            Cell::count(c.observable_cells),
-            Cell::fixed(c.psi_interior, 3),
-            Cell::count(c.wrong_interior),
-            Cell::fixed(c.f1_interior, 3),
-        ]);
+        let mut row = vec![Cell::Link {
+            text: c.key.clone(),
+            href: format!("{{P}}maps/{}/metrics.json", c.key),
+        }];
+        row.extend(c.score_cells());
+        t.push(row);
     }
     t
 }

@@ -12,7 +12,7 @@
 //! error ε).
 
 use crate::energy::EnergyMeta;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::mapping::grid::Beam;
 
 /// Energy-detector noise statistics of a run (from [`EnergyMeta`]).
@@ -31,18 +31,7 @@ pub struct NoiseModel {
 impl NoiseModel {
     /// From an energy table's metadata (`file` names it in errors).
     pub fn new(meta: &EnergyMeta, model_error: f64, file: &std::path::Path) -> Result<Self> {
-        if !(meta.n0.is_finite() && meta.n0 > 0.0) {
-            return Err(Error::input(
-                file,
-                "metadata `n0` must be a positive number",
-            ));
-        }
-        if !(meta.tw.is_finite() && meta.tw > 0.0) || meta.pulses == 0 {
-            return Err(Error::input(
-                file,
-                "metadata `tw`/`pulses` must be positive",
-            ));
-        }
+        meta.check_noise(file)?;
         Ok(NoiseModel {
             n0: meta.n0,
             tw: meta.tw,

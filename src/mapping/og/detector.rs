@@ -9,18 +9,7 @@ use statrs::distribution::{ContinuousCDF, Gamma};
 /// Energy threshold of the per-bin detector at false-alarm rate `pfa`: the (1 − pfa)
 /// quantile of Gamma(shape TW·N_p, rate N_p/N0). `file` names the energy table in errors.
 pub fn detection_threshold(meta: &EnergyMeta, pfa: f64, file: &std::path::Path) -> Result<f64> {
-    if !(meta.n0.is_finite() && meta.n0 > 0.0) {
-        return Err(Error::input(
-            file,
-            "metadata `n0` must be a positive number",
-        ));
-    }
-    if !(meta.tw.is_finite() && meta.tw > 0.0) || meta.pulses == 0 {
-        return Err(Error::input(
-            file,
-            "metadata `tw`/`pulses` must be positive",
-        ));
-    }
+    meta.check_noise(file)?;
     let shape = meta.tw * meta.pulses as f64;
     let rate = meta.pulses as f64 / meta.n0;
     let g = Gamma::new(shape, rate)

@@ -451,7 +451,7 @@ pub(super) fn join_u(v: &[u64]) -> String {
 /// wrong cells in the CSV only.
 pub fn case_table(cases: &[CaseFigures]) -> Table {
     let col = Column::new;
-    let mut t = Table::new(vec![
+    let mut columns = vec![
         col("map", "map"),
         col("data", "data"),
         col("seed", "seed"),
@@ -461,6 +461,42 @@ pub fn case_table(cases: &[CaseFigures]) -> Table {
         col("EKF μ0 (m)", "mu0_m"),
         col("pose σ (m)", "pose_sigma_m"),
         col("heading σ (°)", "heading_sigma_deg"),
+    ];
+    columns.extend(score_columns());
+    columns.push(col("all-free ψ whole", "all_free_psi_whole"));
+    columns.push(col("all-free wrong whole", "all_free_wrong_whole").csv_only());
+    let mut t = Table::new(columns);
+    let plain = |v: f64| Cell::num(v, v.to_string());
+    for c in cases {
+        let k = &c.case;
+        let (data, seed) = match k.source {
+            DataSource::Sweeps => ("sweeps", Cell::missing("")),
+            DataSource::Model(s) => ("model", Cell::text(s.to_string())),
+        };
+        let mut row = vec![
+            Cell::text(&c.key),
+            Cell::text(data),
+            seed,
+            Cell::count(k.elements),
+            Cell::text(k.method),
+            plain(k.og_prior),
+            plain(k.mu0),
+            plain(k.pose_noise.position_m),
+            plain(k.pose_noise.heading_deg),
+        ];
+        row.extend(c.score_cells());
+        row.push(Cell::fixed(c.all_free_psi_whole, 3));
+        row.push(Cell::count(c.all_free_wrong_whole));
+        t.push(row);
+    }
+    t
+}
+
+/// The score columns every experiment table shows: ψ, wrong cells and F1 on the whole map,
+/// the observable region (with its size) and the interior.
+pub fn score_columns() -> Vec<Column> {
+    let col = Column::new;
+    vec![
         col("ψ whole", "psi_whole"),
         col("wrong whole", "wrong_whole"),
         col("F1 whole", "f1_whole"),
@@ -471,26 +507,14 @@ pub fn case_table(cases: &[CaseFigures]) -> Table {
         col("ψ interior", "psi_interior"),
         col("wrong interior", "wrong_interior"),
         col("F1 interior", "f1_interior"),
-        col("all-free ψ whole", "all_free_psi_whole"),
-        col("all-free wrong whole", "all_free_wrong_whole").csv_only(),
-    ]);
-    let plain = |v: f64| Cell::num(v, v.to_string());
-    for c in cases {
-        let k = &c.case;
-        let (data, seed) = match k.source {
-            DataSource::Sweeps => ("sweeps", Cell::missing("")),
-            DataSource::Model(s) => ("model", Cell::text(s.to_string())),
-        };
-        t.push(vec![
-            Cell::text(&c.key),
-            Cell::text(data),
-            seed,
-            Cell::count(k.elements),
-            Cell::text(k.method),
-            plain(k.og_prior),
-            plain(k.mu0),
-            plain(k.pose_noise.position_m),
-            plain(k.pose_noise.heading_deg),
+    ]
+}
+
+impl CaseFigures {
+    /// This map's cells under [`score_columns`] (ψ and F1 shown with 3 decimals).
+    pub fn score_cells(&self) -> Vec<Cell> {
+        let c = self;
+        vec![
             Cell::fixed(c.psi_whole, 3),
             Cell::count(c.wrong_whole),
             Cell::fixed(c.f1_whole, 3),
@@ -501,9 +525,6 @@ pub fn case_table(cases: &[CaseFigures]) -> Table {
             Cell::fixed(c.psi_interior, 3),
             Cell::count(c.wrong_interior),
             Cell::fixed(c.f1_interior, 3),
-            Cell::fixed(c.all_free_psi_whole, 3),
-            Cell::count(c.all_free_wrong_whole),
-        ]);
+        ]
     }
-    t
 }
