@@ -104,7 +104,7 @@ fn floor_energy(c: &Campaign) -> EnergyMatrix {
                 *v = noise.sample(&mut rng);
             }
             let mut add = |r: f64, snr: f64| {
-                let k0 = (2.0 * r / 0.299_792_458 / tb).round() as i64;
+                let k0 = (pradar::units::delay_ns(r) / tb).round() as i64;
                 for (j, kv) in kernel.iter().enumerate() {
                     for s in [k0 - j as i64, k0 + j as i64] {
                         if s >= 0 && (s as usize) < nb {

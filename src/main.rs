@@ -4,9 +4,10 @@
 //! Each `fn <subcommand>` turns its arguments into the library's parameter structs, runs the
 //! library entry with a progress bar (none with `--quiet`) and prints the returned summary.
 //! Errors are printed as one line `error: …` with exit status 1: the library's (whose
-//! `Display` names the file, line or field) and clap's invalid or out-of-range values
-//! (naming the flag). Other usage errors (unknown flag or subcommand, missing argument)
-//! keep clap's text, usage and exit status 2.
+//! `Display` names the file, line or field) and clap's invalid, out-of-range or missing
+//! flag values (naming the flag; clap reports `--out` given without its value as an invalid
+//! value). Other usage errors (unknown flag or subcommand, a required flag absent) keep
+//! clap's text, usage and exit status 2.
 
 mod cli;
 

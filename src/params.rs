@@ -30,7 +30,6 @@ pub struct Valid<P>(P);
 
 impl<P> Valid<P> {
     /// Wrap parameters that were just checked (only `check` implementations call this).
-    #[allow(dead_code)] // until every stage constructs its checked type
     pub(crate) fn new(p: P) -> Valid<P> {
         Valid(p)
     }

@@ -173,7 +173,7 @@ pub fn observed_stretches(
         .map(|i| {
             let (q, _) = layout.perimeter_point((i as f64 + 0.5) * ds);
             let d = q - from;
-            let rel = crate::energy::wrap_deg(d.y.atan2(d.x).to_degrees() - pose.heading_deg);
+            let rel = crate::units::wrap_deg(d.y.atan2(d.x).to_degrees() - pose.heading_deg);
             region.contains(rel, d.x.hypot(d.y)) && !layout.occluded(from, q, 0.05)
         })
         .collect();

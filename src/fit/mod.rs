@@ -2,10 +2,11 @@
 //! Table 1.
 //!
 //! * [`estimators`] — maximum-likelihood fits of the candidate families, AIC, KS with its
-//!   parametric-bootstrap p-value, the position (block) bootstrap;
+//!   parametric-bootstrap p-value, the resampling of whole position groups
+//!   (`bootstrap_groups`; the block length comes from [`geometry`]);
 //! * [`params`] — [`FitParams`] and its checked form [`FitValid`];
 //! * [`geometry`] — cluster locations, perimeter offsets and spacings, the observed
-//!   stretches of perimeter and the scan's interior;
+//!   stretches of perimeter, the scan's interior and the bootstrap's block length;
 //! * [`quantities`] — each quantity from its samples: value, interval, KS, AIC ranking;
 //! * [`channel`] — the campaign fit ([`channel::fit_channel`], [`channel::fit_truth`]);
 //! * [`table1`] — Table 1 as one [`Table`](crate::export::Table) (Markdown, CSV, HTML).
