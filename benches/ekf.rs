@@ -19,7 +19,7 @@ use pradar::mapping::ekf::{
     ekf_run, truncate_kernel, DenseEkf, EkfParams, EkfVariant, Linearized, NoiseModel, Observation,
     RrcsFilter, TiledEkf,
 };
-use pradar::mapping::grid::{GridParams, ObservationModel};
+use pradar::mapping::grid::{GridParams, ObservationModel, PoseGeometry};
 use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Gamma};
@@ -253,6 +253,19 @@ fn bench(cells: usize) -> Bench {
     }
 }
 
+/// The observation of (pose `pi`, direction `d`) with the truncated kernel `kern`.
+fn observe(b: &Bench, kern: &[f64], g: &PoseGeometry, pi: usize, d: usize) -> Observation {
+    let beam = b.model.beam(g, d);
+    let mut scratch = vec![0.0; b.n];
+    Observation::build(
+        &beam,
+        &b.em.profile(pi, d)[..b.model.bins],
+        kern,
+        b.model.min_bin,
+        &mut scratch,
+    )
+}
+
 /// The scalable (tiled) filter over the whole campaign.
 fn scalable(b: &Bench) {
     let Bench {
@@ -316,15 +329,7 @@ fn dense(b: &Bench, poses: usize) {
     for pi in 0..poses.min(model.poses.len()) {
         let g = model.pose_geometry(pi);
         for d in 0..model.directions() {
-            let beam = model.beam(&g, d);
-            let mut scratch = vec![0.0; n];
-            let o = Observation::build(
-                &beam,
-                &em.profile(pi, d)[..model.bins],
-                &kern,
-                model.min_bin,
-                &mut scratch,
-            );
+            let o = observe(b, &kern, &g, pi, d);
             let lin = Linearized::new(&o, f.mean(), &noise);
             let t = Instant::now();
             f.update(&o, &lin).unwrap();
@@ -372,15 +377,7 @@ fn numpy(b: &Bench, dir: &Path) {
     for pi in 0..=warm {
         let g = model.pose_geometry(pi);
         for d in 0..model.directions() {
-            let beam = model.beam(&g, d);
-            let mut scratch = vec![0.0; n];
-            let o = Observation::build(
-                &beam,
-                &em.profile(pi, d)[..model.bins],
-                &kern,
-                model.min_bin,
-                &mut scratch,
-            );
+            let o = observe(b, &kern, &g, pi, d);
             if pi == warm && d == 18 {
                 pick = Some(o);
                 break;
