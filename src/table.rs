@@ -178,6 +178,25 @@ pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// A string column without nulls; `Ok(None)` when the table has no such column.
+pub fn str_column(path: &Path, df: &DataFrame, name: &str) -> Result<Option<Vec<String>>> {
+    let Ok(c) = df.column(name) else {
+        return Ok(None);
+    };
+    let c = c
+        .cast(&DataType::String)
+        .map_err(|_| Error::input(path, format!("column `{name}` is not text")))?;
+    let ca = c.str().map_err(|e| Error::table(path, e))?;
+    ca.iter()
+        .enumerate()
+        .map(|(i, v)| {
+            v.map(str::to_string)
+                .ok_or_else(|| Error::input(path, format!("column `{name}` row {i}: null")))
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
+}
+
 /// A required integer column (cast to i64) without nulls.
 pub fn i64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<i64>> {
     let c = df

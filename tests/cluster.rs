@@ -26,6 +26,7 @@ fn mpc(p: usize, delay_ns: f64, angle: f64, power_db: f64) -> Mpc {
         y_m: r * angle.to_radians().sin(),
         direction: 0,
         bin: 0,
+        component: pradar::mpc::Component::Discrete,
     }
 }
 

@@ -152,6 +152,7 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         y_m: 0.0,
         direction: 18,
         bin: 60,
+        component: pradar::mpc::Component::Discrete,
     }];
     let params =
         pradar::params::ParamGuard::check(&pradar::cluster::ClusterParams::default()).unwrap();

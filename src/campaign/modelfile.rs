@@ -12,18 +12,34 @@
 //! * `perimeter_offset` d_p (m), centroid distance from the closest wall;
 //! * `perimeter_spacing` d_c (m), spacing of centroid projections along the perimeter;
 //! * `cluster_decay` Γ (ns) and `ray_decay` γ (ns), power decay constants;
-//! * `rays_per_cluster` (count, mean) and `cluster_rrcs` (m², mean σ of a cluster's first ray).
+//! * `rays_per_cluster` (count, mean) and `cluster_rrcs` (m², mean σ of a cluster's first ray);
+//! * `[diffuse]` (optional; [`DiffuseModel`]): the dense component, the walls' diffuse
+//!   returns — `wall_rcs_per_m` (m²/m, backscatter σ per metre of wall at normal incidence),
+//!   `lambert_exponent` (1, power ∝ cos^n of the incidence angle), `power_share` (1, the
+//!   diffuse share of the extracted MPC power) and `decay` (ns, −10·log10(e)/slope of the
+//!   diffuse MPCs' power against delay). `synth` draws walls from the first two; the other
+//!   two describe the fitted data.
+//!
+//! A quantity the fit could not estimate (too few clusters, no decaying trend) carries
+//! `not_estimable = "<reason>"` and no `value` (read back as NaN); [`ModelConfig::check`]
+//! accepts it, and [`ModelConfig::require_estimable`] — what `synth` calls — refuses it,
+//! naming it, unless a value is supplied.
 
 use crate::campaign::manifest::{one_line, ArrayConfig, Band};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+fn nan() -> f64 {
+    f64::NAN
+}
+
 /// One modelled quantity.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Quantity {
-    /// Estimate (or true value).
+    /// Estimate (or true value); NaN (absent from the file) when not estimable.
+    #[serde(default = "nan", skip_serializing_if = "f64::is_nan")]
     pub value: f64,
     /// Unit.
     pub unit: String,
@@ -42,6 +58,9 @@ pub struct Quantity {
     /// Sample size.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub n: Option<usize>,
+    /// Why the quantity could not be estimated (its value is then NaN).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub not_estimable: Option<String>,
 }
 
 impl Quantity {
@@ -55,8 +74,37 @@ impl Quantity {
             ks: None,
             ks_p: None,
             n: None,
+            not_estimable: None,
         }
     }
+
+    /// A quantity that could not be estimated, with the reason.
+    pub fn not_estimable(unit: &str, family: &str, reason: impl Into<String>) -> Self {
+        Quantity {
+            value: f64::NAN,
+            not_estimable: Some(reason.into()),
+            ..Quantity::new(f64::NAN, unit, family)
+        }
+    }
+
+    /// Whether the quantity has a value.
+    pub fn is_estimable(&self) -> bool {
+        self.not_estimable.is_none()
+    }
+}
+
+/// The dense (diffuse) component of a channel model: the walls' diffuse returns.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiffuseModel {
+    /// Backscatter σ per metre of wall at normal incidence, m²/m.
+    pub wall_rcs_per_m: Quantity,
+    /// Lambertian exponent n: diffuse power ∝ cos^n(incidence).
+    pub lambert_exponent: Quantity,
+    /// Share of the extracted MPC power that is diffuse (informational).
+    pub power_share: Quantity,
+    /// Power decay of the diffuse MPCs against delay, ns (informational).
+    pub decay: Quantity,
 }
 
 /// Bin settings the model was fitted with.
@@ -102,6 +150,9 @@ pub struct ModelConfig {
     pub rays_per_cluster: Quantity,
     /// Mean σ of a cluster's first ray, m².
     pub cluster_rrcs: Quantity,
+    /// The dense (diffuse) component (absent: no walls are drawn).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diffuse: Option<DiffuseModel>,
 }
 
 impl ModelConfig {
@@ -123,6 +174,7 @@ impl ModelConfig {
             ray_decay: Quantity::new(3.0, "ns", "exponential"),
             rays_per_cluster: Quantity::new(6.0, "count", "poisson"),
             cluster_rrcs: Quantity::new(0.01, "m2", "lognormal"),
+            diffuse: None,
         }
     }
 
@@ -145,17 +197,44 @@ impl ModelConfig {
             ("rays_per_cluster", &self.rays_per_cluster, "count"),
             ("cluster_rrcs", &self.cluster_rrcs, "m2"),
         ];
-        for (name, v, unit) in q {
-            if !(v.value.is_finite() && v.value > 0.0) {
-                return Err(Error::param(
-                    format!("{name}.value"),
-                    "must be finite and > 0",
-                ));
-            }
+        let d = self.diffuse.as_ref();
+        let dq = d.into_iter().flat_map(|d| {
+            [
+                ("diffuse.wall_rcs_per_m", &d.wall_rcs_per_m, "m2/m"),
+                ("diffuse.lambert_exponent", &d.lambert_exponent, "1"),
+                ("diffuse.power_share", &d.power_share, "1"),
+                ("diffuse.decay", &d.decay, "ns"),
+            ]
+        });
+        for (name, v, unit) in q.into_iter().chain(dq) {
             if v.unit != unit {
                 return Err(Error::param(
                     format!("{name}.unit"),
                     format!("`{}` (expected `{unit}`)", v.unit),
+                ));
+            }
+            if let Some(reason) = &v.not_estimable {
+                if !v.value.is_nan() {
+                    return Err(Error::param(
+                        format!("{name}.value"),
+                        format!("given although marked not estimable ({reason})"),
+                    ));
+                }
+                continue;
+            }
+            if name == "diffuse.lambert_exponent" {
+                if !(v.value.is_finite() && v.value >= 0.0) {
+                    return Err(Error::param(
+                        format!("{name}.value"),
+                        "must be finite and >= 0",
+                    ));
+                }
+                continue;
+            }
+            if !(v.value.is_finite() && v.value > 0.0) {
+                return Err(Error::param(
+                    format!("{name}.value"),
+                    "must be finite and > 0",
                 ));
             }
         }
@@ -165,14 +244,99 @@ impl ModelConfig {
         Ok(())
     }
 
+    /// The quantities marked not estimable, by name (`diffuse.` prefix for the dense
+    /// component's).
+    pub fn not_estimable(&self) -> Vec<(String, String)> {
+        let mut out: Vec<(String, String)> = self
+            .quantities()
+            .into_iter()
+            .filter_map(|(n, q)| q.not_estimable.clone().map(|r| (n, r)))
+            .collect();
+        out.sort();
+        out
+    }
+
+    /// Every quantity by its file name (`diffuse.` prefix for the dense component's).
+    fn quantities(&self) -> Vec<(String, &Quantity)> {
+        let mut v: Vec<(String, &Quantity)> = vec![
+            ("inter_cluster_rate".into(), &self.inter_cluster_rate),
+            ("intra_cluster_rate".into(), &self.intra_cluster_rate),
+            ("intra_cluster_aoa".into(), &self.intra_cluster_aoa),
+            ("perimeter_offset".into(), &self.perimeter_offset),
+            ("perimeter_spacing".into(), &self.perimeter_spacing),
+            ("cluster_decay".into(), &self.cluster_decay),
+            ("ray_decay".into(), &self.ray_decay),
+            ("rays_per_cluster".into(), &self.rays_per_cluster),
+            ("cluster_rrcs".into(), &self.cluster_rrcs),
+        ];
+        if let Some(d) = &self.diffuse {
+            v.push(("diffuse.wall_rcs_per_m".into(), &d.wall_rcs_per_m));
+            v.push(("diffuse.lambert_exponent".into(), &d.lambert_exponent));
+            v.push(("diffuse.power_share".into(), &d.power_share));
+            v.push(("diffuse.decay".into(), &d.decay));
+        }
+        v
+    }
+
+    /// The model with every not-estimable quantity given a value from `supplied` (name →
+    /// value, names as in the file); an error naming the first one left without a value.
+    /// What a generator (`synth`) calls before drawing.
+    pub fn require_estimable(
+        &self,
+        supplied: &std::collections::BTreeMap<String, f64>,
+    ) -> Result<ModelConfig> {
+        let mut m = self.clone();
+        for (name, v) in supplied {
+            let q = m.quantity_mut(name).ok_or_else(|| {
+                Error::param(format!("--set {name}"), "no such quantity in the model")
+            })?;
+            q.value = *v;
+            q.not_estimable = None;
+        }
+        if let Some((name, reason)) = m.not_estimable().into_iter().next() {
+            return Err(Error::param(
+                name.clone(),
+                format!(
+                    "not estimable in the model ({reason}); supply a value with --set {name}=VALUE"
+                ),
+            ));
+        }
+        m.check()?;
+        Ok(m)
+    }
+
+    /// The quantity called `name` (as in the file), mutably.
+    fn quantity_mut(&mut self, name: &str) -> Option<&mut Quantity> {
+        Some(match name {
+            "inter_cluster_rate" => &mut self.inter_cluster_rate,
+            "intra_cluster_rate" => &mut self.intra_cluster_rate,
+            "intra_cluster_aoa" => &mut self.intra_cluster_aoa,
+            "perimeter_offset" => &mut self.perimeter_offset,
+            "perimeter_spacing" => &mut self.perimeter_spacing,
+            "cluster_decay" => &mut self.cluster_decay,
+            "ray_decay" => &mut self.ray_decay,
+            "rays_per_cluster" => &mut self.rays_per_cluster,
+            "cluster_rrcs" => &mut self.cluster_rrcs,
+            _ => {
+                let d = self.diffuse.as_mut()?;
+                match name {
+                    "diffuse.wall_rcs_per_m" => &mut d.wall_rcs_per_m,
+                    "diffuse.lambert_exponent" => &mut d.lambert_exponent,
+                    "diffuse.power_share" => &mut d.power_share,
+                    "diffuse.decay" => &mut d.decay,
+                    _ => return None,
+                }
+            }
+        })
+    }
+
     /// Parse a model from a TOML value (e.g. a manifest's `[clutter]`).
     pub fn from_value(v: toml::Value, file: &Path, prefix: &str) -> Result<Self> {
         let m: ModelConfig = v.try_into().map_err(|e: toml::de::Error| {
             Error::input(file, format!("[{prefix}]: {}", one_line(&e.to_string())))
         })?;
-        m.check()
-            .map_err(|e| Error::input(file, format!("[{prefix}] {e}")))?;
-        Ok(m)
+        m.require_estimable(&Default::default())
+            .map_err(|e| Error::input(file, format!("[{prefix}] {e}")))
     }
 
     /// Read a model file.

@@ -213,6 +213,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         ray_decay,
         rays_per_cluster,
         cluster_rrcs,
+        diffuse: None,
     };
     model.check()?;
     Ok(ChannelFit {

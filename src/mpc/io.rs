@@ -1,9 +1,9 @@
 //! The MPC table (DESIGN §3): Parquet columns [`MPC_COLUMNS`], its file metadata
 //! (schema version, method, floor, margins, positions, the scanned sector's width) and the
 //! reader (extra columns such as `cluster_id` are ignored; missing `snr_db`, `direction`,
-//! `bin` read as NaN, 0, 0).
+//! `bin`, `component` read as NaN, 0, 0, discrete).
 
-use super::{ExtractParams, Mpc};
+use super::{Component, ExtractParams, Mpc};
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
@@ -11,7 +11,7 @@ use crate::table;
 use std::path::Path;
 
 /// Columns of the MPC table.
-pub const MPC_COLUMNS: [&str; 10] = [
+pub const MPC_COLUMNS: [&str; 11] = [
     "position",
     "delay_ns",
     "angle_rel_deg",
@@ -22,6 +22,7 @@ pub const MPC_COLUMNS: [&str; 10] = [
     "y_m",
     "direction",
     "bin",
+    "component",
 ];
 
 /// The MPC table as a frame.
@@ -57,6 +58,12 @@ pub fn mpc_frame(path: &Path, mpcs: &[Mpc]) -> Result<polars::prelude::DataFrame
                 mpcs.iter().map(|m| m.direction as i32).collect::<Vec<_>>(),
             ),
             table::col("bin", mpcs.iter().map(|m| m.bin as i32).collect::<Vec<_>>()),
+            table::col(
+                "component",
+                mpcs.iter()
+                    .map(|m| m.component.name().to_string())
+                    .collect::<Vec<_>>(),
+            ),
         ],
     )
 }
@@ -124,11 +131,24 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
     let y = table::f64_column(path, &df, "y_m")?;
     let dir = table::i64_column(path, &df, "direction").unwrap_or_else(|_| vec![0; pos.len()]);
     let bin = table::i64_column(path, &df, "bin").unwrap_or_else(|_| vec![0; pos.len()]);
+    let component = table::str_column(path, &df, "component")?;
     (0..pos.len())
         .map(|i| {
             if pos[i] < 0 {
                 return Err(Error::input(path, format!("row {i}: negative position")));
             }
+            let component = match &component {
+                None => Component::Discrete,
+                Some(c) => Component::parse(&c[i]).ok_or_else(|| {
+                    Error::input(
+                        path,
+                        format!(
+                            "column `component` row {i}: {:?} (expected discrete or diffuse)",
+                            c[i]
+                        ),
+                    )
+                })?,
+            };
             Ok(Mpc {
                 position: pos[i] as usize,
                 delay_ns: delay[i],
@@ -140,6 +160,7 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
                 y_m: y[i],
                 direction: dir[i].max(0) as usize,
                 bin: bin[i].max(0) as usize,
+                component,
             })
         })
         .collect()
@@ -161,6 +182,7 @@ mod tests {
             y_m: 0.5,
             direction: 20,
             bin: 120,
+            component: Component::Discrete,
         }
     }
 

@@ -75,6 +75,38 @@ pub struct Mpc {
     pub direction: usize,
     /// Bin index of the peak cell.
     pub bin: usize,
+    /// Discrete or diffuse (dense wall return); [`Component::Discrete`] until labelled by
+    /// [`diffuse`].
+    pub component: Component,
+}
+
+/// The component an MPC belongs to (DESIGN §2 "Diffuse component").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Component {
+    /// A discrete path (cluster ray, corner, edge, specular point, object).
+    #[default]
+    Discrete,
+    /// A diffuse wall return (the dense component).
+    Diffuse,
+}
+
+impl Component {
+    /// The name in the MPC table's `component` column.
+    pub fn name(self) -> &'static str {
+        match self {
+            Component::Discrete => "discrete",
+            Component::Diffuse => "diffuse",
+        }
+    }
+
+    /// Parse a `component` cell.
+    pub fn parse(s: &str) -> Option<Component> {
+        match s {
+            "discrete" => Some(Component::Discrete),
+            "diffuse" => Some(Component::Diffuse),
+            _ => None,
+        }
+    }
 }
 
 /// One position's energy grid as the extractors see it: sizes, steps, pose, floor and
@@ -174,6 +206,7 @@ impl<'a> PositionView<'a> {
             y_m: self.pose.y_m + r * glob.to_radians().sin(),
             direction: d,
             bin: b,
+            component: Component::Discrete,
         }
     }
 }
