@@ -206,10 +206,17 @@ fn extract(a: ExtractArgs, quiet: bool) -> Result<()> {
         energy: a.energy,
         campaign: a.campaign,
         out: a.out,
-        params: pradar::mpc::ExtractParams::default()
-            .method(a.method)
-            .margin_db(a.margin_db)
-            .dynamic_range_db(a.dynamic_range_db),
+        params: pradar::mpc::ExtractParams {
+            diffuse: pradar::mpc::DiffuseParams {
+                enabled: !a.no_diffuse,
+                discrete_db: a.diffuse_db,
+                ..Default::default()
+            },
+            ..pradar::mpc::ExtractParams::default()
+                .method(a.method)
+                .margin_db(a.margin_db)
+                .dynamic_range_db(a.dynamic_range_db)
+        },
     };
     report(quiet, commands::extract(&cmd)?);
     Ok(())

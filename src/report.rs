@@ -136,12 +136,12 @@ pub fn cluster_colour(i: usize) -> RGBColor {
 }
 
 /// MPCs of one position in the delay–angle plane, coloured by cluster (`labels` local to the
-/// position), marker size by power.
+/// position; None — a diffuse MPC — drawn as a small grey dot), marker size by power.
 pub fn mpc_clusters_plot(
     path: &Path,
     title: &str,
     pts: &[(f64, f64, f64)],
-    labels: &[usize],
+    labels: &[Option<usize>],
     max_delay_ns: f64,
 ) -> Result<()> {
     register_font();
@@ -166,9 +166,12 @@ pub fn mpc_clusters_plot(
             .map_err(|e| plot_err(path, e))?;
         let pmax = pts.iter().map(|p| p.2).fold(f64::MIN, f64::max);
         chart
-            .draw_series(pts.iter().zip(labels).map(|(&(a, d, pw), &l)| {
-                let size = (6.0 + (pw - pmax) / 6.0).clamp(2.0, 6.0) as i32;
-                Circle::new((a, d), size, cluster_colour(l).filled())
+            .draw_series(pts.iter().zip(labels).map(|(&(a, d, pw), &l)| match l {
+                Some(l) => {
+                    let size = (6.0 + (pw - pmax) / 6.0).clamp(2.0, 6.0) as i32;
+                    Circle::new((a, d), size, cluster_colour(l).filled())
+                }
+                None => Circle::new((a, d), 1, RGBColor(150, 150, 150).filled()),
             }))
             .map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, e))?;
@@ -176,13 +179,14 @@ pub fn mpc_clusters_plot(
     std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
 }
 
-/// MPCs (dots, coloured by campaign-wide cluster id) and cluster centroids (crosses) in the
-/// global frame over the layout's walls, with the poses (black triangles).
+/// MPCs (dots, coloured by campaign-wide cluster id; diffuse ones grey) and cluster
+/// centroids (crosses) in the global frame over the layout's walls, with the poses (black
+/// triangles).
 pub fn global_map_plot(
     path: &Path,
     layout: &crate::campaign::Layout,
     poses: &[(f64, f64)],
-    mpcs: &[(f64, f64, usize)],
+    mpcs: &[(f64, f64, Option<usize>)],
     centroids: &[(f64, f64, usize)],
 ) -> Result<()> {
     register_font();
@@ -231,7 +235,10 @@ pub fn global_map_plot(
             .draw_series(
                 mpcs.iter()
                     .filter(|m| clip(m.0, m.1))
-                    .map(|&(x, y, c)| Circle::new((x, y), 2, cluster_colour(c).filled())),
+                    .map(|&(x, y, c)| match c {
+                        Some(c) => Circle::new((x, y), 2, cluster_colour(c).filled()),
+                        None => Circle::new((x, y), 1, RGBColor(150, 150, 150).filled()),
+                    }),
             )
             .map_err(|e| plot_err(path, e))?;
         chart

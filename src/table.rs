@@ -178,6 +178,30 @@ pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// An optional f64 column whose NaN cells mean "not applicable" (nulls read as NaN too);
+/// `Ok(None)` when the table has no such column. Infinite values are an error.
+pub fn f64_column_or_nan(path: &Path, df: &DataFrame, name: &str) -> Result<Option<Vec<f64>>> {
+    let Ok(c) = df.column(name) else {
+        return Ok(None);
+    };
+    let c = c
+        .cast(&DataType::Float64)
+        .map_err(|_| Error::input(path, format!("column `{name}` is not numeric")))?;
+    let ca = c.f64().map_err(|e| Error::table(path, e))?;
+    ca.iter()
+        .enumerate()
+        .map(|(i, v)| match v {
+            Some(x) if x.is_infinite() => Err(Error::input(
+                path,
+                format!("column `{name}` row {i}: infinite value {x}"),
+            )),
+            Some(x) => Ok(x),
+            None => Ok(f64::NAN),
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
+}
+
 /// A string column without nulls; `Ok(None)` when the table has no such column.
 pub fn str_column(path: &Path, df: &DataFrame, name: &str) -> Result<Option<Vec<String>>> {
     let Ok(c) = df.column(name) else {

@@ -27,6 +27,7 @@ fn mpc(p: usize, delay_ns: f64, angle: f64, power_db: f64) -> Mpc {
         direction: 0,
         bin: 0,
         component: pradar::mpc::Component::Discrete,
+        wall: None,
     }
 }
 
@@ -116,7 +117,9 @@ fn k_recovered_on_table1_clusters() {
             .filter(|(t, pc)| pc.k == **t)
             .count();
         let frac = within as f64 / k_true.len() as f64;
-        let ari = adjusted_rand_index(&truth, &c.cluster_id);
+        // every MPC here is discrete, so every one has an id
+        let ids: Vec<usize> = c.cluster_id.iter().map(|i| i.unwrap()).collect();
+        let ari = adjusted_rand_index(&truth, &ids);
         eprintln!(
             "{:16} | {within}/{} ({frac:.2}) | {exact}/{} | {ari:.3}",
             format!("{crit:?}"),

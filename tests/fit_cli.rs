@@ -153,6 +153,7 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         direction: 18,
         bin: 60,
         component: pradar::mpc::Component::Discrete,
+        wall: None,
     }];
     let params =
         pradar::params::ParamGuard::check(&pradar::cluster::ClusterParams::default()).unwrap();

@@ -10,6 +10,7 @@ mod common;
 mod cli;
 mod closed_loop;
 mod cluster;
+mod diffuse;
 mod ekf;
 mod experiment;
 mod fit_cli;

@@ -352,6 +352,32 @@ impl Layout {
         )
     }
 
+    /// The first wall met by the ray from `from` along the global angle `angle_rad`, beyond
+    /// 1 mm: (range m, index into [`Layout::walls`], |cos| of the incidence angle measured
+    /// from the wall normal). None when the ray leaves the layout without meeting a wall.
+    pub fn first_hit(&self, from: Coord<f64>, angle_rad: f64) -> Option<(f64, usize, f64)> {
+        let u = Coord {
+            x: angle_rad.cos(),
+            y: angle_rad.sin(),
+        };
+        let mut best: Option<(f64, usize, f64)> = None;
+        for (i, w) in self.walls.iter().enumerate() {
+            let d = w.line.delta();
+            let den = u.x * d.y - u.y * d.x;
+            if den.abs() < 1e-12 {
+                continue;
+            }
+            let q = w.line.start - from;
+            let t = (q.x * d.y - q.y * d.x) / den;
+            let s = (q.x * u.y - q.y * u.x) / den;
+            if t > 1e-3 && (0.0..=1.0).contains(&s) && best.is_none_or(|b| t < b.0) {
+                let l = d.x.hypot(d.y);
+                best = Some((t, i, (den / l).abs()));
+            }
+        }
+        best
+    }
+
     /// Total perimeter length, m.
     pub fn perimeter_length(&self) -> f64 {
         self.walls

@@ -185,6 +185,17 @@ pub struct ExtractArgs {
         allow_negative_numbers = true
     )]
     pub dynamic_range_db: f64,
+    /// Do not label diffuse wall returns (every MPC discrete).
+    #[arg(long)]
+    pub no_diffuse: bool,
+    /// An MPC on a wall's curve this far above the diffuse level is discrete, dB.
+    #[arg(
+        long,
+        default_value_t = pradar::mpc::DiffuseParams::default().discrete_db,
+        value_parser = ranges::non_negative,
+        allow_negative_numbers = true
+    )]
+    pub diffuse_db: f64,
 }
 
 // `pradar cluster`

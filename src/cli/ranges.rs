@@ -54,8 +54,8 @@ pub fn positive(s: &str) -> Result<f64, String> {
     checked(s, |v| v.is_finite() && v > 0.0, "finite and > 0")
 }
 
-/// `--pose-noise-m`, `--pose-noise-deg`, `--margin-db`: finite and ≥ 0 (`PoseNoise`,
-/// `ExtractParams` margin_db).
+/// `--pose-noise-m`, `--pose-noise-deg`, `--margin-db`, `--diffuse-db`: finite and ≥ 0
+/// (`PoseNoise`, `ExtractParams` margin_db, `DiffuseParams` discrete_db).
 pub fn non_negative(s: &str) -> Result<f64, String> {
     checked(s, |v| v.is_finite() && v >= 0.0, "finite and >= 0")
 }

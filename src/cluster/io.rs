@@ -1,5 +1,5 @@
 //! Parquet output of a clustering (DESIGN §3): the clustered MPC table (the MPC columns plus
-//! `cluster_id`) and the per-cluster summary `<stem>_summary.parquet`, both with
+//! `cluster_id`, −1 for diffuse MPCs) and the per-cluster summary `<stem>_summary.parquet`, both with
 //! `schema_version` 1.
 
 use super::Clustering;
@@ -12,7 +12,10 @@ pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
     let mut df = crate::mpc::mpc_frame(path, &c.mpcs)?;
     df.with_column(table::col(
         "cluster_id",
-        c.cluster_id.iter().map(|&i| i as i64).collect::<Vec<_>>(),
+        c.cluster_id
+            .iter()
+            .map(|i| i.map_or(-1, |i| i as i64))
+            .collect::<Vec<_>>(),
     ))
     .map_err(|e| Error::table(path, e))?;
     table::write_parquet(path, &df, vec![("schema_version".into(), "1".into())])?;

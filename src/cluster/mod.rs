@@ -2,8 +2,10 @@
 //! seeded) per position on scaled (delay, angle_rel), K from a stated criterion.
 //!
 //! Takes the MPCs of each position and checked parameters ([`ClusterValid`]); gives a
-//! cluster label per MPC (ids unique over the campaign, numbered position by position) and a
-//! per-cluster summary ([`Clustering`]).
+//! cluster label per discrete MPC (ids unique over the campaign, numbered position by
+//! position; diffuse MPCs — the dense wall returns labelled by [`crate::mpc::diffuse`] —
+//! are not clustered and carry no id, `cluster_id` −1 in the table) and a per-cluster
+//! summary ([`Clustering`]).
 //!
 //! * Features ([`kmeans`]): (delay_ns, angle_rel_deg) standardised per position (z-scores).
 //! * Partitions (`kmeans::partition`): for K = 2..min(K_max, n − 1), K-means with
@@ -37,6 +39,7 @@
 //!     position: 0, delay_ns, angle_rel_deg, angle_global_deg: angle_rel_deg,
 //!     power_db: -60.0, snr_db: 30.0, x_m: 0.0, y_m: 0.0, direction: 0, bin: 0,
 //!     component: pradar::mpc::Component::Discrete,
+//!     wall: None,
 //! };
 //! let mpcs: Vec<Mpc> = (0..8)
 //!     .map(|i| mpc(10.0 + 0.3 * i as f64, -50.0 + i as f64))
@@ -65,7 +68,7 @@ pub use select::cluster_position;
 pub use summary::ClusterSummary;
 
 use crate::error::Result;
-use crate::mpc::Mpc;
+use crate::mpc::{Component, Mpc};
 use rayon::prelude::*;
 
 /// Result of clustering one position.
@@ -92,8 +95,9 @@ pub struct PositionClustering {
 pub struct Clustering {
     /// MPCs in input order.
     pub mpcs: Vec<Mpc>,
-    /// Campaign-wide cluster id per MPC.
-    pub cluster_id: Vec<usize>,
+    /// Campaign-wide cluster id per MPC (None for a diffuse MPC: the dense component is not
+    /// clustered).
+    pub cluster_id: Vec<Option<usize>>,
     /// Per-cluster summaries.
     pub summary: Vec<ClusterSummary>,
     /// Per-position details (index = position).
@@ -115,7 +119,8 @@ impl Clustering {
     }
 }
 
-/// The MPC indices of each position (index = position; at least `n_positions` entries).
+/// The discrete MPCs' indices of each position (index = position; at least `n_positions`
+/// entries).
 fn by_position(mpcs: &[Mpc], n_positions: usize) -> Vec<Vec<usize>> {
     let np = mpcs
         .iter()
@@ -125,7 +130,9 @@ fn by_position(mpcs: &[Mpc], n_positions: usize) -> Vec<Vec<usize>> {
         .max(n_positions);
     let mut by_pos: Vec<Vec<usize>> = vec![Vec::new(); np];
     for (i, m) in mpcs.iter().enumerate() {
-        by_pos[m.position].push(i);
+        if m.component == Component::Discrete {
+            by_pos[m.position].push(i);
+        }
     }
     by_pos
 }
@@ -143,7 +150,7 @@ pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterValid) -> Res
         })
         .collect::<Result<_>>()?;
     // campaign-wide ids, position by position, and the summaries
-    let mut cluster_id = vec![0usize; mpcs.len()];
+    let mut cluster_id = vec![None; mpcs.len()];
     let mut summary = Vec::new();
     for (p, (idx, pc)) in by_pos.iter().zip(&per).enumerate() {
         for c in 0..pc.k {
@@ -159,7 +166,7 @@ pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterValid) -> Res
             let id = summary.len();
             for (&i, &l) in idx.iter().zip(&pc.labels) {
                 if l == c {
-                    cluster_id[i] = id;
+                    cluster_id[i] = Some(id);
                 }
             }
             let heading = headings_deg.get(p).copied();

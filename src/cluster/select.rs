@@ -159,6 +159,7 @@ fn index_candidate(
 ///     position: 0, delay_ns, angle_rel_deg, angle_global_deg: angle_rel_deg,
 ///     power_db: -60.0, snr_db: 30.0, x_m: 0.0, y_m: 0.0, direction: 0, bin: 0,
 ///     component: pradar::mpc::Component::Discrete,
+///     wall: None,
 /// };
 /// let ms: Vec<Mpc> = (0..8)
 ///     .map(|i| mpc(10.0 + 0.3 * i as f64, -50.0 + i as f64))

@@ -109,7 +109,15 @@ pub struct ChannelFit {
 /// # }
 /// ```
 pub fn fit_channel(clusters: &Path, c: &Campaign, p: &FitValid) -> Result<ChannelFit> {
-    fit_rays(clusters, read_rays(clusters, false)?, c, p)
+    let mut f = fit_rays(clusters, read_rays(clusters, false)?, c, p)?;
+    let r = crate::fit::diffuse::Resample {
+        bootstrap: p.bootstrap,
+        seed: p.seed,
+        block: bootstrap_block(&c.manifest),
+    };
+    f.model.diffuse = crate::fit::diffuse::fit_diffuse_table(clusters, c.manifest.positions(), &r)?;
+    f.model.check()?;
+    Ok(f)
 }
 
 /// The same estimators applied to the simulator's true clutter clusters
@@ -132,8 +140,12 @@ fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
     let d = table::f64_column(path, &df, "delay_ns")?;
     let a = table::f64_column(path, &df, "angle_rel_deg")?;
     let pw = table::f64_column(path, &df, "power_db")?;
+    // the dense component (diffuse MPCs, cluster_id −1) is fitted apart (`fit::diffuse`)
+    let diffuse = table::str_column(path, &df, "component")?
+        .map(|c| c.iter().map(|x| x == "diffuse").collect::<Vec<_>>())
+        .unwrap_or_else(|| vec![false; pos.len()]);
     (0..pos.len())
-        .filter(|&i| !truth || cid[i] >= 0)
+        .filter(|&i| !diffuse[i] && (!truth || cid[i] >= 0))
         .map(|i| {
             if pos[i] < 0 || cid[i] < 0 {
                 return Err(Error::input(

@@ -8,10 +8,12 @@
 //! * [`geometry`] — cluster locations, perimeter offsets and spacings, the observed
 //!   stretches of perimeter, the scan's interior and the bootstrap's block length;
 //! * [`quantities`] — each quantity from its samples: value, interval, KS, AIC ranking;
+//! * [`diffuse`] — the dense component's quantities (`[diffuse]`) from the diffuse MPCs;
 //! * [`channel`] — the campaign fit ([`channel::fit_channel`], [`channel::fit_truth`]);
 //! * [`table1`] — Table 1 as one [`Table`](crate::export::Table) (Markdown, CSV, HTML).
 
 pub mod channel;
+pub mod diffuse;
 pub mod estimators;
 pub mod geometry;
 pub mod params;

@@ -72,6 +72,41 @@ impl Footprint {
     }
 }
 
+impl Footprint {
+    /// The two-way half-power beamwidth, degrees (of the broadside table for mechanical
+    /// steering, of beam 0's for electronic).
+    pub(crate) fn half_power_deg(&self) -> f64 {
+        let t = &self.w[0];
+        let peak = t
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(0, |x| x.0);
+        let up = (peak..t.len()).find(|&i| t[i] < 0.5).unwrap_or(t.len() - 1) - peak;
+        let down = peak - (0..=peak).rev().find(|&i| t[i] < 0.5).unwrap_or(0);
+        (up + down) as f64 * WSTEP
+    }
+
+    /// The largest angle from the beam at which the two-way weight still reaches `thr`,
+    /// degrees (at most 90°).
+    pub(crate) fn reach_deg(&self, thr: f64) -> f64 {
+        let t = &self.w[0];
+        let peak = t
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(0, |x| x.0);
+        let far = t
+            .iter()
+            .enumerate()
+            .filter(|(_, &v)| v >= thr)
+            .map(|(i, _)| i.abs_diff(peak))
+            .max()
+            .unwrap_or(0);
+        (far as f64 * WSTEP).min(90.0)
+    }
+}
+
 /// K(δ) every KSTEP over ±`kernel_bins`: bin energies of a unit echo at delay (kb − δ)·T_b,
 /// read at bin kb (well inside), normalised to K(0) = 1.
 fn kernel_table(c: &Campaign, em: &EnergyMatrix, kernel_bins: usize) -> Result<Vec<f64>> {

@@ -1,9 +1,10 @@
 //! The MPC table (DESIGN §3): Parquet columns [`MPC_COLUMNS`], its file metadata
 //! (schema version, method, floor, margins, positions, the scanned sector's width) and the
 //! reader (extra columns such as `cluster_id` are ignored; missing `snr_db`, `direction`,
-//! `bin`, `component` read as NaN, 0, 0, discrete).
+//! `bin`, `component` read as NaN, 0, 0, discrete; `wall_unit_db`, `incidence_deg` are NaN
+//! for an MPC on no wall curve).
 
-use super::{Component, ExtractParams, Mpc};
+use super::{Component, ExtractParams, Mpc, WallCell};
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
@@ -11,7 +12,7 @@ use crate::table;
 use std::path::Path;
 
 /// Columns of the MPC table.
-pub const MPC_COLUMNS: [&str; 11] = [
+pub const MPC_COLUMNS: [&str; 13] = [
     "position",
     "delay_ns",
     "angle_rel_deg",
@@ -23,6 +24,8 @@ pub const MPC_COLUMNS: [&str; 11] = [
     "direction",
     "bin",
     "component",
+    "wall_unit_db",
+    "incidence_deg",
 ];
 
 /// The MPC table as a frame.
@@ -64,6 +67,18 @@ pub fn mpc_frame(path: &Path, mpcs: &[Mpc]) -> Result<polars::prelude::DataFrame
                     .map(|m| m.component.name().to_string())
                     .collect::<Vec<_>>(),
             ),
+            table::col(
+                "wall_unit_db",
+                mpcs.iter()
+                    .map(|m| m.wall.map_or(f64::NAN, |w| w.unit_db))
+                    .collect::<Vec<_>>(),
+            ),
+            table::col(
+                "incidence_deg",
+                mpcs.iter()
+                    .map(|m| m.wall.map_or(f64::NAN, |w| w.incidence_deg))
+                    .collect::<Vec<_>>(),
+            ),
         ],
     )
 }
@@ -99,6 +114,16 @@ pub fn table_metadata(
             "sector_deg".into(),
             c.manifest.directions.width_deg().to_string(),
         ),
+        (
+            "diffuse".into(),
+            if params.diffuse.enabled {
+                "layout"
+            } else {
+                "off"
+            }
+            .into(),
+        ),
+        ("diffuse_db".into(), params.diffuse.discrete_db.to_string()),
     ]
 }
 
@@ -132,6 +157,8 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
     let dir = table::i64_column(path, &df, "direction").unwrap_or_else(|_| vec![0; pos.len()]);
     let bin = table::i64_column(path, &df, "bin").unwrap_or_else(|_| vec![0; pos.len()]);
     let component = table::str_column(path, &df, "component")?;
+    let unit = table::f64_column_or_nan(path, &df, "wall_unit_db")?;
+    let inc = table::f64_column_or_nan(path, &df, "incidence_deg")?;
     (0..pos.len())
         .map(|i| {
             if pos[i] < 0 {
@@ -161,6 +188,13 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
                 direction: dir[i].max(0) as usize,
                 bin: bin[i].max(0) as usize,
                 component,
+                wall: match (&unit, &inc) {
+                    (Some(u), Some(a)) if u[i].is_finite() && a[i].is_finite() => Some(WallCell {
+                        unit_db: u[i],
+                        incidence_deg: a[i],
+                    }),
+                    _ => None,
+                },
             })
         })
         .collect()
@@ -183,6 +217,7 @@ mod tests {
             direction: 20,
             bin: 120,
             component: Component::Discrete,
+            wall: None,
         }
     }
 

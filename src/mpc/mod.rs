@@ -36,12 +36,14 @@
 //! ```
 
 pub mod clean;
+pub mod diffuse;
 pub mod edge;
 pub mod footprint;
 pub mod io;
 pub mod params;
 pub mod peaks;
 
+pub use diffuse::{DiffuseParams, DiffuseSummary, DiffuseValid};
 pub use io::{mpc_frame, read_mpcs, read_sector_deg, table_metadata, write_mpcs, MPC_COLUMNS};
 pub use params::{ExtractParams, ExtractValid, Method};
 
@@ -78,6 +80,18 @@ pub struct Mpc {
     /// Discrete or diffuse (dense wall return); [`Component::Discrete`] until labelled by
     /// [`diffuse`].
     pub component: Component,
+    /// The wall curve the MPC lies on, when it does ([`diffuse`]).
+    pub wall: Option<WallCell>,
+}
+
+/// What the diffuse stage predicts for an MPC on a wall's curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WallCell {
+    /// E₁ in dB: the expected energy in the MPC's cell of a Lambertian wall of backscatter
+    /// 1 m²/m (same units as `power_db`).
+    pub unit_db: f64,
+    /// Incidence angle on the wall along the MPC's bearing, from the wall normal, degrees.
+    pub incidence_deg: f64,
 }
 
 /// The component an MPC belongs to (DESIGN §2 "Diffuse component").
@@ -207,6 +221,7 @@ impl<'a> PositionView<'a> {
             direction: d,
             bin: b,
             component: Component::Discrete,
+            wall: None,
         }
     }
 }
@@ -238,8 +253,18 @@ pub fn auto_min_delay_ns(em: &EnergyMatrix) -> f64 {
     }
 }
 
-/// Extract MPCs from every position (positions in parallel, results in position order).
+/// Extract MPCs from every position (positions in parallel, results in position order),
+/// each labelled discrete or diffuse by [`diffuse`].
 pub fn extract(em: &EnergyMatrix, c: &Campaign, params: &ExtractValid) -> Result<Vec<Mpc>> {
+    extract_labelled(em, c, params).map(|x| x.0)
+}
+
+/// [`extract`], with what the diffuse stage found.
+pub fn extract_labelled(
+    em: &EnergyMatrix,
+    c: &Campaign,
+    params: &ExtractValid,
+) -> Result<(Vec<Mpc>, DiffuseSummary)> {
     crate::energy::check_campaign(c, em, &c.path)?;
     let floor = em.meta.noise_mean();
     if !(floor.is_finite() && floor > 0.0) {
@@ -248,13 +273,33 @@ pub fn extract(em: &EnergyMatrix, c: &Campaign, params: &ExtractValid) -> Result
             "energy table has no positive noise estimate",
         ));
     }
-    let fp = match params.method {
-        Method::Clean => Some(Footprint::new(c, em, params.kernel_bins)?),
-        Method::Peaks => None,
+    let fp = if params.method == Method::Clean || params.diffuse.enabled {
+        Some(Footprint::new(c, em, params.kernel_bins)?)
+    } else {
+        None
     };
+    let clean_fp = fp.as_ref().filter(|_| params.method == Method::Clean);
     let per: Vec<Vec<Mpc>> = (0..em.positions)
         .into_par_iter()
-        .map(|p| extract_position(em, c, fp.as_ref(), p, params, floor))
+        .map(|p| extract_position(em, c, clean_fp, p, params, floor))
         .collect();
-    Ok(per.into_iter().flatten().collect())
+    let mut mpcs: Vec<Mpc> = per.into_iter().flatten().collect();
+    // checked with the extraction parameters
+    let diffuse_params = crate::params::Valid::new(params.diffuse);
+    let summary = match &fp {
+        Some(fp) => diffuse::label(
+            &mut mpcs,
+            c,
+            &em.angles_rel_deg,
+            em.meta.bin_width_ns,
+            fp,
+            &diffuse_params,
+        )?,
+        None => DiffuseSummary {
+            on_curve: 0,
+            diffuse: 0,
+            level_m2_per_m: f64::NAN,
+        },
+    };
+    Ok((mpcs, summary))
 }

@@ -39,6 +39,8 @@ pub struct ExtractParams {
     /// plus the window kernel's null-to-null width (4/B), where the gate and the coupling's
     /// kernel tail corrupt the profile; 0 otherwise.
     pub min_delay_ns: Option<f64>,
+    /// The diffuse stage ([`super::diffuse`]).
+    pub diffuse: super::diffuse::DiffuseParams,
 }
 
 /// Extraction parameters that passed [`ParamGuard::check`].
@@ -54,6 +56,7 @@ impl Default for ExtractParams {
             max_mpcs: 200,
             kernel_bins: 12,
             min_delay_ns: None,
+            diffuse: super::diffuse::DiffuseParams::default(),
         }
     }
 }
@@ -119,6 +122,7 @@ impl ParamGuard for ExtractParams {
                 ));
             }
         }
+        self.diffuse.check()?;
         Ok(Valid::new(*self))
     }
 }

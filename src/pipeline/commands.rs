@@ -318,6 +318,8 @@ pub struct Extract {
 pub struct ExtractSummary {
     /// MPCs written.
     pub mpcs: usize,
+    /// Of which diffuse.
+    pub diffuse: usize,
     /// Positions of the energy table.
     pub positions: usize,
     /// The MPC Parquet written.
@@ -328,8 +330,9 @@ impl fmt::Display for ExtractSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} MPCs from {} positions -> {}",
+            "{} MPCs ({} diffuse) from {} positions -> {}",
             self.mpcs,
+            self.diffuse,
             self.positions,
             self.out.display()
         )
@@ -340,11 +343,16 @@ impl fmt::Display for ExtractSummary {
 pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
     let c = Campaign::load(&cmd.campaign)?;
     let em = EnergyMatrix::read(&cmd.energy)?;
-    let mpcs = crate::mpc::extract(&em, &c, &cmd.params.check()?)?;
-    let meta = crate::mpc::table_metadata(&em, &c, &cmd.params);
+    let (mpcs, diffuse) = crate::mpc::extract_labelled(&em, &c, &cmd.params.check()?)?;
+    let mut meta = crate::mpc::table_metadata(&em, &c, &cmd.params);
+    meta.push((
+        "diffuse_level_m2_per_m".into(),
+        format!("{:.17e}", diffuse.level_m2_per_m),
+    ));
     crate::mpc::write_mpcs(&cmd.out, &mpcs, meta)?;
     Ok(ExtractSummary {
         mpcs: mpcs.len(),
+        diffuse: diffuse.diffuse,
         positions: em.positions,
         out: cmd.out.clone(),
     })

@@ -246,6 +246,8 @@ fn write_fit_plots(f: &ChannelFit, out: &Path) -> Result<Vec<FitPlot>> {
     Ok(plots)
 }
 
+/// An MPC as (angle_rel_deg, delay_ns, power_db) for the cluster plots.
+type Point3 = (f64, f64, f64);
 /// Per position the energy heat map with its MPCs marked and the MPCs coloured by cluster;
 /// then every MPC and centroid in the global frame (`mpcs_global.png`).
 fn write_plots(s: &Simulated, a: &Analysis, out: &Path, progress: Progress) -> Result<()> {
@@ -260,20 +262,29 @@ fn write_plots(s: &Simulated, a: &Analysis, out: &Path, progress: Progress) -> R
             .collect();
         let heat = out.join(format!("energy_p{p:02}.png"));
         report::energy_heatmap(em, p, &heat, -60.0, &marks)?;
-        let pts: Vec<(f64, f64, f64)> = mpcs
+        // the position's MPCs with their labels local to the position (None: diffuse)
+        let mut labels = clustering.positions[p].labels.iter();
+        let (pts, local): (Vec<Point3>, Vec<Option<usize>>) = mpcs
             .iter()
             .filter(|m| m.position == p)
-            .map(|m| (m.angle_rel_deg, m.delay_ns, m.power_db))
-            .collect();
+            .map(|m| {
+                let l = match m.component {
+                    crate::mpc::Component::Discrete => labels.next().copied(),
+                    crate::mpc::Component::Diffuse => None,
+                };
+                ((m.angle_rel_deg, m.delay_ns, m.power_db), l)
+            })
+            .unzip();
         report::mpc_clusters_plot(
             &out.join(format!("clusters_p{p:02}.png")),
             &format!(
-                "position {p}: {} MPCs in {} clusters",
+                "position {p}: {} MPCs ({} diffuse) in {} clusters",
                 pts.len(),
+                local.iter().filter(|l| l.is_none()).count(),
                 clustering.positions[p].k
             ),
             &pts,
-            &clustering.positions[p].labels,
+            &local,
             max_delay,
         )?;
         cb(p + 1, em.positions);
@@ -282,7 +293,7 @@ fn write_plots(s: &Simulated, a: &Analysis, out: &Path, progress: Progress) -> R
     let poses: Vec<(f64, f64)> = (s.campaign.manifest.poses.iter())
         .map(|p| (p.x_m, p.y_m))
         .collect();
-    let pts: Vec<(f64, f64, usize)> = mpcs
+    let pts: Vec<(f64, f64, Option<usize>)> = mpcs
         .iter()
         .zip(&clustering.cluster_id)
         .map(|(m, &c)| (m.x_m, m.y_m, c))
