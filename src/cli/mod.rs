@@ -208,7 +208,7 @@ pub struct ClusterArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Largest K tried per position.
-    #[arg(long, default_value_t = 8, value_parser = ranges::at_least_one, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = pradar::cluster::ClusterParams::default().k_max, value_parser = ranges::at_least_one, allow_negative_numbers = true)]
     pub k_max: usize,
     /// Seed of the k-means++ draws.
     #[arg(long, default_value_t = 1)]

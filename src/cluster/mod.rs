@@ -22,7 +22,9 @@
 //! * Selection ([`select`]): the candidate partitions per K (four delay weights for the
 //!   likelihood criteria) and the winner; K = 1 when the distance indices find no
 //!   substantial structure.
-//! * K_max (default 8) caps K. Where a position's criterion still prefers the cap,
+//! * K_max (default 16) caps K; with the diffuse wall returns set apart it does not bind on
+//!   the built-in corridor, and raising it to 2× and 3× changes K at few positions
+//!   ([`Clustering::k_changed`]; figures in `docs/cluster.md`). Where a position's criterion still prefers the cap,
 //!   [`Clustering::positions_at_k_max`] names it, `pradar cluster` warns and the report
 //!   lists K per position.
 //! * Summary per cluster ([`summary`]) and Parquet output ([`io`]); the adjusted Rand index
@@ -110,6 +112,22 @@ impl Clustering {
     /// cluster count, and with it Λ, λ, the AoA spread and d_c, is set by K_max rather than
     /// found.
     pub fn positions_at_k_max(&self, k_max: usize) -> Vec<usize> {
+        self.positions_at_k_max_inner(k_max)
+    }
+
+    /// The positions whose chosen K differs between `self` and `other` (the same MPCs
+    /// clustered with another K_max): K is found, not capped, when this is nearly empty.
+    pub fn k_changed(&self, other: &Clustering) -> Vec<usize> {
+        self.positions
+            .iter()
+            .zip(&other.positions)
+            .enumerate()
+            .filter(|(_, (a, b))| a.k != b.k)
+            .map(|(p, _)| p)
+            .collect()
+    }
+
+    fn positions_at_k_max_inner(&self, k_max: usize) -> Vec<usize> {
         self.positions
             .iter()
             .enumerate()

@@ -92,7 +92,7 @@ pub type ClusterValid = Valid<ClusterParams>;
 impl Default for ClusterParams {
     fn default() -> Self {
         ClusterParams {
-            k_max: 8,
+            k_max: 16,
             seed: 1,
             n_runs: 10,
             min_silhouette: 0.25,
