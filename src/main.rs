@@ -251,7 +251,11 @@ fn fit(a: FitArgs, quiet: bool) -> Result<()> {
             seed: a.seed,
         },
     };
-    report(quiet, commands::fit(&cmd)?);
+    let summary = commands::fit(&cmd)?;
+    for w in summary.warnings() {
+        eprintln!("warning: {w}");
+    }
+    report(quiet, summary);
     Ok(())
 }
 

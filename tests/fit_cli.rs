@@ -140,13 +140,102 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("bad.toml") && e.contains("unit"), "{e}");
-    // a clusters table with a single cluster cannot give inter-cluster gaps
-    let mpcs = vec![pradar::mpc::Mpc {
-        position: 0,
-        delay_ns: 10.0,
-        angle_rel_deg: 0.0,
-        angle_global_deg: 0.0,
-        power_db: -80.0,
+    // one cluster of 8 rays at each of 3 positions: no inter-cluster gaps (Λ) and no
+    // cluster-power trend (Γ), but λ, the AoA and γ are fitted — a partial model
+    let man = write_campaign(&tmp.path().join("in"), &corridor());
+    let mut mpcs = Vec::new();
+    for position in 0..3 {
+        for (i, (t, a)) in [
+            (0.0, 0.0),
+            (0.6, 4.0),
+            (1.5, -6.0),
+            (2.1, 9.0),
+            (3.4, -3.0),
+            (4.0, 14.0),
+            (5.3, -11.0),
+            (6.1, 2.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            mpcs.push(mpc(
+                position,
+                10.0 + position as f64 + t,
+                a,
+                -80.0 - 1.5 * t - 0.3 * (i % 3) as f64,
+            ));
+        }
+    }
+    let cl = tmp.path().join("clusters.parquet");
+    write_clusters(&cl, mpcs, |m| m.position);
+    let (model, table) = (tmp.path().join("partial.toml"), tmp.path().join("t1.md"));
+    let (code, err) = pradar(&[
+        "fit",
+        "--clusters",
+        s(&cl),
+        "--campaign",
+        s(&man),
+        "--out",
+        s(&model),
+        "--table",
+        s(&table),
+        "--bootstrap",
+        "50",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.lines().any(|l| l.starts_with(
+            "warning: inter_cluster_rate not estimable: no inter-cluster gaps (fewer than 2 clusters at every position)"
+        )),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    let text = std::fs::read_to_string(&model).unwrap();
+    let toml: toml::Table = toml::from_str(&text).unwrap();
+    let lambda_big = toml["inter_cluster_rate"].as_table().unwrap();
+    assert!(
+        lambda_big.contains_key("not_estimable") && !lambda_big.contains_key("value"),
+        "{text}"
+    );
+    assert!(!text.to_lowercase().contains("nan"), "{text}");
+    let m = pradar::campaign::modelfile::ModelConfig::load(&model).unwrap();
+    assert!(!m.inter_cluster_rate.is_estimable());
+    for q in [&m.intra_cluster_rate, &m.intra_cluster_aoa, &m.ray_decay] {
+        assert!(q.is_estimable() && q.value > 0.0, "{q:?}");
+    }
+    // one warning per not-estimable quantity
+    let warnings = err.lines().filter(|l| l.starts_with("warning: ")).count();
+    assert_eq!(warnings, m.not_estimable().len(), "{err}");
+    // Table 1: the Λ row says why, the CSV leaves its numbers empty
+    let md = std::fs::read_to_string(&table).unwrap();
+    let row = md.lines().find(|l| l.contains("Λ")).unwrap();
+    assert!(
+        row.contains("not estimable: no inter-cluster gaps"),
+        "{row}"
+    );
+    let csv = std::fs::read_to_string(table.with_extension("csv")).unwrap();
+    let row = csv.lines().find(|l| l.contains("Λ")).unwrap();
+    assert!(row.contains(",,1/ns,,,"), "{row}");
+    // nothing estimable (no clusters at all): exit 1, one line, no model
+    let empty = tmp.path().join("empty.parquet");
+    write_clusters(&empty, Vec::new(), |m| m.position);
+    fit_fails_with_one_line(
+        tmp.path(),
+        &empty,
+        &man,
+        &[],
+        "no quantity can be estimated",
+    );
+}
+
+/// A discrete MPC at `position` (the corridor's array, the fit reads delay, angle, power).
+fn mpc(position: usize, delay_ns: f64, angle_rel_deg: f64, power_db: f64) -> pradar::mpc::Mpc {
+    pradar::mpc::Mpc {
+        position,
+        delay_ns,
+        angle_rel_deg,
+        angle_global_deg: angle_rel_deg,
+        power_db,
         snr_db: 30.0,
         x_m: 1.5,
         y_m: 0.0,
@@ -154,14 +243,18 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         bin: 60,
         component: pradar::mpc::Component::Discrete,
         wall: None,
-    }];
-    let params =
-        pradar::params::ParamGuard::check(&pradar::cluster::ClusterParams::default()).unwrap();
-    let c = pradar::cluster::cluster(&mpcs, &[0.0], &params).unwrap();
-    let cl = tmp.path().join("clusters.parquet");
-    pradar::cluster::write(&cl, &c).unwrap();
-    let man = write_campaign(&tmp.path().join("in"), &corridor());
-    fit_fails_with_one_line(tmp.path(), &cl, &man, &[], "inter_cluster_rate");
+    }
+}
+
+/// Write `mpcs` as a clusters table with the cluster ids `id` gives (no summaries).
+fn write_clusters(path: &Path, mpcs: Vec<pradar::mpc::Mpc>, id: fn(&pradar::mpc::Mpc) -> usize) {
+    let c = pradar::cluster::Clustering {
+        cluster_id: mpcs.iter().map(|m| Some(id(m))).collect(),
+        mpcs,
+        summary: Vec::new(),
+        positions: Vec::new(),
+    };
+    pradar::cluster::write(path, &c).unwrap();
 }
 
 /// `pradar fit` of `clusters` on campaign `man` (outputs in `dir`, `extra` flags added)

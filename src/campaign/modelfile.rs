@@ -378,4 +378,61 @@ mod tests {
             .contains("ray_decay.unit"));
         assert!((m.perimeter_spacing.value - 1.505).abs() < 1e-3);
     }
+
+    #[test]
+    fn not_estimable_round_trip_and_gate() {
+        let mut m = ModelConfig::table1_defaults();
+        let reason = "no inter-cluster gaps (fewer than 2 clusters at every position)";
+        m.inter_cluster_rate = Quantity {
+            n: Some(0),
+            ..Quantity::not_estimable("1/ns", "exponential", reason)
+        };
+        m.check().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("partial.toml");
+        m.save(&p).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(
+            text.contains(&format!("not_estimable = \"{reason}\"")),
+            "{text}"
+        );
+        assert!(!text.to_lowercase().contains("nan"), "{text}");
+        let back = ModelConfig::load(&p).unwrap();
+        let q = &back.inter_cluster_rate;
+        assert!(q.value.is_nan() && !q.is_estimable());
+        assert_eq!(q.not_estimable.as_deref(), Some(reason));
+        assert_eq!((q.unit.as_str(), q.n), ("1/ns", Some(0)));
+        assert_eq!(
+            back.not_estimable(),
+            vec![("inter_cluster_rate".to_string(), reason.to_string())]
+        );
+        // the rest is unchanged, and saving again writes the same file
+        assert_eq!(back.intra_cluster_rate, m.intra_cluster_rate);
+        let again = dir.path().join("again.toml");
+        back.save(&again).unwrap();
+        assert_eq!(text, std::fs::read_to_string(&again).unwrap());
+        // the generators' gate names the quantity and says how to supply it
+        let e = back
+            .require_estimable(&Default::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("inter_cluster_rate")
+                && e.contains(reason)
+                && e.contains("--set inter_cluster_rate=VALUE"),
+            "{e}"
+        );
+        let supplied = [("inter_cluster_rate".to_string(), 0.3)].into();
+        let filled = back.require_estimable(&supplied).unwrap();
+        assert_eq!(filled.inter_cluster_rate.value, 0.3);
+        assert!(filled.not_estimable().is_empty());
+        // a value beside the mark is refused
+        let mut both = back.clone();
+        both.inter_cluster_rate.value = 0.2;
+        assert!(both
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("inter_cluster_rate.value"));
+    }
 }

@@ -43,8 +43,23 @@
 //!
 //! Every quantity: estimate, 95 % bootstrap interval resampling whole positions in blocks
 //! ([`bootstrap_block`], seeded), KS statistic with its
-//! parametric-bootstrap p-value, and the candidate families ranked by AIC. Too few samples
-//! for a quantity is an error naming it (never NaN in the model).
+//! parametric-bootstrap p-value, and the candidate families ranked by AIC.
+//!
+//! Partial fits. A quantity these data cannot give is marked not estimable, with the
+//! reason in one short line, in the model file (`not_estimable = "<reason>"`, no value)
+//! and in Table 1 ("not estimable: <reason>"), and the others are fitted and written:
+//! * what marks a quantity: fewer than 2 samples (Λ with fewer than 2 clusters at every
+//!   position, λ and the AoA with single-ray clusters, d_p with fewer than 2 clusters in
+//!   the interior), a family that does not fit the samples or a value that is not finite
+//!   and positive, no cluster on the observed perimeter (d_c), no decaying trend or fewer
+//!   than 3 powers (Γ, γ), no clusters (the means). Too few positions for the bootstrap
+//!   only leave the interval out; too few complete gaps only d_c's families and KS.
+//! * what stays an error: bad input — an unreadable or malformed table, negative position
+//!   or cluster ids, a position outside the campaign, a delay or angle that is not finite,
+//!   a NaN power, a bad manifest or layout — and a fit where not one quantity can be
+//!   estimated (one line with every reason).
+//!
+//! Every entry of [`ChannelFit::details`] is present, a not-estimable one with no samples.
 //!
 //! Measurements behind these choices (closed-loop and coverage figures): `docs/fit.md`.
 
@@ -191,22 +206,21 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         block: bootstrap_block(m),
     };
     let mut details = BTreeMap::new();
-    for (name, q) in fit_arrivals(&s.inter, &s.intra, &aoa, delta, &r)? {
+    for (name, q) in fit_arrivals(&s.inter, &s.intra, &aoa, delta, &r) {
         details.insert(name.to_string(), q);
     }
     details.insert(
         "perimeter_offset".to_string(),
-        fit_offset(&s.dp, &s.dp_signed, &r)?,
+        fit_offset(&s.dp, &s.dp_signed, &r),
     );
     details.insert(
         "perimeter_spacing".to_string(),
-        fit_spacing(&s.dc, &s.exposure, &r)?,
+        fit_spacing(&s.dc, &s.exposure, &r),
     );
-    let cluster_decay =
-        decay_quantity(&s.cluster_pairs(), "cluster_decay", "cluster", 6, decay, &r)?;
-    let ray_decay = decay_quantity(&s.ray_decay, "ray_decay", "ray", 9, decay_lad0, &r)?;
-    let rays_per_cluster = mean_quantity(&s.members, "count", "poisson", 7, &r)?;
-    let cluster_rrcs = mean_quantity(&s.sigma, "m2", "lognormal", 8, &r)?;
+    let cluster_decay = decay_quantity(&s.cluster_pairs(), "cluster", 6, decay, &r);
+    let ray_decay = decay_quantity(&s.ray_decay, "ray", 9, decay_lad0, &r);
+    let rays_per_cluster = mean_quantity(&s.members, "count", "poisson", 7, &r);
+    let cluster_rrcs = mean_quantity(&s.sigma, "m2", "lognormal", 8, &r);
     let q = |k: &str| details[k].q.clone();
     let model = ModelConfig {
         schema_version: 1,
@@ -228,22 +242,66 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         diffuse: None,
     };
     model.check()?;
+    nothing_estimable(clusters, rays.len(), &model)?;
     Ok(ChannelFit {
         model,
-        dc_m: details["perimeter_spacing"].samples.clone(),
+        dc_m: details
+            .get("perimeter_spacing")
+            .map(|d| d.samples.clone())
+            .unwrap_or_default(),
         details,
     })
 }
 
+/// The error when not one quantity of `model` could be estimated (from `n` rays of
+/// `clusters`): one line with each quantity's reason.
+fn nothing_estimable(clusters: &Path, n: usize, model: &ModelConfig) -> Result<()> {
+    let m = model;
+    let all = [
+        &m.inter_cluster_rate,
+        &m.intra_cluster_rate,
+        &m.intra_cluster_aoa,
+        &m.perimeter_offset,
+        &m.perimeter_spacing,
+        &m.cluster_decay,
+        &m.ray_decay,
+        &m.rays_per_cluster,
+        &m.cluster_rrcs,
+    ];
+    if all.iter().any(|q| q.is_estimable()) {
+        return Ok(());
+    }
+    let why: Vec<String> = (m.not_estimable().iter())
+        .map(|(q, r)| format!("{q}: {r}"))
+        .collect();
+    Err(Error::input(
+        clusters,
+        format!(
+            "no quantity can be estimated from {n} rays ({})",
+            why.join("; ")
+        ),
+    ))
+}
+
 /// The rays keyed by (position, cluster): truth cluster ids name objects seen from many
-/// positions. A position outside the campaign is an error naming `path`.
+/// positions. A position outside the campaign, a delay or angle that is not finite or a
+/// NaN power is an error naming `path` (bad input, not a quantity left unestimated).
 fn group_clusters(
     path: &Path,
     rays: &[Ray],
     np: usize,
 ) -> Result<BTreeMap<(usize, usize), Vec<Ray>>> {
     let mut by_cluster: BTreeMap<(usize, usize), Vec<Ray>> = BTreeMap::new();
-    for r in rays {
+    for (i, r) in rays.iter().enumerate() {
+        if !(r.delay_ns.is_finite() && r.angle_rel_deg.is_finite()) || r.power_db.is_nan() {
+            return Err(Error::input(
+                path,
+                format!(
+                    "ray {i} (position {}, cluster {}): delay_ns and angle_rel_deg must be finite, power_db a number",
+                    r.position, r.cluster
+                ),
+            ));
+        }
         if r.position >= np {
             return Err(Error::input(
                 path,
@@ -531,5 +589,58 @@ mod tests {
             "{dc}"
         );
         assert!(dc.contains(",exponential,,,"), "{dc}");
+    }
+
+    #[test]
+    fn bad_input_stays_an_error_and_no_data_estimate_nothing() {
+        let (_dir, c) = hall_at_centre(2);
+        let p = FitParams::default().check().unwrap();
+        let ray = |delay_ns: f64| Ray {
+            position: 0,
+            cluster: 0,
+            delay_ns,
+            angle_rel_deg: 0.0,
+            power_db: -90.0,
+        };
+        let path = Path::new("clusters.parquet");
+        let e = fit_rays(path, vec![ray(f64::NAN)], &c, &p)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("clusters.parquet") && e.contains("finite"),
+            "{e}"
+        );
+        let e = fit_rays(
+            path,
+            vec![Ray {
+                position: 5,
+                ..ray(10.0)
+            }],
+            &c,
+            &p,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("outside the campaign"), "{e}");
+        let e = fit_rays(path, Vec::new(), &c, &p).unwrap_err().to_string();
+        assert!(
+            e.contains("no quantity can be estimated from 0 rays")
+                && e.contains("rays_per_cluster: no clusters")
+                && !e.contains('\n'),
+            "{e}"
+        );
+        // a single ray: the means are fitted, the rest marked with their reasons, and every
+        // entry of `details` is there (the not-estimable ones without samples)
+        let f = fit_rays(path, vec![ray(10.0)], &c, &p).unwrap();
+        assert_eq!(f.model.rays_per_cluster.value, 1.0);
+        assert_eq!(f.details.len(), 5);
+        let ne = f.model.not_estimable();
+        assert!(ne.iter().any(|(q, r)| q == "intra_cluster_rate"
+            && r == "no intra-cluster gaps (every cluster has a single ray)"));
+        assert!(f.details["inter_cluster_rate"].samples.is_empty());
+        let rows = crate::fit::table1::rows(&f, Some(&f));
+        assert!(rows[0].value.is_nan());
+        assert!(rows[0].value_shown.starts_with("not estimable: "));
+        assert_eq!(rows[0].truth_shown(), rows[0].value_shown);
     }
 }

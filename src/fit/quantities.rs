@@ -13,9 +13,15 @@
 //!
 //! Every resampling stream is keyed by the seed and the quantity's own offset, so the
 //! quantities do not depend on the order they are fitted in.
+//!
+//! None of these estimators fails: a quantity the samples cannot give (fewer than 2
+//! samples, a family that does not fit them, no decaying trend, no samples at all) comes
+//! back not estimable ([`Quantity::not_estimable`]) with the reason in one short line, and
+//! the others are fitted as usual. Bad input is refused before the samples are gathered
+//! ([`channel`](super::channel)).
 
 use crate::campaign::modelfile::Quantity;
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::fit::estimators::{bootstrap_groups, fit, ks_bootstrap, Family, Fitted};
 
 /// A fitted quantity with its diagnostics.
@@ -27,8 +33,34 @@ pub struct FittedQuantity {
     pub aic: Vec<(String, f64)>,
     /// Samples per position (for plots).
     pub samples: Vec<f64>,
-    /// The fitted law of the samples.
+    /// The fitted law of the samples (no parameters when not estimable).
     pub fitted: Fitted,
+}
+
+impl FittedQuantity {
+    /// A quantity the samples cannot give: `reason` in the model entry, no samples, no
+    /// families; `n` the samples there were.
+    pub fn not_estimable(
+        unit: &str,
+        family: Family,
+        reason: impl Into<String>,
+        n: usize,
+    ) -> FittedQuantity {
+        FittedQuantity {
+            q: Quantity {
+                n: Some(n),
+                ..Quantity::not_estimable(unit, family.name(), reason)
+            },
+            aic: Vec::new(),
+            samples: Vec::new(),
+            fitted: Fitted {
+                family,
+                params: Vec::new(),
+                loglik: 0.0,
+                n: 0,
+            },
+        }
+    }
 }
 
 /// Samples grouped by position.
@@ -55,18 +87,32 @@ pub(super) struct Resampling {
     pub(super) block: usize,
 }
 
-/// What to fit to a quantity's samples: its name and unit, the family whose fit gives the
-/// value and the candidate families ranked by AIC.
+/// What to fit to a quantity's samples: its unit, the family whose fit gives the value,
+/// the candidate families ranked by AIC, and the samples' names for the reasons of a
+/// quantity that is not estimable.
 struct Spec<'a> {
-    name: &'a str,
     unit: &'a str,
     family: Family,
     candidates: &'a [Family],
+    /// The samples (plural, e.g. "inter-cluster gaps").
+    what: &'a str,
+    /// Why there are none (e.g. "fewer than 2 clusters at every position").
+    none: &'a str,
+}
+
+/// The message of an estimator error (a parameter error's text without its field).
+fn message(e: &Error) -> String {
+    match e {
+        Error::Param { msg, .. } => msg.clone(),
+        other => other.to_string(),
+    }
 }
 
 /// Fit one sampled quantity: `spec.family` gives the estimate through `value` (from the
 /// fit) and its interval by the position bootstrap, unless another estimator `given` them
 /// (value, interval): then the samples give only the families, KS and plots (d_p, d_c).
+/// Fewer than 2 samples, a family that does not fit them or a value that is not finite
+/// and positive: not estimable, with the reason.
 fn quantity(
     spec: &Spec,
     groups: &Groups,
@@ -74,16 +120,35 @@ fn quantity(
     given: Option<(f64, Option<[f64; 2]>)>,
     r: &Resampling,
     seed_off: u64,
-) -> Result<FittedQuantity> {
-    let (name, family) = (spec.name, spec.family);
+) -> FittedQuantity {
+    let family = spec.family;
     let x = flat(groups);
-    let f = fit(family, &x)
-        .map_err(|e| Error::param(name, format!("cannot fit ({} samples): {e}", x.len())))?;
+    let n = x.len();
+    let not_estimable =
+        |reason: String| FittedQuantity::not_estimable(spec.unit, family, reason, n);
+    if n == 0 {
+        return not_estimable(format!("no {} ({})", spec.what, spec.none));
+    }
+    if n < 2 {
+        return not_estimable(format!("{}: 1 sample, at least 2 needed", spec.what));
+    }
+    let f = match fit(family, &x) {
+        Ok(f) => f,
+        Err(e) => {
+            return not_estimable(format!(
+                "no {} fit to {n} {}: {}",
+                family.name(),
+                spec.what,
+                message(&e)
+            ))
+        }
+    };
     let v = given.map_or_else(|| value(&f), |g| g.0);
     if !v.is_finite() || v <= 0.0 {
-        return Err(Error::param(
-            name,
-            format!("fit gave {v} from {} samples", x.len()),
+        return not_estimable(format!(
+            "the {} fit to {n} {} gave {v}",
+            family.name(),
+            spec.what
         ));
     }
     let interval = match given {
@@ -103,21 +168,18 @@ fn quantity(
         .filter_map(|c| fit(*c, &x).ok().map(|f| (c.name().to_string(), f.aic())))
         .collect();
     aic.sort_by(|a, b| a.1.total_cmp(&b.1));
-    Ok(FittedQuantity {
+    FittedQuantity {
         q: Quantity {
-            value: v,
-            unit: spec.unit.into(),
-            family: family.name().into(),
             interval,
             ks: Some(ks),
             ks_p: Some(ks_p),
-            n: Some(x.len()),
-            not_estimable: None,
+            n: Some(n),
+            ..Quantity::new(v, spec.unit, family.name())
         },
         aic,
         samples: x,
         fitted: f,
-    })
+    }
 }
 
 /// Λ, λ (shifted-exponential rates) and the AoA std (√2 times the Laplacian scale).
@@ -127,30 +189,37 @@ pub(super) fn fit_arrivals(
     aoa: &Groups,
     delta: f64,
     r: &Resampling,
-) -> Result<Vec<(&'static str, FittedQuantity)>> {
+) -> Vec<(&'static str, FittedQuantity)> {
     let sh = Family::ShiftedExponential { delta };
     let arrival_cands = [sh, Family::Gamma, Family::LogNormal, Family::Rayleigh];
-    let arrivals = |name| Spec {
-        name,
+    let arrivals = |what, none| Spec {
         unit: "1/ns",
         family: sh,
         candidates: &arrival_cands,
+        what,
+        none,
     };
     let rate = |f: &Fitted| f.params[0];
-    let inter = quantity(&arrivals("inter_cluster_rate"), inter, rate, None, r, 1)?;
-    let intra = quantity(&arrivals("intra_cluster_rate"), intra, rate, None, r, 2)?;
+    let inter_spec = arrivals(
+        "inter-cluster gaps",
+        "fewer than 2 clusters at every position",
+    );
+    let inter = quantity(&inter_spec, inter, rate, None, r, 1);
+    let intra_spec = arrivals("intra-cluster gaps", "every cluster has a single ray");
+    let intra = quantity(&intra_spec, intra, rate, None, r, 2);
     let aoa_spec = Spec {
-        name: "intra_cluster_aoa",
         unit: "deg",
         family: Family::Laplacian,
         candidates: &[Family::Laplacian, Family::Gaussian],
+        what: "AoA offsets",
+        none: "every cluster has a single ray",
     };
-    let aoa = quantity(&aoa_spec, aoa, |f| 2f64.sqrt() * f.params[1], None, r, 3)?;
-    Ok(vec![
+    let aoa = quantity(&aoa_spec, aoa, |f| 2f64.sqrt() * f.params[1], None, r, 3);
+    vec![
         ("inter_cluster_rate", inter),
         ("intra_cluster_rate", intra),
         ("intra_cluster_aoa", aoa),
-    ])
+    ]
 }
 
 /// Families of the perimeter statistics.
@@ -170,53 +239,55 @@ fn exponential_mean(f: &Fitted) -> f64 {
 }
 
 /// d_p: families, KS and samples from the folded offsets; the value and its interval from
-/// the mean signed offset (floored at 1 mm).
-pub(super) fn fit_offset(
-    dp: &Groups,
-    dp_signed: &Groups,
-    r: &Resampling,
-) -> Result<FittedQuantity> {
+/// the mean signed offset (floored at 1 mm). Not estimable when the folded offsets give no
+/// exponential fit (fewer than 2 clusters inside the observed interior).
+pub(super) fn fit_offset(dp: &Groups, dp_signed: &Groups, r: &Resampling) -> FittedQuantity {
     let signed = (
         mean(&flat(dp_signed)).map_or(1e-3, |v| v.max(1e-3)),
         bootstrap_groups(dp_signed, mean, r.bootstrap, r.seed ^ 4, r.block)
             .map(|[lo, hi]| [lo.max(1e-3), hi.max(1e-3)]),
     );
     let spec = Spec {
-        name: "perimeter_offset",
         unit: "m",
         family: Family::Exponential,
         candidates: &PERIMETER_CANDIDATES,
+        what: "perimeter offsets",
+        none: "no cluster inside the observed interior",
     };
     quantity(&spec, dp, exponential_mean, Some(signed), r, 4)
 }
 
 /// d_c: families, KS and samples from the complete gaps; the value and its interval from
 /// the censored (exposure) estimate Σ L / Σ k. Fewer than two complete gaps (a gap needs
-/// two clusters on one observed stretch) leave the families and KS empty ("—" in the
-/// table, no plot), not the value.
-pub(super) fn fit_spacing(
-    dc: &Groups,
-    exposure: &Groups,
-    r: &Resampling,
-) -> Result<FittedQuantity> {
+/// two clusters on one observed stretch), or gaps no exponential fits, leave the families
+/// and KS empty ("—" in the table, no plot), not the value. No cluster on the observed
+/// perimeter: not estimable.
+pub(super) fn fit_spacing(dc: &Groups, exposure: &Groups, r: &Resampling) -> FittedQuantity {
     let per_cluster = |s: &[f64]| {
         let (l, k) = s
             .chunks(2)
             .fold((0.0, 0.0), |(l, k), c| (l + c[0], k + c[1]));
         (k > 0.0).then(|| l / k)
     };
-    let censored = per_cluster(&flat(exposure))
-        .ok_or_else(|| Error::param("perimeter_spacing", "no cluster on the observed perimeter"))?;
-    let censored_iv = bootstrap_groups(exposure, per_cluster, r.bootstrap, r.seed ^ 5, r.block);
     let complete_gaps = flat(dc);
+    let Some(censored) = per_cluster(&flat(exposure)).filter(|v| v.is_finite() && *v > 0.0) else {
+        return FittedQuantity::not_estimable(
+            "m",
+            Family::Exponential,
+            "no cluster on the observed perimeter",
+            complete_gaps.len(),
+        );
+    };
+    let censored_iv = bootstrap_groups(exposure, per_cluster, r.bootstrap, r.seed ^ 5, r.block);
     if complete_gaps.len() >= 2 {
         let spec = Spec {
-            name: "perimeter_spacing",
             unit: "m",
             family: Family::Exponential,
             candidates: &PERIMETER_CANDIDATES,
+            what: "complete perimeter gaps",
+            none: "",
         };
-        return quantity(
+        let q = quantity(
             &spec,
             dc,
             exponential_mean,
@@ -224,17 +295,15 @@ pub(super) fn fit_spacing(
             r,
             5,
         );
+        if q.q.is_estimable() {
+            return q;
+        }
     }
-    Ok(FittedQuantity {
+    FittedQuantity {
         q: Quantity {
-            value: censored,
-            unit: "m".into(),
-            family: Family::Exponential.name().into(),
             interval: censored_iv,
-            ks: None,
-            ks_p: None,
             n: Some(complete_gaps.len()),
-            not_estimable: None,
+            ..Quantity::new(censored, "m", Family::Exponential.name())
         },
         aic: Vec::new(),
         samples: complete_gaps,
@@ -245,26 +314,30 @@ pub(super) fn fit_spacing(
             loglik: 0.0,
             n: 0,
         },
-    })
+    }
 }
 
 /// A power-decay constant from (excess delay, relative power dB) pairs per position, with
-/// its position-bootstrap interval; `what` names the powers in the error.
+/// its position-bootstrap interval; `what` names the powers in the reason when there is no
+/// decaying trend (or fewer than 3 pairs): then not estimable.
 pub(super) fn decay_quantity(
     pairs: &[Vec<(f64, f64)>],
-    name: &str,
     what: &str,
     seed: u64,
     decay: fn(&[(f64, f64)]) -> Option<f64>,
     r: &Resampling,
-) -> Result<Quantity> {
+) -> Quantity {
     let all: Vec<(f64, f64)> = pairs.iter().flatten().copied().collect();
-    let v = decay(&all).ok_or_else(|| {
-        Error::param(
-            name,
-            format!("no decaying trend in {} {what} powers", all.len()),
-        )
-    })?;
+    let Some(v) = decay(&all).filter(|v| v.is_finite() && *v > 0.0) else {
+        return Quantity {
+            n: Some(all.len()),
+            ..Quantity::not_estimable(
+                "ns",
+                "exponential",
+                format!("no decaying trend in {} {what} powers", all.len()),
+            )
+        };
+    };
     let enc: Groups = pairs
         .iter()
         .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
@@ -276,40 +349,38 @@ pub(super) fn decay_quantity(
         r.seed ^ seed,
         r.block,
     );
-    Ok(Quantity {
-        value: v,
-        unit: "ns".into(),
-        family: "exponential".into(),
+    Quantity {
         interval: iv,
-        ks: None,
-        ks_p: None,
         n: Some(all.len()),
-        not_estimable: None,
-    })
+        ..Quantity::new(v, "ns", "exponential")
+    }
 }
 
-/// The mean of the samples with its position-bootstrap interval (rays per cluster, σ).
+/// The mean of the samples with its position-bootstrap interval (rays per cluster, σ); not
+/// estimable without clusters (or when the mean is not finite and positive).
 pub(super) fn mean_quantity(
     g: &Groups,
     unit: &str,
     family: &str,
     seed: u64,
     r: &Resampling,
-) -> Result<Quantity> {
+) -> Quantity {
     let x = flat(g);
-    let Some(value) = mean(&x) else {
-        return Err(Error::param(unit, "no samples"));
+    let reason = match mean(&x) {
+        None => "no clusters".to_string(),
+        Some(v) if v.is_finite() && v > 0.0 => {
+            return Quantity {
+                interval: bootstrap_groups(g, mean, r.bootstrap, r.seed ^ seed, r.block),
+                n: Some(x.len()),
+                ..Quantity::new(v, unit, family)
+            }
+        }
+        Some(v) => format!("the mean of {} clusters is {v}", x.len()),
     };
-    Ok(Quantity {
-        value,
-        unit: unit.into(),
-        family: family.into(),
-        interval: bootstrap_groups(g, mean, r.bootstrap, r.seed ^ seed, r.block),
-        ks: None,
-        ks_p: None,
+    Quantity {
         n: Some(x.len()),
-        not_estimable: None,
-    })
+        ..Quantity::not_estimable(unit, family, reason)
+    }
 }
 
 /// Least-squares decay constant from (delay, dB) pairs: −10·log10(e)/slope.

@@ -15,6 +15,9 @@
 //!   hi, family, ks_p, best_aic, paper, truth`; numbers at full precision, empty where
 //!   missing; `paper` and `truth` in the value's unit. The paper's d_c, 5.02 ns, is read
 //!   one-way as metres (1.505 m, as [`ModelConfig::table1_defaults`]).
+//! * A quantity the fit could not estimate shows "not estimable: <reason>" in the value
+//!   cell (and "—" for its interval and KS p); its CSV value, lo, hi and ks_p are empty.
+//!   The same holds for the truth column.
 //!
 //! [`ModelConfig::table1_defaults`]: crate::campaign::modelfile::ModelConfig::table1_defaults
 
@@ -30,11 +33,12 @@ use std::path::Path;
 pub struct Table1Row {
     /// The quantity's name in the table.
     pub parameter: &'static str,
-    /// Our estimate, in `unit`.
+    /// Our estimate, in `unit` (NaN when not estimable).
     pub value: f64,
     /// Its unit.
     pub unit: String,
-    /// The estimate as the table shows it (with its unit; d_c also in ns and with its std).
+    /// The estimate as the table shows it (with its unit; d_c also in ns and with its std),
+    /// or "not estimable: <reason>".
     pub value_shown: String,
     /// 95 % position-bootstrap interval.
     pub interval: Option<[f64; 2]>,
@@ -46,7 +50,8 @@ pub struct Table1Row {
     pub best_aic: String,
     /// The paper's value in `unit` and as the table shows it.
     pub paper: Option<(f64, &'static str)>,
-    /// The same estimators on the simulator's truth: its value and its shown text.
+    /// The same estimators on the simulator's truth: its value (NaN when not estimable)
+    /// and its shown text.
     pub truth: Option<(f64, String)>,
 }
 
@@ -65,9 +70,17 @@ impl Table1Row {
 
     fn cells(&self) -> Vec<Cell> {
         let opt = |v: Option<f64>| v.map_or(Cell::missing(""), |v| Cell::num(v, ""));
+        // a value that is not a number (not estimable): its text, an empty CSV field
+        let value = |v: f64, shown: &str| {
+            if v.is_nan() {
+                Cell::missing(shown)
+            } else {
+                Cell::num(v, shown)
+            }
+        };
         vec![
             Cell::text(self.parameter),
-            Cell::num(self.value, self.value_shown.clone()),
+            value(self.value, &self.value_shown),
             Cell::text(self.unit.clone()),
             match self.interval {
                 Some([lo, hi]) => Cell::interval(lo, hi, self.interval_shown()),
@@ -83,9 +96,7 @@ impl Table1Row {
                 .map_or(Cell::missing("—"), |(v, shown)| Cell::num(v, shown)),
             self.truth
                 .as_ref()
-                .map_or(Cell::missing("—"), |(v, shown)| {
-                    Cell::num(*v, shown.clone())
-                }),
+                .map_or(Cell::missing("—"), |(v, shown)| value(*v, shown)),
         ]
     }
 }
@@ -154,7 +165,10 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
         parameter,
         value: q.value,
         unit: q.unit.clone(),
-        value_shown: format!("{:.3} {}", q.value, q.unit),
+        value_shown: match &q.not_estimable {
+            Some(reason) => not_estimable_shown(reason),
+            None => format!("{:.3} {}", q.value, q.unit),
+        },
         interval: q.interval,
         family: q.family.clone(),
         ks_p: q.ks_p,
@@ -209,9 +223,17 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
     ]
 }
 
+/// A value cell's text when the quantity is not estimable.
+fn not_estimable_shown(reason: &str) -> String {
+    format!("not estimable: {reason}")
+}
+
 /// d_c as shown: the mean spacing (the model value, the censored estimate) in m and ns
 /// one-way / round-trip, and the std of the complete gaps.
 fn spacing_shown(f: &ChannelFit) -> String {
+    if let Some(reason) = &f.model.perimeter_spacing.not_estimable {
+        return not_estimable_shown(reason);
+    }
     let dc = &f.dc_m;
     let n = dc.len().max(1) as f64;
     let dc_mean = f.model.perimeter_spacing.value;

@@ -471,6 +471,16 @@ pub struct FitSummary {
     pub truth: Option<ChannelFit>,
 }
 
+impl FitSummary {
+    /// One line per quantity of the fit that is not estimable (the command line prints each
+    /// after `warning: `): "`<quantity>` not estimable: `<reason>`".
+    pub fn warnings(&self) -> Vec<String> {
+        (self.fit.model.not_estimable().into_iter())
+            .map(|(q, r)| format!("{q} not estimable: {r}"))
+            .collect()
+    }
+}
+
 impl fmt::Display for FitSummary {
     /// One line per Table 1 row: parameter, value, interval, truth.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -494,7 +504,9 @@ impl fmt::Display for FitSummary {
 
 /// Run `pradar fit` ([`crate::fit::channel::fit_channel`], and
 /// [`crate::fit::channel::fit_truth`] with a truth folder); writes the model file and
-/// Table 1.
+/// Table 1. A partial fit is written with its not-estimable quantities marked
+/// ([`FitSummary::warnings`] lists them); a fit where no quantity can be estimated is an
+/// error and writes nothing.
 pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     let c = Campaign::load(&cmd.campaign)?;
     let params = cmd.params.check()?;

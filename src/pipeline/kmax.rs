@@ -9,7 +9,7 @@
 //! positions whose K changed against the default is its own column).
 
 use crate::campaign::manifest::Campaign;
-use crate::campaign::modelfile::ModelConfig;
+use crate::campaign::modelfile::{ModelConfig, Quantity};
 use crate::cluster;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
@@ -83,20 +83,23 @@ fn kmax_table() -> Table {
     ])
 }
 
-/// One row: the cap, the K range, and the fit's cluster-count quantities ("—" without a fit).
+/// One row: the cap, the K range, and the fit's cluster-count quantities ("—" without a fit,
+/// "not estimable" where the fit could not estimate one; both empty in a CSV).
 fn kmax_row(label: String, ks: String, changed: Cell, f: Option<&ChannelFit>) -> Vec<Cell> {
-    let v = |g: fn(&ModelConfig) -> f64, digits: usize| {
-        f.map_or(Cell::missing("—"), |f| Cell::fixed(g(&f.model), digits))
+    let v = |g: fn(&ModelConfig) -> &Quantity, digits: usize| match f.map(|f| g(&f.model)) {
+        None => Cell::missing("—"),
+        Some(q) if !q.is_estimable() => Cell::missing("not estimable"),
+        Some(q) => Cell::fixed(q.value, digits),
     };
     vec![
         Cell::text(label),
         Cell::text(ks),
         changed,
-        v(|m| m.inter_cluster_rate.value, 3),
-        v(|m| m.perimeter_spacing.value, 2),
-        v(|m| m.intra_cluster_rate.value, 3),
-        v(|m| m.intra_cluster_aoa.value, 1),
-        v(|m| m.ray_decay.value, 2),
+        v(|m| &m.inter_cluster_rate, 3),
+        v(|m| &m.perimeter_spacing, 2),
+        v(|m| &m.intra_cluster_rate, 3),
+        v(|m| &m.intra_cluster_aoa, 1),
+        v(|m| &m.ray_decay, 2),
     ]
 }
 

@@ -6,7 +6,9 @@
 //!
 //! Options are checked once ([`ReproduceOptions`] → [`ReproduceValid`]). A failed fit, K_max
 //! table or geometry-only table is reported on the page, not raised: the rest of the report
-//! still stands; any other error stops the job.
+//! still stands; any other error stops the job. A partial fit (a quantity not estimable) is
+//! written and shown with its reasons in Table 1; the experiments, whose model data need
+//! every quantity, are then not run and the page says why.
 
 use super::experiment::{self, ExperimentValid};
 use super::geometry::geometry_only_table;
@@ -231,7 +233,8 @@ fn table1_section(s: &Simulated, a: &Analysis, work: &Path, out: &Path) -> Resul
     Ok(page::table1_html(&note, &table1, &kmax))
 }
 
-/// `out/fit_<quantity>.png` per fitted quantity with at least 2 samples.
+/// `out/fit_<quantity>.png` per fitted quantity with at least 2 samples (none for a quantity
+/// that is not estimable: it has no samples, and Table 1 says why).
 fn write_fit_plots(f: &ChannelFit, out: &Path) -> Result<Vec<FitPlot>> {
     let mut plots = Vec::new();
     for (name, d) in &f.details {
@@ -305,15 +308,22 @@ fn write_plots(s: &Simulated, a: &Analysis, out: &Path, progress: Progress) -> R
 }
 
 /// The mapping experiments on the simulated sweeps and the fitted model, into
-/// `out/experiments` (not run when the fit failed).
+/// `out/experiments` (not run when the fit failed or left a quantity not estimable: the
+/// model data need every quantity).
 fn run_experiments(
     opts: &ReproduceValid,
     s: &Simulated,
     fit: &Result<ChannelFit>,
     progress: Progress,
 ) -> Result<Vec<Section>> {
-    if let Err(e) = fit {
-        return Ok(vec![page::experiments_not_run(e)]);
+    match fit {
+        Err(e) => return Ok(vec![page::experiments_not_run(e)]),
+        Ok(f) if !f.model.not_estimable().is_empty() => {
+            return Ok(vec![page::experiments_not_run_partial(
+                &f.model.not_estimable(),
+            )])
+        }
+        Ok(_) => {}
     }
     let inputs = experiment::ExperimentInputs {
         campaign: s.sim.manifest.clone(),

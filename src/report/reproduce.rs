@@ -108,6 +108,22 @@ pub fn experiments_not_run(e: &dyn std::fmt::Display) -> Section {
     }
 }
 
+/// `<p>not run: the fitted model leaves … not estimable (…)</p>`, the experiments' section
+/// when the fit is partial: their model data (`synth`) need every quantity.
+pub fn experiments_not_run_partial(not_estimable: &[(String, String)]) -> Section {
+    let which: Vec<String> = not_estimable
+        .iter()
+        .map(|(q, r)| format!("{q} ({r})"))
+        .collect();
+    Section {
+        title: "Experiments".into(),
+        html: format!(
+            "<p>not run: the fitted model leaves {} not estimable, and the model data need every quantity</p>",
+            html_escape(&which.join(", "))
+        ),
+    }
+}
+
 /// A fit plot of Table 1: `Some(png)` when drawn, `None` when the quantity had fewer than
 /// 2 samples.
 pub type FitPlot = (String, Option<String>);
