@@ -135,9 +135,12 @@ pub fn fit_channel(clusters: &Path, c: &Campaign, p: &FitValid) -> Result<Channe
     Ok(f)
 }
 
-/// The same estimators applied to the simulator's true clutter clusters
-/// (`truth_dir/rays.parquet`: the clutter rays seen from each position, in the half-plane
-/// and within the energy table's delay span) — the reference the chain is scored against.
+/// The same estimators applied to the simulator's true clusters (`truth_dir/rays.parquet`
+/// grouped by `truth_cluster`, defined in `docs/campaign.md`, "True clusters of a
+/// simulated scene"; the diffuse rows, −1, are dropped), seen from each position in the half-plane
+/// and within the energy table's delay span — the reference the chain is scored against.
+/// An older `rays.parquet` without `truth_cluster` falls back to `cluster_id` (clutter
+/// clusters only).
 pub fn fit_truth(truth_dir: &Path, c: &Campaign, p: &FitValid) -> Result<ChannelFit> {
     let path = truth_dir.join("rays.parquet");
     let max = c.manifest.processing.max_delay_ns;
@@ -148,10 +151,18 @@ pub fn fit_truth(truth_dir: &Path, c: &Campaign, p: &FitValid) -> Result<Channel
     fit_rays(&path, rays, c, p)
 }
 
+/// The rays of a clustered MPC table (`truth = false`: grouped by `cluster_id`, all ≥ 0)
+/// or of a truth `rays.parquet` (`truth = true`: grouped by `truth_cluster`, else
+/// `cluster_id` in files written before it; rows with −1 are dropped).
 fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
     let df = table::read_parquet(path, None)?;
     let pos = table::i64_column(path, &df, "position")?;
-    let cid = table::i64_column(path, &df, "cluster_id")?;
+    let column = if truth && df.column("truth_cluster").is_ok() {
+        "truth_cluster"
+    } else {
+        "cluster_id"
+    };
+    let cid = table::i64_column(path, &df, column)?;
     let d = table::f64_column(path, &df, "delay_ns")?;
     let a = table::f64_column(path, &df, "angle_rel_deg")?;
     let pw = table::f64_column(path, &df, "power_db")?;
@@ -165,7 +176,7 @@ fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
             if pos[i] < 0 || cid[i] < 0 {
                 return Err(Error::input(
                     path,
-                    format!("row {i}: negative position or cluster_id"),
+                    format!("row {i}: negative position or {column}"),
                 ));
             }
             Ok(Ray {
@@ -642,5 +653,40 @@ mod tests {
         assert!(rows[0].value.is_nan());
         assert!(rows[0].value_shown.starts_with("not estimable: "));
         assert_eq!(rows[0].truth_shown(), rows[0].value_shown);
+    }
+
+    #[test]
+    fn truth_rays_group_by_truth_cluster_else_cluster_id() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rays.parquet");
+        let cols = |with_truth: bool| {
+            let mut v = vec![
+                table::col("position", vec![0i32, 0, 1, 1]),
+                table::col("cluster_id", vec![0i64, -1, -1, 1]),
+                table::col("delay_ns", vec![10.0, 11.0, 12.0, 13.0]),
+                table::col("angle_rel_deg", vec![0.0; 4]),
+                table::col("power_db", vec![-60.0; 4]),
+            ];
+            if with_truth {
+                // a clutter ray, a diffuse row (−1), a corner (one-ray cluster 2), clutter
+                v.push(table::col("truth_cluster", vec![0i64, -1, 2, 1]));
+            }
+            table::frame(&path, v).unwrap()
+        };
+        let clusters = |truth: bool| {
+            read_rays(&path, truth)
+                .unwrap()
+                .iter()
+                .map(|r| (r.position, r.cluster))
+                .collect::<Vec<_>>()
+        };
+        table::write_parquet(&path, &cols(true), vec![]).unwrap();
+        assert_eq!(clusters(true), [(0, 0), (1, 2), (1, 1)]);
+        // an older truth file: the clutter clusters of `cluster_id`
+        table::write_parquet(&path, &cols(false), vec![]).unwrap();
+        assert_eq!(clusters(true), [(0, 0), (1, 1)]);
+        // a clustered MPC table never has −1
+        let e = read_rays(&path, false).unwrap_err().to_string();
+        assert!(e.contains("cluster_id"), "{e}");
     }
 }

@@ -315,14 +315,14 @@ impl Response {
     fn truth_rows(&self, rays: &[SeenRay]) -> Vec<TruthRay> {
         let (g0, lc) = (self.g0, self.lc);
         rays.iter()
-            .map(|r| TruthRay {
-                scatterer_id: -1,
-                kind: "clutter",
-                cluster_id: r.cluster as i64,
-                pos: r.pos,
-                delay_ns: r.tau_s * 1e9,
-                angle_global_deg: r.theta.to_degrees(),
-                power_db: 10.0 * (g0 * g0 * lc * lc * r.amp2).log10(),
+            .map(|r| {
+                TruthRay::model_cluster(
+                    r.cluster,
+                    r.pos,
+                    r.tau_s * 1e9,
+                    r.theta.to_degrees(),
+                    10.0 * (g0 * g0 * lc * lc * r.amp2).log10(),
+                )
             })
             .collect()
     }

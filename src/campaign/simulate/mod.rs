@@ -157,6 +157,7 @@ pub fn simulate(
     let mut rays = table::ParquetStream::create(&rays_path)?;
     let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
     let lc = C0 / m.band.center_hz();
+    let ids = truth::TruthIds::of(&scene);
     for p in 0..np {
         let pose = m.poses[p];
         let at = Coord {
@@ -172,7 +173,7 @@ pub fn simulate(
             s21: synth.position(p, pose.heading_deg.to_radians(), &paths),
         };
         sweeps.write(&m.band, &sw, &m.name)?;
-        let rows = truth::truth_rays(&scene, &paths, g0, lc);
+        let rows = truth::truth_rays(&scene, &ids, &paths, g0, lc);
         rays.write(&truth_rays_frame(&rays_path, p, pose.heading_deg, &rows)?)?;
         progress(p + 1, np);
     }

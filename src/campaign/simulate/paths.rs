@@ -28,6 +28,9 @@ pub struct Path1 {
     pub scatterer: usize,
     /// Kind.
     pub kind: ScattererKind,
+    /// The wall of a specular path or of a diffuse wall scatterer (index into the layout's
+    /// `walls`).
+    pub wall: Option<usize>,
     /// Reflection point, m.
     pub pos: Coord<f64>,
 }
@@ -77,13 +80,14 @@ impl Scene {
             amp,
             scatterer: i,
             kind: s.kind,
+            wall: s.wall,
             pos: s.pos,
         })
     }
 
     /// The specular (normal-incidence) path of every wall seen from `at`, appended to `out`.
     fn specular_paths(&self, at: Coord<f64>, out: &mut Vec<Path1>) {
-        for w in &self.layout.walls {
+        for (wi, w) in self.layout.walls.iter().enumerate() {
             let dl = w.line.delta();
             let l2 = dl.x * dl.x + dl.y * dl.y;
             let t = ((at.x - w.line.start.x) * dl.x + (at.y - w.line.start.y) * dl.y) / l2;
@@ -104,6 +108,7 @@ impl Scene {
                 amp: gamma / (4.0 * PI * 2.0 * d),
                 scatterer: usize::MAX,
                 kind: ScattererKind::Specular,
+                wall: Some(wi),
                 pos: foot,
             });
         }

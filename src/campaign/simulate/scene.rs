@@ -227,6 +227,8 @@ pub struct Scatterer {
     pub anchor: Coord<f64>,
     /// Free-side unit normal for Lambertian weighting (diffuse only).
     pub normal: Option<Coord<f64>>,
+    /// The wall it lies on (index into the layout's `walls`; diffuse only).
+    pub wall: Option<usize>,
 }
 
 impl Scatterer {
@@ -239,7 +241,16 @@ impl Scatterer {
             cluster: None,
             anchor: pos,
             normal: None,
+            wall: None,
         }
+    }
+
+    /// A discrete point scatterer (corner, edge or target): its own one-ray true cluster.
+    pub fn is_discrete(&self) -> bool {
+        matches!(
+            self.kind,
+            ScattererKind::Corner | ScattererKind::Edge | ScattererKind::Target
+        )
     }
 }
 
@@ -314,7 +325,7 @@ fn diffuse_walls(
 ) {
     let cell = C0 / (2.0 * bandwidth_hz);
     let density = cfg.scatterers_per_cell / cell;
-    for w in &layout.walls {
+    for (wi, w) in layout.walls.iter().enumerate() {
         let len = w.length();
         let n = (len * density).ceil() as usize;
         let sigma_each = cfg.wall_rcs_per_m * len / n as f64;
@@ -329,6 +340,7 @@ fn diffuse_walls(
                 cluster: None,
                 anchor: pos,
                 normal: Some(nrm),
+                wall: Some(wi),
             });
         }
     }
@@ -422,6 +434,7 @@ fn clutter_clusters(
                 cluster: Some(cid),
                 anchor: centre,
                 normal: None,
+                wall: None,
             });
         }
         clusters.push(TruthCluster {
