@@ -34,12 +34,16 @@ fn nan() -> f64 {
     f64::NAN
 }
 
+fn is_nan(v: &f64) -> bool {
+    v.is_nan()
+}
+
 /// One modelled quantity.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Quantity {
     /// Estimate (or true value); NaN (absent from the file) when not estimable.
-    #[serde(default = "nan", skip_serializing_if = "f64::is_nan")]
+    #[serde(default = "nan", skip_serializing_if = "is_nan")]
     pub value: f64,
     /// Unit.
     pub unit: String,

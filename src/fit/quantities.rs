@@ -112,6 +112,7 @@ fn quantity(
             ks: Some(ks),
             ks_p: Some(ks_p),
             n: Some(x.len()),
+            not_estimable: None,
         },
         aic,
         samples: x,
@@ -233,6 +234,7 @@ pub(super) fn fit_spacing(
             ks: None,
             ks_p: None,
             n: Some(complete_gaps.len()),
+            not_estimable: None,
         },
         aic: Vec::new(),
         samples: complete_gaps,
@@ -282,6 +284,7 @@ pub(super) fn decay_quantity(
         ks: None,
         ks_p: None,
         n: Some(all.len()),
+        not_estimable: None,
     })
 }
 
@@ -305,6 +308,7 @@ pub(super) fn mean_quantity(
         ks: None,
         ks_p: None,
         n: Some(x.len()),
+        not_estimable: None,
     })
 }
 
