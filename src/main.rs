@@ -149,6 +149,7 @@ fn synth(a: SynthArgs, quiet: bool) -> Result<()> {
         campaign: a.campaign,
         out: a.out,
         elements: a.elements,
+        values: a.set.into_iter().collect(),
         params: pradar::model::SynthParams {
             seed: a.seed,
             truth_dir: a.truth,

@@ -9,7 +9,9 @@ use pradar::campaign::manifest::SweepFormat;
 use pradar::campaign::modelfile::ModelConfig;
 use pradar::campaign::Campaign;
 use pradar::energy::EnergyMatrix;
-use pradar::model::{synth, synth_channel, ChannelModel, ModelCluster, ModelRay, SynthParams};
+use pradar::model::{
+    synth, synth_channel, ChannelModel, ModelCluster, ModelRay, SynthParams, SynthValid,
+};
 use pradar::params::ParamGuard;
 use std::process::Command;
 
@@ -335,4 +337,284 @@ fn synth_library_seed_changes_the_draw() {
         a.profiles,
         c.manifest.positions() * c.manifest.directions.count()
     );
+}
+
+/// FNV-1a over the bits of every energy value and every truth-ray column of a synth run.
+fn synth_digest(em: &EnergyMatrix, truth_rays: &std::path::Path) -> (u64, usize) {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        for b in x.to_bits().to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for p in 0..em.positions {
+        for d in 0..em.directions() {
+            em.profile(p, d).iter().for_each(|&e| eat(e));
+        }
+    }
+    let df = pradar::table::read_parquet(truth_rays, None).unwrap();
+    for name in ["delay_ns", "angle_global_deg", "power_db", "x_m", "y_m"] {
+        let col = df.column(name).unwrap().f64().unwrap().clone();
+        col.into_no_null_iter().for_each(&mut eat);
+    }
+    (h, df.height())
+}
+
+#[test]
+fn synth_without_diffuse_is_unchanged() {
+    // a model without [diffuse] gives the values it gave before the diffuse walls existed
+    // (digest recorded from the code before issue 16: corridor, N = 100, seed 3)
+    let root = common::root();
+    let mut c = Campaign::load(&root.join("data/corridor/campaign.toml")).unwrap();
+    c.set_elements(100).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("a.parquet");
+    let m = ModelConfig::table1_defaults();
+    assert!(m.diffuse.is_none());
+    synth(
+        &c,
+        &m,
+        &out,
+        &SynthParams::default().seed(3).check().unwrap(),
+        &|_, _| {},
+    )
+    .unwrap();
+    let em = EnergyMatrix::read(&out).unwrap();
+    let (h, rows) = synth_digest(&em, &tmp.path().join("a_truth/rays.parquet"));
+    eprintln!("digest {h:#018x}, {rows} truth rays");
+    assert_eq!((h, rows), (0xd4f1_a1e3_97ff_83e2, 1225));
+}
+
+/// A model with `[diffuse]` (σ' m²/m, Lambert exponent n) and almost no clusters.
+fn diffuse_model(per_m: f64, n: f64) -> ModelConfig {
+    use pradar::campaign::modelfile::{DiffuseModel, Quantity};
+    let mut m = ModelConfig::table1_defaults();
+    m.perimeter_spacing.value = 200.0; // at most one cluster along the room
+    m.cluster_rrcs.value = 1e-12; // and far below the walls
+    m.diffuse = Some(DiffuseModel {
+        wall_rcs_per_m: Quantity::new(per_m, "m2/m", "constant"),
+        lambert_exponent: Quantity::new(n, "1", "constant"),
+        power_share: Quantity::new(0.5, "1", "constant"),
+        decay: Quantity::new(10.0, "ns", "exponential"),
+    });
+    m
+}
+
+#[test]
+fn synth_diffuse_walls_follow_the_radar_equation() {
+    // the 20 m × 20 m room, poses 6 m from the east wall looking at it, 400 elements: the
+    // energy along the wall's (delay, angle) curve, summed over a delay window, against
+    // Σ_walls ∫ σ'·cos^n ψ·ḡ²(θ − θ_d) / ((4π)³ d⁴) · K(τ) ds (K a unit echo's energy in
+    // the window), in a near-normal and an oblique group of directions
+    use pradar::campaign::layout::Layout;
+    use pradar::campaign::pattern::ArrayPattern;
+    use pradar::energy::EnergyProcessor;
+    use pradar::model::BandPattern;
+    use std::f64::consts::PI;
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = fixture("tests/point_target.toml");
+    set(&mut t, "processing.max_delay_ns", 60.0);
+    set(&mut t, "processing.noise_from_ns", 70.0);
+    set(&mut t, "directions.start_deg", -50.0);
+    set(&mut t, "directions.stop_deg", 50.0);
+    let ys = [-3.0, -1.5, 0.0, 1.5, 3.0];
+    let poses: Vec<toml::Value> = ys
+        .iter()
+        .map(|y| {
+            let mut p = toml::Table::new();
+            p.insert("x_m".into(), 4.0.into());
+            p.insert("y_m".into(), (*y).into());
+            p.insert("heading_deg".into(), 0.0.into());
+            toml::Value::Table(p)
+        })
+        .collect();
+    t.insert("poses".into(), toml::Value::Array(poses));
+    let path = write_campaign(tmp.path(), &t);
+    let c = Campaign::load(&path).unwrap();
+    let m = &c.manifest;
+    let layout = Layout::load(&c.layout_path()).unwrap();
+    let proc = EnergyProcessor::new(m.band, m.processing).unwrap();
+    let tb = proc.bin_width_ns() * 1e-9;
+    let pattern = ArrayPattern::new(m.array, m.band.center_hz()).unwrap();
+    let bp = BandPattern::new(&pattern.tables(&[0.0], &m.band, 33)[0], m.processing.window);
+    // delay window 30..58 ns; K(τ) = Σ_{b in window} e_b(τ), exact near its edges
+    let (lo, hi) = ((30e-9 / tb).round() as usize, (58e-9 / tb).round() as usize);
+    let k_of = |tau: f64| -> f64 {
+        let b0 = (tau / tb).round() as i64;
+        (b0 - 24..=b0 + 24)
+            .filter(|b| *b >= lo as i64 && *b <= hi as i64)
+            .map(|b| proc.point_echo_energy_at(1.0, tau, b as usize))
+            .sum()
+    };
+    let k_mid = k_of((lo + hi) as f64 / 2.0 * tb);
+    let grid = tb / 16.0;
+    let mut k_cache = std::collections::HashMap::new();
+    let mut k_at = |tau: f64| -> f64 {
+        let near = tau < (lo as f64 + 25.0) * tb || tau > (hi as f64 - 25.0) * tb;
+        if !near {
+            return k_mid;
+        }
+        let i = (tau / grid).round() as i64;
+        *k_cache.entry(i).or_insert_with(|| k_of(i as f64 * grid))
+    };
+    let (per_m, n_exp) = (0.02, 2.0);
+    let angles = m.directions.angles_deg();
+    // prediction per (pose, direction), the wall integrated at 2 mm
+    let ds = 2e-3;
+    let mut pred = vec![0.0; ys.len() * angles.len()];
+    for w in &layout.walls {
+        let nrm = w.normal();
+        let steps = (w.length() / ds).round() as usize;
+        for i in 0..steps {
+            let s = w.line.start + w.line.delta() * ((i as f64 + 0.5) / steps as f64);
+            for (p, y) in ys.iter().enumerate() {
+                let v = Coord { x: 4.0, y: *y } - s;
+                let d = v.x.hypot(v.y);
+                let cos = (v.x * nrm.x + v.y * nrm.y) / d;
+                let tau = 2.0 * d / pradar::units::C0;
+                if cos <= 0.0 || tau < (lo as f64 - 24.0) * tb || tau > (hi as f64 + 24.0) * tb {
+                    continue;
+                }
+                let th = (-v.y).atan2(-v.x);
+                let e = per_m * ds * cos.powf(n_exp) / ((4.0 * PI).powi(3) * d.powi(4));
+                let k = k_at(tau);
+                for (di, a) in angles.iter().enumerate() {
+                    let rel = pradar::units::wrap_rad(th - a.to_radians());
+                    if let Some((g, _)) = bp.at(rel) {
+                        pred[p * angles.len() + di] += g * g * e * k;
+                    }
+                }
+            }
+        }
+    }
+    let model = diffuse_model(per_m, n_exp);
+    // (sum measured, sum predicted, Σ dB ratio, count) per group: |θ| ≤ 15°, 30° ≤ |θ| ≤ 45°
+    let mut groups = [(0.0, 0.0, 0.0, 0usize); 2];
+    let mut diffuse_rows = 0usize;
+    for seed in [1u64, 2] {
+        let out = tmp.path().join(format!("walls{seed}.parquet"));
+        let truth = tmp.path().join(format!("walls{seed}_truth"));
+        let r = synth(
+            &c,
+            &model,
+            &out,
+            &SynthParams::default().seed(seed).check().unwrap(),
+            &|_, _| {},
+        )
+        .unwrap();
+        assert!(r.clusters <= 1, "{} clusters", r.clusters);
+        assert!(r.diffuse_points > 3000, "{} points", r.diffuse_points);
+        let em = EnergyMatrix::read(&out).unwrap();
+        let mu = em.meta.noise_mean();
+        for p in 0..ys.len() {
+            for (di, a) in angles.iter().enumerate() {
+                let g = if a.abs() <= 15.0 {
+                    0
+                } else if (30.0..=45.0).contains(&a.abs()) {
+                    1
+                } else {
+                    continue;
+                };
+                let meas: f64 = em.profile(p, di)[lo..=hi].iter().map(|e| e - mu).sum();
+                let want = pred[p * angles.len() + di];
+                assert!(
+                    want > 10.0 * mu * (hi - lo) as f64,
+                    "weak prediction {want:e} vs noise {:e}",
+                    mu * (hi - lo) as f64
+                );
+                groups[g].0 += meas;
+                groups[g].1 += want;
+                groups[g].2 += 10.0 * (meas / want).log10();
+                groups[g].3 += 1;
+            }
+        }
+        // the truth carries the walls' points as kind diffuse, cluster −1, on the walls
+        let df = pradar::table::read_parquet(&truth.join("rays.parquet"), None).unwrap();
+        let kind = df.column("kind").unwrap().str().unwrap().clone();
+        let cl = df.column("cluster_id").unwrap().i64().unwrap().clone();
+        let x = df.column("x_m").unwrap().f64().unwrap().clone();
+        let yy = df.column("y_m").unwrap().f64().unwrap().clone();
+        let mut rows = 0usize;
+        for i in 0..df.height() {
+            if kind.get(i) == Some("diffuse") {
+                rows += 1;
+                assert_eq!(cl.get(i), Some(-1));
+                let (px, py) = (x.get(i).unwrap(), yy.get(i).unwrap());
+                assert!(
+                    (px.abs() - 10.0).abs() < 1e-9 || (py.abs() - 10.0).abs() < 1e-9,
+                    "({px}, {py}) is not on a wall"
+                );
+            }
+        }
+        assert!(
+            (rows as f64 - r.diffuse_per_position * ys.len() as f64).abs() < 0.5,
+            "{rows} truth rows vs {} seen",
+            r.diffuse_per_position * ys.len() as f64
+        );
+        diffuse_rows += rows;
+    }
+    assert!(diffuse_rows > 1000);
+    for (name, (meas, want, db, n)) in ["|θ| ≤ 15°", "30° ≤ |θ| ≤ 45°"].iter().zip(groups)
+    {
+        let pooled = 10.0 * (meas / want).log10();
+        let mean_db = db / n as f64;
+        eprintln!(
+            "diffuse walls, {name}: pooled {pooled:+.2} dB, mean {mean_db:+.2} dB over {n} (pose, direction) curves"
+        );
+        assert!(
+            pooled.abs() < 1.5 && mean_db.abs() < 1.5,
+            "{name}: {pooled:+.2} dB"
+        );
+    }
+}
+
+#[test]
+fn synth_cli_refuses_a_not_estimable_quantity_unless_set() {
+    use pradar::campaign::modelfile::Quantity;
+    let tmp = tempfile::tempdir().unwrap();
+    let root = common::root();
+    let campaign = root.join("data/corridor/campaign.toml");
+    let mut m = diffuse_model(0.02, 1.0);
+    m.diffuse.as_mut().unwrap().decay = Quantity::not_estimable("ns", "exponential", "no trend");
+    let model = tmp.path().join("model.toml");
+    m.save(&model).unwrap();
+    let out = tmp.path().join("e.parquet");
+    let run = |extra: &[&str]| {
+        pradar()
+            .args(["synth", "--quiet", "--elements", "16", "--model"])
+            .arg(&model)
+            .arg("--campaign")
+            .arg(&campaign)
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    assert_eq!(o.status.code(), Some(1));
+    common::assert_one_line_error(&o, "diffuse.decay");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--set diffuse.decay=VALUE"));
+    assert!(!out.exists());
+    // a value for another quantity does not help; a bad name is named
+    let o = run(&["--set", "ray_decay=3"]);
+    common::assert_one_line_error(&o, "diffuse.decay");
+    let o = run(&["--set", "diffuse.decai=3"]);
+    assert_eq!(o.status.code(), Some(1));
+    common::assert_one_line_error(&o, "diffuse.decai");
+    let o = run(&["--set", "diffuse.decay"]);
+    assert_eq!(o.status.code(), Some(1));
+    common::assert_one_line_error(&o, "--set");
+    // with the value it runs, and draws the walls
+    let o = run(&["--set", "diffuse.decay=10"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let df = pradar::table::read_parquet(&tmp.path().join("e_truth/rays.parquet"), None).unwrap();
+    let kind = df.column("kind").unwrap().str().unwrap().clone();
+    assert!((0..kind.len()).any(|i| kind.get(i) == Some("diffuse")));
+    // the library refuses it too
+    let c = Campaign::load(&campaign).unwrap();
+    let e = synth(&c, &m, &out, &SynthValid::default(), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("diffuse.decay"), "{e}");
 }

@@ -102,6 +102,10 @@ pub struct SynthArgs {
     /// Ground-truth folder (default: <out stem>_truth beside the output).
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// A value for a model quantity, e.g. one the fit marked not estimable
+    /// (`--set diffuse.decay=10`; names as in the model file; repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = ranges::name_value)]
+    pub set: Vec<(String, f64)>,
 }
 
 // `pradar map`

@@ -65,6 +65,19 @@ pub fn dynamic_range_db(s: &str) -> Result<f64, String> {
     checked(s, |v| v > 0.0, "> 0")
 }
 
+/// `--set NAME=VALUE` (synth): a quantity name and a number; the model's check
+/// (`ModelConfig::require_estimable`) judges the name and the value.
+pub fn name_value(s: &str) -> Result<(String, f64), String> {
+    let Some((name, v)) = s.split_once('=') else {
+        return Err("expected NAME=VALUE".into());
+    };
+    let name = name.trim();
+    if name.is_empty() {
+        return Err("expected NAME=VALUE (empty name)".into());
+    }
+    Ok((name.to_string(), real(v)?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -81,5 +94,11 @@ mod tests {
         assert!(non_negative("NaN").is_err());
         assert!(dynamic_range_db("0").is_err() && dynamic_range_db("inf").is_ok());
         assert!(dynamic_range_db("NaN").is_err());
+        assert_eq!(
+            name_value("diffuse.decay=12").unwrap(),
+            ("diffuse.decay".to_string(), 12.0)
+        );
+        assert!(name_value("decay").is_err() && name_value("=1").is_err());
+        assert!(name_value("decay=x").is_err());
     }
 }

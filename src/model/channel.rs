@@ -165,7 +165,7 @@ impl ChannelModel {
                 let theta = th + r.aoa_rad;
                 let range = crate::units::range_from_delay_s(tau);
                 out.push(SeenRay {
-                    cluster: l,
+                    source: RaySource::Cluster(l),
                     tau_s: tau,
                     theta,
                     amp2: pc * (-r.excess_ns / gamma_r).exp(),
@@ -173,6 +173,7 @@ impl ChannelModel {
                         x: at.x + range * theta.cos(),
                         y: at.y + range * theta.sin(),
                     },
+                    phase: 0.0,
                 });
             }
         }
@@ -180,11 +181,20 @@ impl ChannelModel {
     }
 }
 
+/// What a seen ray comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RaySource {
+    /// A ray of model cluster `l` (index into [`ChannelModel::clusters`]).
+    Cluster(usize),
+    /// A diffuse point scatterer of wall `w` (index into the layout's walls).
+    Wall(usize),
+}
+
 /// A ray seen from a pose.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeenRay {
-    /// Model cluster.
-    pub cluster: usize,
+    /// Its source: a model cluster or a diffuse wall point.
+    pub source: RaySource,
     /// Round-trip delay, s.
     pub tau_s: f64,
     /// Global angle of arrival, rad.
@@ -193,4 +203,7 @@ pub struct SeenRay {
     pub amp2: f64,
     /// Where the echo maps to, m.
     pub pos: Coord<f64>,
+    /// Phase of the scatterer's complex amplitude, rad, added to the path phase
+    /// −2πf_c(τ + τ_g): 0 for cluster rays, uniform for diffuse points (complex Gaussian).
+    pub phase: f64,
 }

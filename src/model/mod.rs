@@ -31,6 +31,13 @@
 //!   log-normal shadowing (3 dB, as the simulator's clutter). So the first cluster follows
 //!   the radar equation exactly (a single scatterer is `simulate`'s point target) and later
 //!   clusters and rays decay with Γ and γ — the slopes `fit` measures, path loss included;
+//! * **diffuse walls** (when the model has `[diffuse]`; [`diffuse`]): one point scatterer
+//!   per range cell c/(2B) of every wall, uniform in its cell, complex Gaussian with
+//!   E|x|² = `wall_rcs_per_m` × cell length and a uniform phase; seen from the free side
+//!   through no wall with |A|² = |x|²·cos^n ψ / ((4π)³ d⁴) (the radar equation, absolute;
+//!   n = `lambert_exponent`, ψ the incidence from the wall normal); their own ChaCha
+//!   stream, so a model without `[diffuse]` gives the bytes it gave before; truth kind
+//!   `diffuse`, cluster −1;
 //! * **array**: each ray is seen through the campaign's array as
 //!   a = ḡ(θ_arr)·|A|·e^{−j2πf_c(τ + τ_g)}, ḡ the window-weighted band average of |F|²λ
 //!   (33 frequency knots) and τ_g the antenna group delay (slope of arg F² over the band,
@@ -52,15 +59,17 @@
 //! position, direction) (the noise), so the bytes do not depend on the thread count.
 //!
 //! Layout: [`params`] (the run's options), [`channel`] (the drawn clusters and the rays a
-//! pose sees), [`response`] (band-averaged pattern, window kernel), [`synth`](mod@synth)
+//! pose sees), [`diffuse`] (the drawn wall points and the rays a pose sees), [`response`] (band-averaged pattern, window kernel), [`synth`](mod@synth)
 //! (the run: profiles, noise, truth and the energy table).
 
 pub mod channel;
+pub mod diffuse;
 pub mod params;
 pub mod response;
 pub mod synth;
 
-pub use channel::{ChannelModel, ModelCluster, ModelRay, SeenRay};
+pub use channel::{ChannelModel, ModelCluster, ModelRay, RaySource, SeenRay};
+pub use diffuse::{DiffusePoint, DiffuseWalls};
 pub use params::{SynthParams, SynthValid};
 pub use response::BandPattern;
 pub use synth::{default_truth_dir, synth, synth_channel, SynthReport};

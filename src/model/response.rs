@@ -97,6 +97,11 @@ impl BandPattern {
         }
     }
 
+    /// The peak of ḡ over the angle grid.
+    pub fn peak(&self) -> f64 {
+        self.g.iter().copied().fold(0.0, f64::max)
+    }
+
     /// (ḡ, τ_g) towards `theta` (rad, array frame), linear in angle; None behind the array.
     pub fn at(&self, theta: f64) -> Option<(f64, f64)> {
         let deg = theta.to_degrees();
@@ -118,6 +123,8 @@ pub(super) struct Kernel {
     step_s: f64,
     half: usize,
     r: Vec<f64>,
+    /// tail[k] = max r(t)² over |t| ≥ k bins, k = 0..=KERNEL_BINS (non-increasing).
+    tail: Vec<f64>,
 }
 
 impl Kernel {
@@ -138,8 +145,34 @@ impl Kernel {
                     .sum::<f64>()
                     / wsum
             })
+            .collect::<Vec<f64>>();
+        let tail = (0..=KERNEL_BINS)
+            .map(|k| {
+                let m = k * KERNEL_FINE;
+                r.iter()
+                    .enumerate()
+                    .filter(|(i, _)| i.abs_diff(half) >= m)
+                    .map(|(_, v)| v * v)
+                    .fold(0.0, f64::max)
+            })
             .collect();
-        Kernel { step_s, half, r }
+        Kernel {
+            step_s,
+            half,
+            r,
+            tail,
+        }
+    }
+
+    /// The reach, s, beyond which r(t)² stays below `frac` (a ray's cull level over its
+    /// power): whole bins, at most the table's half-width.
+    pub(super) fn reach_s(&self, frac: f64) -> f64 {
+        let k = self
+            .tail
+            .iter()
+            .position(|&t| t < frac)
+            .unwrap_or(KERNEL_BINS);
+        k as f64 * KERNEL_FINE as f64 * self.step_s
     }
 
     #[inline]

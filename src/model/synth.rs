@@ -12,7 +12,8 @@
 //! drawn independently. The noise streams are keyed by (seed, position, direction), so the
 //! bytes do not depend on the thread count.
 
-use super::channel::{ChannelModel, SeenRay};
+use super::channel::{ChannelModel, RaySource, SeenRay};
+use super::diffuse::DiffuseWalls;
 use super::params::SynthValid;
 use super::response::{BandPattern, Kernel, KERNEL_BINS};
 use crate::campaign::layout::Layout;
@@ -43,8 +44,12 @@ pub struct SynthReport {
     pub profiles: usize,
     /// Clusters of the drawn model.
     pub clusters: usize,
-    /// Mean rays seen per position (all angles).
+    /// Mean cluster rays seen per position (all angles).
     pub rays_per_position: f64,
+    /// Diffuse wall points drawn (0 without `[diffuse]`).
+    pub diffuse_points: usize,
+    /// Mean diffuse points seen per position above the cull.
+    pub diffuse_per_position: f64,
     /// The truth folder.
     pub truth_dir: PathBuf,
 }
@@ -83,14 +88,17 @@ pub fn synth(
     params: &SynthValid,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<SynthReport> {
+    let model = model.require_estimable(&Default::default())?;
     let layout = Layout::load(&c.layout_path())?;
     let seed = params.seed.unwrap_or(c.manifest.seed);
-    let channel = ChannelModel::draw(&layout, model, seed)?;
+    let channel = ChannelModel::draw(&layout, &model, seed)?;
     synth_channel(c, &channel, out, params, progress)
 }
 
 /// [`synth`] for an already drawn (or hand-built) channel, in steps: set up the response
-/// and detector (`Response::new`), then per pose the seen rays, their energy profiles
+/// and detector (`Response::new`), draw the diffuse walls when the channel's model has
+/// `[diffuse]` ([`DiffuseWalls::draw`], cells of c/(2B) of the campaign's band), then per
+/// pose the seen rays (clusters, then diffuse points), their energy profiles
 /// (`Response::position`) and their truth rows; last the truth clusters, the model and
 /// the energy table.
 pub fn synth_channel(
@@ -104,6 +112,12 @@ pub fn synth_channel(
     let layout = Layout::load(&c.layout_path())?;
     let seed = params.seed.unwrap_or(m.seed);
     let resp = Response::new(c, params.cull)?;
+    let walls = match &channel.config.diffuse {
+        Some(d) => Some(DiffuseWalls::draw(&layout, d, m.band.bandwidth_hz(), seed)?),
+        None => None,
+    };
+    // a point weaker than the cull even at the pattern's peak is never in a profile
+    let min_amp2 = resp.cull * resp.noise_mean / (resp.g_peak * resp.g_peak);
     let truth_dir = params
         .truth_dir
         .clone()
@@ -114,14 +128,20 @@ pub fn synth_channel(
     let (np, nd, nb) = (m.positions(), resp.angles.len(), resp.proc.nbins());
     let mut energies = vec![0.0; np * nd * nb];
     let mut seen_total = 0usize;
+    let mut diffuse_total = 0usize;
     for p in 0..np {
         let pose = m.poses[p];
         let at = Coord {
             x: pose.x_m,
             y: pose.y_m,
         };
-        let rays = channel.rays_from(&layout, at, pose.heading_deg);
+        let mut rays = channel.rays_from(&layout, at, pose.heading_deg);
         seen_total += rays.len();
+        if let Some(w) = &walls {
+            let diffuse = w.rays_from(&layout, at, min_amp2);
+            diffuse_total += diffuse.len();
+            rays.extend(diffuse);
+        }
         let profiles = &mut energies[p * nd * nb..(p + 1) * nd * nb];
         resp.position(p, pose.heading_deg.to_radians(), &rays, seed, profiles);
         let rows = resp.truth_rows(&rays);
@@ -138,6 +158,8 @@ pub fn synth_channel(
         profiles: np * nd,
         clusters: channel.clusters.len(),
         rays_per_position: seen_total as f64 / np.max(1) as f64,
+        diffuse_points: walls.as_ref().map_or(0, |w| w.points.len()),
+        diffuse_per_position: diffuse_total as f64 / np.max(1) as f64,
         truth_dir,
     })
 }
@@ -190,6 +212,8 @@ struct Response {
     g0: f64,
     lc: f64,
     cull: f64,
+    /// Peak of ḡ over every band pattern (the diffuse points' pre-cull).
+    g_peak: f64,
 }
 
 impl Response {
@@ -224,6 +248,7 @@ impl Response {
         let pulses = m.pulses as f64;
         let dof = 2.0 * proc.tw() * pulses - 1.0;
         let chi = Gamma::new(dof / 2.0, 2.0).map_err(|e| Error::input(&c.path, e.to_string()))?;
+        let g_peak = bands.iter().map(BandPattern::peak).fold(0.0, f64::max);
         Ok(Response {
             kernel,
             steering: m.array.steering,
@@ -240,6 +265,7 @@ impl Response {
             chi,
             kernel_reach: KERNEL_BINS as f64 * tb,
             g0: pattern.gain(0.0, 0.0, fc),
+            g_peak,
             lc: C0 / fc,
             cull,
             proc,
@@ -278,10 +304,18 @@ impl Response {
                 continue;
             }
             let tau = r.tau_s + tau_g;
-            let a = Complex64::from_polar(a2.sqrt(), -2.0 * PI * (self.fc * tau).fract());
+            let (phase, reach) = match r.source {
+                RaySource::Cluster(_) => (-2.0 * PI * (self.fc * tau).fract(), self.kernel_reach),
+                // a diffuse point: its own phase, and its kernel only where it matters
+                RaySource::Wall(_) => (
+                    r.phase - 2.0 * PI * (self.fc * tau).fract(),
+                    self.kernel.reach_s(self.cull * self.noise_mean / a2),
+                ),
+            };
+            let a = Complex64::from_polar(a2.sqrt(), phase);
             // samples n·dt within the kernel's reach, from bin 0 (sample −half)
-            let lo = ((tau - self.kernel_reach) / dt).ceil().max(-(half as f64)) as i64;
-            let hi = ((tau + self.kernel_reach) / dt).floor() as i64;
+            let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
+            let hi = ((tau + reach) / dt).floor() as i64;
             let hi = hi.min((nb * l) as i64 - half - 1);
             for n in lo..=hi {
                 let t = n as f64 * dt;
@@ -311,18 +345,22 @@ impl Response {
         }
     }
 
-    /// The truth rows of the seen rays (power through the broadside gain).
+    /// The truth rows of the seen rays (power through the broadside gain): cluster rays
+    /// as `clutter` of their cluster, diffuse points through [`diffuse_truth_row`].
     fn truth_rows(&self, rays: &[SeenRay]) -> Vec<TruthRay> {
         let (g0, lc) = (self.g0, self.lc);
         rays.iter()
             .map(|r| {
-                TruthRay::model_cluster(
-                    r.cluster,
-                    r.pos,
-                    r.tau_s * 1e9,
-                    r.theta.to_degrees(),
-                    10.0 * (g0 * g0 * lc * lc * r.amp2).log10(),
-                )
+                let power_db = 10.0 * (g0 * g0 * lc * lc * r.amp2).log10();
+                let (delay_ns, angle) = (r.tau_s * 1e9, r.theta.to_degrees());
+                match r.source {
+                    RaySource::Cluster(l) => {
+                        TruthRay::model_cluster(l, r.pos, delay_ns, angle, power_db)
+                    }
+                    RaySource::Wall(w) => {
+                        TruthRay::diffuse_wall(w, r.pos, delay_ns, angle, power_db)
+                    }
+                }
             })
             .collect()
     }

@@ -59,6 +59,7 @@
 //!         campaign: "sim/campaign.toml".into(),
 //!         out: "model.parquet".into(),
 //!         elements: None,
+//!         values: Default::default(),
 //!         params: pradar::model::SynthParams::default(),
 //!     },
 //!     &none,
@@ -211,6 +212,8 @@ pub struct Synth {
     pub out: PathBuf,
     /// `[array] elements` override.
     pub elements: Option<usize>,
+    /// Values for model quantities (`--set NAME=VALUE`), e.g. ones marked not estimable.
+    pub values: std::collections::BTreeMap<String, f64>,
     /// Seed and truth folder.
     pub params: SynthParams,
 }
@@ -229,10 +232,18 @@ impl fmt::Display for SynthSummary {
         let r = &self.report;
         write!(
             f,
-            "synthesised {} profiles ({} clusters, {:.1} rays seen per position) -> {} (truth in {})",
+            "synthesised {} profiles ({} clusters, {:.1} rays seen per position{}) -> {} (truth in {})",
             r.profiles,
             r.clusters,
             r.rays_per_position,
+            if r.diffuse_points > 0 {
+                format!(
+                    "; {} diffuse wall points, {:.0} seen per position",
+                    r.diffuse_points, r.diffuse_per_position
+                )
+            } else {
+                String::new()
+            },
             self.out.display(),
             r.truth_dir.display()
         )
@@ -242,7 +253,9 @@ impl fmt::Display for SynthSummary {
 /// Run `pradar synth` ([`crate::model::synth()`]).
 pub fn synth(cmd: &Synth, progress: StepProgress) -> Result<SynthSummary> {
     let c = load_campaign(&cmd.campaign, cmd.elements)?;
-    let m = ModelConfig::load(&cmd.model)?;
+    let m = ModelConfig::load(&cmd.model)?
+        .require_estimable(&cmd.values)
+        .map_err(|e| crate::error::Error::input(&cmd.model, e.to_string()))?;
     let report = crate::model::synth(&c, &m, &cmd.out, &cmd.params.check()?, progress)?;
     Ok(SynthSummary {
         report,

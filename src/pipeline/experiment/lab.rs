@@ -244,13 +244,18 @@ impl<'a> Lab<'a> {
         }
         let dir = self.out.join("work").join("synth");
         let path = dir.join(format!("n{elements}_s{seed}.parquet"));
+        // a model quantity the fit could not estimate has no value to draw from
+        let model = self
+            .model
+            .require_estimable(&Default::default())
+            .map_err(|e| Error::input(&self.inputs.model, e.to_string()))?;
         let mut c = Campaign::load(&self.inputs.campaign)?;
         c.set_elements(elements)?;
         let sp = SynthParams::default()
             .seed(seed)
             .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")))
             .check()?;
-        synth(&c, &self.model, &path, &sp, &|_, _| {})?;
+        synth(&c, &model, &path, &sp, &|_, _| {})?;
         self.synth_cache.insert((elements, seed), path.clone());
         Ok(path)
     }
