@@ -364,18 +364,21 @@ fn reproduce_writes_the_report() {
     }
     assert!(html.contains("Stage timings") && html.contains("simulate"));
     // the K chosen per position and Table 1 against K_max: the default row, one row per
-    // larger cap, the truth row; every position's K at most its row's cap
+    // larger cap (2× and 3× the default), the truth row; every position's K at most its
+    // row's cap
     assert!(html.contains("K chosen per position"));
     let kmax = std::fs::read_to_string(out.join("table1_kmax.md")).unwrap();
     let rows: Vec<&str> = kmax.lines().filter(|l| l.starts_with("| ")).collect();
-    assert_eq!(rows.len(), 6, "{kmax}");
-    for (row, cap) in rows[1..5].iter().zip([8usize, 12, 16, 24]) {
+    assert_eq!(rows.len(), 5, "{kmax}");
+    for (row, cap) in rows[1..4].iter().zip([16usize, 32, 48]) {
         let cells: Vec<&str> = row.split('|').map(str::trim).collect();
         assert!(cells[1].starts_with(&cap.to_string()), "{row}");
         let hi: usize = cells[2].split(['–', ' ']).nth(1).unwrap().parse().unwrap();
         assert!(hi <= cap, "{row}");
+        // the positions whose K moved against the default: a count
+        let _: usize = cells[3].parse().unwrap();
     }
-    assert!(rows[5].contains("simulator truth"));
+    assert!(rows[4].contains("simulator truth"));
     // the experiments' sections, each with its panel and table
     for e in ["fig5", "fig6", "prior-sensitivity", "pose-noise"] {
         let png = format!("experiments/{e}/{e}.png");

@@ -50,7 +50,12 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
         "perimeter_offset",
         "perimeter_spacing",
     ] {
-        let png = std::fs::read(rep.join(format!("fit_{q}.png"))).unwrap();
+        let path = rep.join(format!("fit_{q}.png"));
+        // d_c has no samples to plot with fewer than 2 complete gaps (the table says so)
+        if q == "perimeter_spacing" && html.contains("fewer than 2 complete gaps") {
+            continue;
+        }
+        let png = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert_eq!(&png[1..4], b"PNG");
     }
     let work = rep.join("work");

@@ -15,6 +15,8 @@
 //!   hi, family, ks_p, best_aic, paper, truth`; numbers at full precision, empty where
 //!   missing; `paper` and `truth` in the value's unit. The paper's d_c, 5.02 ns, is read
 //!   one-way as metres (1.505 m, as [`ModelConfig::table1_defaults`]).
+//! * With a `[diffuse]` section the dense component's four quantities follow the discrete
+//!   clusters' rows (σ′, the Lambert exponent, the power share, the decay).
 //! * A quantity the fit could not estimate shows "not estimable: <reason>" in the value
 //!   cell (and "—" for its interval and KS p); its CSV value, lo, hi and ks_p are empty.
 //!   The same holds for the truth column.
@@ -187,7 +189,7 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
             None,
         )
     };
-    vec![
+    let mut rows = vec![
         row(
             "inter-cluster arrival rate Λ",
             &m.inter_cluster_rate,
@@ -220,7 +222,20 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
             None,
         ),
         row("ray power decay γ", &m.ray_decay, String::new(), None),
-    ]
+    ];
+    // the dense component beside the discrete clusters (its truth column stays "—": the
+    // simulator's walls are not clusters)
+    if let Some(d) = &m.diffuse {
+        for (name, q) in [
+            ("diffuse wall backscatter σ′", &d.wall_rcs_per_m),
+            ("diffuse Lambert exponent n", &d.lambert_exponent),
+            ("diffuse share of MPC power", &d.power_share),
+            ("diffuse power decay", &d.decay),
+        ] {
+            rows.push(row(name, q, String::new(), None));
+        }
+    }
+    rows
 }
 
 /// A value cell's text when the quantity is not estimable.
