@@ -19,6 +19,7 @@ mod fit_estimators;
 mod mapping;
 mod mpc;
 mod physics;
+mod responsiveness;
 mod synth;
 
 /// With `autotests = false` cargo builds only this file: a `tests/*.rs` left out of the
