@@ -31,10 +31,12 @@ fn truth_rays(path: &Path, positions: usize) -> Vec<TruthCell> {
     let kind = pradar::table::str_column(path, &df, "kind")
         .unwrap()
         .unwrap();
+    let tc = pradar::table::i64_column(path, &df, "truth_cluster").unwrap();
     let mut out = vec![Vec::new(); positions];
     for i in 0..pos.len() {
         if pw[i].is_finite() {
-            out[pos[i] as usize].push((a[i], d[i], 10f64.powf(pw[i] / 10.0), kind[i] == "diffuse"));
+            let p = 10f64.powf(pw[i] / 10.0);
+            out[pos[i] as usize].push((a[i], d[i], p, kind[i] == "diffuse", tc[i]));
         }
     }
     out
