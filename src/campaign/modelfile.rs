@@ -235,6 +235,9 @@ impl ModelConfig {
                 }
                 continue;
             }
+            if name == "diffuse.power_share" && !(v.value > 0.0 && v.value <= 1.0) {
+                return Err(Error::param(format!("{name}.value"), "must be in (0, 1]"));
+            }
             if !(v.value.is_finite() && v.value > 0.0) {
                 return Err(Error::param(
                     format!("{name}.value"),

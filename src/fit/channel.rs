@@ -167,9 +167,20 @@ fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
     let a = table::f64_column(path, &df, "angle_rel_deg")?;
     let pw = table::f64_column(path, &df, "power_db")?;
     // the dense component (diffuse MPCs, cluster_id −1) is fitted apart (`fit::diffuse`)
-    let diffuse = table::str_column(path, &df, "component")?
-        .map(|c| c.iter().map(|x| x == "diffuse").collect::<Vec<_>>())
-        .unwrap_or_else(|| vec![false; pos.len()]);
+    let diffuse = match table::str_column(path, &df, "component")? {
+        None => vec![false; pos.len()],
+        Some(c) => c
+            .iter()
+            .enumerate()
+            .map(|(i, x)| match crate::mpc::Component::parse(x) {
+                Some(k) => Ok(k == crate::mpc::Component::Diffuse),
+                None => Err(Error::input(
+                    path,
+                    format!("column `component` row {i}: {x:?} (expected discrete or diffuse)"),
+                )),
+            })
+            .collect::<Result<Vec<_>>>()?,
+    };
     (0..pos.len())
         .filter(|&i| !diffuse[i] && (!truth || cid[i] >= 0))
         .map(|i| {

@@ -17,11 +17,17 @@
 //! 2. *at the diffuse level*: ρ = E / E₁ ≤ σ̂ · 10^(`discrete_db`/10), with E₁ the expected
 //!    energy of a Lambertian wall of unit backscatter per metre (σ′ = 1 m²/m) in that cell,
 //!    E₁ = Σ_φ G₀²λ² · W(φ − θ_d) · K(τ(φ)/T_b − b) · r(φ)·Δφ / ((4π)³ r(φ)⁴)
-//!    (W the two-way pattern and K the window kernel of the CLEAN footprint; the wall
-//!    element ds = r·Δφ/cos α carries σ′·ds·cos α: Lambert's law, power ∝ cos α), summed
-//!    over the rays φ at 0.1° where W > 10⁻³; and σ̂ = median(ρ over the campaign's on-curve
+//!    (W the two-way pattern and K the window kernel of the CLEAN footprint, both
+//!    normalised to 1 at their peaks; the wall element ds = r·Δφ/cos α carries
+//!    σ′·ds·cos α: Lambert's law, power ∝ cos α), summed over the rays φ at 0.1° out to
+//!    the farthest angle where W reaches 10⁻³ (of the first beam's table); and σ̂ = median(ρ over the campaign's on-curve
 //!    MPCs) / ln 2, the mean of an exponential law (the energy of a Rayleigh cell) read from
-//!    its median so the discrete MPCs among them do not move it.
+//!    its median so the discrete MPCs among them move it only by their share.
+//!
+//! The level is read only when the campaign has a dense component to read it from: at least
+//! [`MIN_ON_CURVE`] on-curve MPCs whose 10·log10 ρ have an interquartile range of at most
+//! [`MAX_IQR_DB`] (twice an exponential law's 6.83 dB); otherwise every MPC stays discrete (a scene
+//! without diffuse walls, such as `synth` data from a model without `[diffuse]`).
 //!
 //! Everything else is discrete: off the curve (clutter in the room, multi-bounce paths
 //! arriving after the wall), or on it but `discrete_db` (default 10 dB) above the diffuse
@@ -173,7 +179,7 @@ pub(crate) fn label(
     let rho: Vec<Option<(f64, WallCell)>> = mpcs
         .par_iter()
         .map(|x| {
-            let pose = m.poses[x.position];
+            let pose = *m.poses.get(x.position)?;
             let view = PoseView {
                 layout: &layout,
                 at: Coord {
@@ -198,9 +204,13 @@ pub(crate) fn label(
         })
         .collect();
     let mut on: Vec<f64> = rho.iter().flatten().map(|x| x.0).collect();
-    if on.is_empty() {
+    if !is_dense(&on) {
+        // no dense component to read a level from: every MPC stays discrete
+        for (x, r) in mpcs.iter_mut().zip(&rho) {
+            x.wall = r.map(|r| r.1);
+        }
         return Ok(DiffuseSummary {
-            on_curve: 0,
+            on_curve: on.len(),
             diffuse: 0,
             level_m2_per_m: f64::NAN,
         });
@@ -226,6 +236,26 @@ pub(crate) fn label(
         level_m2_per_m: level,
     })
 }
+
+/// At least [`MIN_ON_CURVE`] MPCs on the wall curves, their ratios ρ spread like the
+/// energies of Rayleigh cells: the interquartile range of 10·log10 ρ of an exponential law
+/// is 10·log10(ln 4 / ln(4/3)) = 6.83 dB; a spread above [`MAX_IQR_DB`] (twice that) is a
+/// handful of discrete echoes near walls, not a continuum (`docs/mpc.md` has the figures).
+fn is_dense(rho: &[f64]) -> bool {
+    if rho.len() < MIN_ON_CURVE {
+        return false;
+    }
+    let mut db: Vec<f64> = rho.iter().map(|r| 10.0 * r.log10()).collect();
+    db.sort_by(f64::total_cmp);
+    let q = |f: f64| db[((db.len() - 1) as f64 * f).round() as usize];
+    q(0.75) - q(0.25) <= MAX_IQR_DB
+}
+
+/// Fewest on-curve MPCs from which a diffuse level is read.
+pub const MIN_ON_CURVE: usize = 20;
+
+/// Largest interquartile range of 10·log10 ρ (dB) of a dense component.
+pub const MAX_IQR_DB: f64 = 13.66;
 
 impl PoseView<'_> {
     /// E₁: the expected energy in the MPC's cell (beam at `beam` deg relative, its bin) of

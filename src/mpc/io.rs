@@ -236,4 +236,32 @@ mod tests {
             assert!(e.contains("sector_deg") && e.contains("m.parquet"), "{e}");
         }
     }
+
+    #[test]
+    fn component_and_wall_round_trip_old_tables_read_discrete_bad_values_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.parquet");
+        let mut m = one_mpc();
+        m.component = Component::Diffuse;
+        m.wall = Some(WallCell {
+            unit_db: -95.5,
+            incidence_deg: 30.0,
+        });
+        write_mpcs(&p, &[m.clone(), one_mpc()], vec![]).unwrap();
+        assert_eq!(read_mpcs(&p).unwrap(), vec![m, one_mpc()]);
+        // a table of the ten columns before issue 16: discrete, no wall
+        let mut df = mpc_frame(&p, &[one_mpc()]).unwrap();
+        for c in ["component", "wall_unit_db", "incidence_deg"] {
+            df = df.drop(c).unwrap();
+        }
+        table::write_parquet(&p, &df, vec![]).unwrap();
+        assert_eq!(read_mpcs(&p).unwrap(), vec![one_mpc()]);
+        // an unknown component is one error naming the column and row
+        let mut df = mpc_frame(&p, &[one_mpc()]).unwrap();
+        df.with_column(table::col("component", vec!["Diffuse".to_string()]))
+            .unwrap();
+        table::write_parquet(&p, &df, vec![]).unwrap();
+        let e = read_mpcs(&p).unwrap_err().to_string();
+        assert!(e.contains("component") && e.contains("row 0"), "{e}");
+    }
 }
