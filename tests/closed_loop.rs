@@ -44,7 +44,7 @@
 //! continuum sit above its mean cell, `docs/fit.md`), n 0.80 for 1, decay 10.7 ns for 10,
 //! power share 0.001 for 0.5 (the model's share is informational: synth does not draw it).
 //!
-//! Runtime (2 cores, shared with other builds): 146 s (Table 1 set 73 s of it; 243 s under
+//! Runtime (2 cores, shared with other builds): 146 s (Table 1 set 73 s of it; 235–243 s under
 //! heavier load). Judging 3°
 //! steps against 2° (91 directions, 614 s): every truth figure is identical (the truth is
 //! the drawn rays, independent of the scan), and the chain's asserted figures moved by at
