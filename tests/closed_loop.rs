@@ -1,66 +1,162 @@
-//! Issue 4's closed loop as a test: `synth` → `extract` → `cluster` → `fit` (the CLI, as a
-//! user runs it) at the issue's three parameter sets, in a 480 m × 12 m hall (written
-//! here), 240 random poses, 91 directions, 801 points, 400 elements (`scripts/closed-loop`
-//! runs the same chain in the 120 m hall, where one environment draw's means scatter about
-//! the model by more than 15 %). Every fitted quantity is printed beside the model value
-//! and beside the same estimators on synth's own truth (`fit --truth`).
+//! Issue 4's closed loop as a test (issue 16 item 5): `synth` → `extract` → `cluster` →
+//! `fit` (the CLI, as a user runs it), scored against the environment synth drew (DESIGN §2
+//! "Truth of a simulated scene"): the reference of every quantity (Λ, λ, AoA std, d_c, d_p,
+//! Γ, γ) is `fit_truth` on synth's own truth folder (the same estimators on the true
+//! clusters), not the model value. Per set it prints the chain, that truth, the model, and
+//! the truth's mean ± sd over 5 more environment draws (`synth --seed 101..=105`, truth
+//! only; drawn without `[diffuse]`: synth draws the walls from their own stream, so the
+//! discrete environment is the same, which the test checks at the campaign seed).
 //!
-//! What is asserted is what the chain meets today (a regression guard, each check one the
-//! code could fail): in set 1 (λ 1.0/ns, AoA 8°, d_c 6 m) Λ within 15 % of the rate from
-//! synth's own true cluster delays, and λ, d_c, d_p, Γ, γ within 15 % of the model; in set 2
-//! (λ 0.43/ns, 16.9°, 8 m) λ, Γ and γ; in set 3 (λ 0.2/ns, 30°, 10 m) Γ. The issue asks
-//! for all seven in all three sets: the rest is NOT met and printed only (`#4` closing
-//! notes). What misses is what clustering merges: clusters interleaved in delay and angle
-//! make one cluster of two, which widens the AoA spread and lowers Λ and the cluster count
-//! behind d_c. Set 2's d_p (0.471 m for 0.40 m) is not asserted: its 250 interior clusters
-//! give a position-bootstrap interval of ±18 % ([0.325, 0.613] m, covering 0.40 m), so a
-//! 15 % mark on the point value is a coin toss; merged clusters and single-MPC clusters
-//! located along one member's bearing are its outliers.
+//! Runs, 61 directions (3° steps), 801 points, 400 elements: sets 1–3 (λ 1.0/0.43/0.2 per
+//! ns, AoA 8/16.9/30°, d_c 6/8/10 m; d_p 0.4 m, Γ 15 ns, γ 4 ns, `common::hall_model`) and
+//! the Table 1 set (`ModelConfig::table1_defaults()` unchanged: λ 0.43/ns, 16.9°, d_c
+//! 1.505 m, d_p 0.3 m, Γ 12 ns, γ 3 ns, 6 rays, plus `[diffuse]` σ′ 0.02 m²/m, n 1) in a
+//! 480 m × 12 m hall with 240 random poses; set 1's model in an L-shaped corridor (two
+//! 200 m × 12 m arms, 800 m of perimeter, 113 clusters drawn) with 200 poses.
 //!
-//! The environment synth draws (the campaign seed, 77) is sparser than the model in all
-//! three sets: 141/106/83 clusters where 984 m of perimeter / d_c gives 164/123/98, a mean
-//! spacing of 6.98/9.28/11.86 m (+16 %, +16 %, +19 %; one draw of ~100 clusters scatters by
-//! about 10 %). So even synth's truth reads d_c 7.1/9.6/11.2 m, and the chain's d_c is
-//! scored against a model value the draw itself misses by more than 15 % in set 3.
+//! Asserted within 15 % of the drawn environment's truth (what the chain meets, each a check
+//! the code could fail; figures chain vs truth): set 1 Λ +2.0 %, d_c −4.0 %, d_p +8.5 %,
+//! Γ −3.5 %, γ +7.2 %; set 2 λ −10.4 %, Γ −11.7 %; set 3 λ +10.0 %, Γ −0.8 %; Table 1
+//! AoA std +5.3 %, Γ −1.3 %; L-shape Λ +4.3 %, d_c −3.2 %, d_p −0.5 %, Γ +5.1 %. Also
+//! asserted: the Table 1 set's truth is the same without the walls.
+//!
+//! NOT met (printed only): set 1 λ −33 %, AoA std +41 %; set 2 Λ −23 %, AoA +44 % (d_c
+//! +14.0 %, d_p +13.9 %, γ +14.1 % are inside but too close to the mark to guard); set 3 Λ
+//! −27 %, AoA +32 %, d_c +29 %, γ +41 % (d_p −7.1 % here but −15.0 % with 2° steps, and
+//! its draws scatter by 20 %); Table 1 Λ −63 %, λ +61 %, d_c +167 %, d_p +51 %, γ +126 %
+//! (1429 clusters chosen for 5747 true ones: at d_c 1.5 m a position sees more clusters
+//! than K_max 16); L-shape λ −43 %, AoA +47 %, γ +16.7 %. Why: the clustering merges true
+//! clusters, and it is the criterion that prefers the merge, not the K-means search
+//! missing the true partition: the cross-validated criterion (the default) of the true
+//! partition (each discrete MPC labelled by the truth ray of its position nearest in
+//! delay and angle within one bin and 1.5°; 92–99 % matched, the rest their own
+//! clusters) is worse than that of the chosen one, summed over positions, in every set
+//! (true − chosen +1357/+1067/+883/+7496/+1304), and the positions preferring the true
+//! partition are 32/12/9/4/20 against 155/145/158/236/140 preferring the chosen one
+//! (51/64/57/0/37 ties). Merged clusters widen the AoA spread and lower Λ and the cluster
+//! count behind d_c.
+//!
+//! Noticed: the truth's λ reads above the model at λ 1.0/ns (1.31 here, 1.196 ± 0.017 over
+//! the draws): the truth rays are not merged at the resolution δ = 1/6 ns while the
+//! estimator is the shifted-exponential MLE 1/(mean − δ), which reads 1/(1/λ − δ) = 1.2/ns
+//! on unshifted gaps. The truth's γ is the model's exactly in every draw. The fitted
+//! `[diffuse]` (Table 1 set) reads σ′ 0.044 m²/m for 0.02 (the CLEAN peaks of a Rayleigh
+//! continuum sit above its mean cell, `docs/fit.md`), n 0.80 for 1, decay 10.7 ns for 10,
+//! power share 0.001 for 0.5 (the model's share is informational: synth does not draw it).
+//!
+//! Runtime (2 cores, shared with other builds): 146 s (Table 1 set 73 s of it; 235–243 s under
+//! heavier load). Judging 3°
+//! steps against 2° (91 directions, 614 s): every truth figure is identical (the truth is
+//! the drawn rays, independent of the scan), and the chain's asserted figures moved by at
+//! most 8 points (set 1 Γ +4.6 → −3.5 %), none across 15 %.
 
 use crate::common;
 
 use pradar::campaign::manifest::Campaign;
-use pradar::campaign::modelfile::ModelConfig;
+use pradar::campaign::modelfile::{DiffuseModel, ModelConfig, Quantity};
+use pradar::cluster::{likelihood_criterion, ClusterParams, Criterion};
 use pradar::fit::channel::{fit_truth, FitParams};
 use pradar::params::ParamGuard;
+use pradar::table;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::Instant;
 
-/// Hall length (m) and poses: long enough that the environment synth draws holds many
-/// clusters (the fitted means of one draw scatter about the model by 1/√(clusters)).
-const HALL_M: f64 = 480.0;
-const POSES: usize = 240;
+/// Direction step (degrees) of the scan: 61 directions over the half-plane.
+const STEP_DEG: f64 = 3.0;
+/// Seeds of the extra environment draws (synth `--seed`), beside the campaign's 77.
+const DRAW_SEEDS: [u64; 5] = [101, 102, 103, 104, 105];
 
-fn campaign(dir: &Path) -> std::path::PathBuf {
-    let hx = HALL_M / 2.0;
-    std::fs::write(
-        dir.join("hall.geojson"),
-        format!(
-            r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{"role":"perimeter","name":"hall","material":"concrete"}},"geometry":{{"type":"Polygon","coordinates":[[[-{hx},-6.0],[{hx},-6.0],[{hx},6.0],[-{hx},6.0],[-{hx},-6.0]]]}}}}]}}"#
-        ),
-    )
-    .unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let poses: Vec<[f64; 3]> = (0..POSES)
-        .map(|_| {
-            [
-                rng.gen_range(-(HALL_M / 2.0 - 2.5)..(HALL_M / 2.0 - 2.5)),
-                rng.gen_range(-3.5..3.5),
-                rng.gen_range(-180.0..180.0),
-            ]
-        })
-        .collect();
-    let path = dir.join("campaign.toml");
-    std::fs::write(&path, common::hall_manifest(2.0, &poses)).unwrap();
-    path
+/// A layout (its perimeter polygon) and the poses in it.
+struct Scene {
+    name: &'static str,
+    /// Perimeter polygon, closed.
+    ring: Vec<[f64; 2]>,
+    poses: Vec<[f64; 3]>,
+}
+
+impl Scene {
+    /// The 480 m × 12 m hall, 240 random poses at least 2.5 m from the walls.
+    fn hall() -> Scene {
+        let hx = 240.0;
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let poses = (0..240)
+            .map(|_| {
+                [
+                    rng.gen_range(-(hx - 2.5)..(hx - 2.5)),
+                    rng.gen_range(-3.5..3.5),
+                    rng.gen_range(-180.0..180.0),
+                ]
+            })
+            .collect();
+        Scene {
+            name: "hall 480 m × 12 m",
+            ring: vec![[-hx, -6.0], [hx, -6.0], [hx, 6.0], [-hx, 6.0], [-hx, -6.0]],
+            poses,
+        }
+    }
+
+    /// An L-shaped corridor, two 200 m arms 12 m wide meeting at the origin (800 m of
+    /// perimeter), 200 random poses at least 2.5 m from the walls, in either arm.
+    fn l_shape() -> Scene {
+        let mut rng = ChaCha8Rng::seed_from_u64(6);
+        let poses = (0..200)
+            .map(|i| {
+                let along = rng.gen_range(2.5..197.5);
+                let across = rng.gen_range(2.5..9.5);
+                let h = rng.gen_range(-180.0..180.0);
+                if i % 2 == 0 {
+                    [along, across, h]
+                } else {
+                    [across, along, h]
+                }
+            })
+            .collect();
+        Scene {
+            name: "L-shaped corridor, 2 × 200 m × 12 m",
+            ring: vec![
+                [0.0, 0.0],
+                [200.0, 0.0],
+                [200.0, 12.0],
+                [12.0, 12.0],
+                [12.0, 200.0],
+                [0.0, 200.0],
+                [0.0, 0.0],
+            ],
+            poses,
+        }
+    }
+
+    fn perimeter_m(&self) -> f64 {
+        self.ring
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum()
+    }
+
+    /// Write the layout and the campaign into `dir`; returns the manifest path.
+    fn write(&self, dir: &Path) -> PathBuf {
+        std::fs::create_dir_all(dir).unwrap();
+        let coords: Vec<String> = self
+            .ring
+            .iter()
+            .map(|[x, y]| format!("[{x:?},{y:?}]"))
+            .collect();
+        std::fs::write(
+            dir.join("hall.geojson"),
+            format!(
+                r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{"role":"perimeter","name":"hall","material":"concrete"}},"geometry":{{"type":"Polygon","coordinates":[[{}]]}}}}]}}"#,
+                coords.join(",")
+            ),
+        )
+        .unwrap();
+        let path = dir.join("campaign.toml");
+        std::fs::write(&path, common::hall_manifest(STEP_DEG, &self.poses)).unwrap();
+        path
+    }
 }
 
 fn run(args: &[&str]) {
@@ -75,40 +171,55 @@ fn run(args: &[&str]) {
     );
 }
 
-type Pick = fn(&ModelConfig) -> f64;
+fn s(p: &Path) -> String {
+    p.to_str().unwrap().to_string()
+}
 
-/// synth → extract → cluster → fit in `dir` with `model`; returns the fitted model file.
-fn chain(dir: &Path, cpath: &Path, model: &Path, truth: &Path) -> PathBuf {
-    let s = |p: &Path| p.to_str().unwrap().to_string();
-    let (e, mp, cl, f) = (
-        dir.join("e.parquet"),
+/// `pradar synth` of `model` (seed `seed`, else the campaign's) into `dir`; returns the
+/// energy table and the truth folder.
+fn synth(dir: &Path, cpath: &Path, model: &Path, seed: Option<u64>) -> (PathBuf, PathBuf) {
+    let (e, t) = (dir.join("e.parquet"), dir.join("e_truth"));
+    let mut args = vec![
+        "synth".to_string(),
+        "--quiet".into(),
+        "--model".into(),
+        s(model),
+        "--campaign".into(),
+        s(cpath),
+        "--out".into(),
+        s(&e),
+        "--truth".into(),
+        s(&t),
+    ];
+    if let Some(seed) = seed {
+        args.extend(["--seed".into(), seed.to_string()]);
+    }
+    run(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    (e, t)
+}
+
+/// extract → cluster → fit of the energy table `e` in `dir`; returns the clustered MPC
+/// table, the fitted model file and the steps' wall times.
+fn chain(dir: &Path, cpath: &Path, e: &Path) -> (PathBuf, PathBuf, String) {
+    let t = Instant::now();
+    let (mp, cl, f) = (
         dir.join("m.parquet"),
         dir.join("c.parquet"),
         dir.join("f.toml"),
     );
     run(&[
-        "synth",
-        "--quiet",
-        "--model",
-        &s(model),
-        "--campaign",
-        &s(cpath),
-        "--out",
-        &s(&e),
-        "--truth",
-        &s(truth),
-    ]);
-    run(&[
         "extract",
         "--quiet",
         "--energy",
-        &s(&e),
+        &s(e),
         "--campaign",
         &s(cpath),
         "--out",
         &s(&mp),
     ]);
+    let t_extract = t.elapsed().as_secs_f64();
     run(&["cluster", "--quiet", "--mpcs", &s(&mp), "--out", &s(&cl)]);
+    let t_cluster = t.elapsed().as_secs_f64() - t_extract;
     run(&[
         "fit",
         "--quiet",
@@ -123,27 +234,24 @@ fn chain(dir: &Path, cpath: &Path, model: &Path, truth: &Path) -> PathBuf {
         "--table",
         &s(&dir.join("t.md")),
     ]);
-    f
+    let times = format!(
+        "extract {t_extract:.1} s, cluster {t_cluster:.1} s, fit {:.1} s",
+        t.elapsed().as_secs_f64() - t_extract - t_cluster
+    );
+    (cl, f, times)
 }
 
-/// Print the environment synth drew (its clusters.csv): one draw's means scatter about the
-/// model's.
-fn print_environment(truth: &Path) {
+/// The number of true clusters synth drew (its clusters.csv) and their mean spacing.
+fn environment(truth: &Path, perimeter_m: f64) -> String {
     let csv = std::fs::read_to_string(truth.join("clusters.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = header.iter().position(|h| *h == "offset_m").unwrap();
-    let offsets: Vec<f64> = lines
-        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
-        .collect();
-    let perimeter = 2.0 * (HALL_M + 12.0);
-    eprintln!(
-        "environment drawn: {} clusters, mean offset {:.3} m, mean spacing {:.2} m",
-        offsets.len(),
-        offsets.iter().sum::<f64>() / offsets.len() as f64,
-        perimeter / offsets.len() as f64
-    );
+    let n = csv.lines().count() - 1;
+    format!(
+        "{n} clusters drawn (mean spacing {:.2} m)",
+        perimeter_m / n as f64
+    )
 }
+
+type Pick = fn(&ModelConfig) -> f64;
 
 const PICKS: [(&str, Pick); 7] = [
     ("Λ (1/ns)", |m| m.inter_cluster_rate.value),
@@ -155,50 +263,229 @@ const PICKS: [(&str, Pick); 7] = [
     ("γ (ns)", |m| m.ray_decay.value),
 ];
 
-/// Print every pair of set `set` and return the asserted quantities outside 15 % (Λ is
-/// scored against synth's own true cluster delays: it follows from geometry).
+type DiffusePick = fn(&DiffuseModel) -> f64;
+
+const DIFFUSE: [(&str, DiffusePick); 4] = [
+    ("σ' (m²/m)", |d| d.wall_rcs_per_m.value),
+    ("Lambert n", |d| d.lambert_exponent.value),
+    ("power share", |d| d.power_share.value),
+    ("decay (ns)", |d| d.decay.value),
+];
+
+/// Print every quantity of set `name`: the chain, the drawn environment's truth (the
+/// reference), the model, the truth's mean (and sd) over the extra draws; return the
+/// asserted quantities outside 15 % of the reference.
 fn score(
-    set: usize,
+    name: &str,
     got: &ModelConfig,
-    want: &ModelConfig,
     truth: &ModelConfig,
+    want: &ModelConfig,
+    draws: &[ModelConfig],
     asserted: &[usize],
 ) -> Vec<String> {
     let mut failures = Vec::new();
-    eprintln!("quantity      | chain    | reference (model; Λ: truth) | truth, same estimators | within 15 %");
-    for (i, (name, pick)) in PICKS.iter().enumerate() {
-        let reference = if i == 0 { pick(truth) } else { pick(want) };
-        let v = pick(got);
-        let rel = (v - reference).abs() / reference;
-        let ok = rel <= 0.15;
+    eprintln!(
+        "quantity      |    chain | truth (ref) |    model | truth mean ± sd, {} draws | chain vs ref",
+        draws.len()
+    );
+    for (i, (q, pick)) in PICKS.iter().enumerate() {
+        let (v, r) = (pick(got), pick(truth));
+        let d: Vec<f64> = draws.iter().map(pick).filter(|x| x.is_finite()).collect();
+        let mean = d.iter().sum::<f64>() / d.len() as f64;
+        let sd =
+            (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (d.len() as f64 - 1.0)).sqrt();
+        let rel = (v - r) / r;
+        let ok = rel.abs() <= 0.15;
         eprintln!(
-            "{name:13} | {v:8.3} | {reference:8.3} | {:8.3} | {} ({:+.1} %){}",
-            pick(truth),
-            if ok { "yes" } else { "no" },
-            100.0 * (v - reference) / reference,
+            "{q:13} | {v:8.3} | {r:11.3} | {:8.3} | {mean:8.3} ± {sd:6.3} ({} ok) | {:+6.1} % {}{}",
+            pick(want),
+            d.len(),
+            100.0 * rel,
+            if ok { "within 15 %" } else { "OUTSIDE 15 %" },
             if asserted.contains(&i) {
-                ""
+                "  [asserted]"
             } else {
-                "  [not asserted]"
+                ""
             }
         );
         if asserted.contains(&i) && !ok {
-            failures.push(format!("set {set} {name}: {v:.3} vs {reference:.3}"));
+            failures.push(format!("{name} {q}: {v:.3} vs truth {r:.3}"));
+        }
+    }
+    if let Some(dm) = &want.diffuse {
+        eprintln!("[diffuse]     |   fitted |    model");
+        for (q, pick) in DIFFUSE {
+            let v = got.diffuse.as_ref().map_or(f64::NAN, pick);
+            eprintln!("{q:13} | {v:8.4} | {:8.4}", pick(dm));
         }
     }
     failures
 }
 
+/// Per position, the discrete MPCs' [delay_ns, angle_rel_deg], the chosen labels (the
+/// clustered table's `cluster_id`) and the true labels (the `truth_cluster` of the truth
+/// ray of the same position nearest in (delay, angle) within one bin and half a direction
+/// step; an unmatched MPC is its own cluster), both relabelled 0..K; and the matched share.
+type Partitions = Vec<(Vec<[f64; 2]>, Vec<usize>, Vec<usize>)>;
+
+fn partitions(clusters: &Path, truth: &Path, bin_ns: f64) -> (Partitions, f64) {
+    let df = table::read_parquet(clusters, None).unwrap();
+    let pos = table::i64_column(clusters, &df, "position").unwrap();
+    let d = table::f64_column(clusters, &df, "delay_ns").unwrap();
+    let a = table::f64_column(clusters, &df, "angle_rel_deg").unwrap();
+    let cid = table::i64_column(clusters, &df, "cluster_id").unwrap();
+    let tp = truth.join("rays.parquet");
+    let tf = table::read_parquet(&tp, None).unwrap();
+    let t_pos = table::i64_column(&tp, &tf, "position").unwrap();
+    let t_d = table::f64_column(&tp, &tf, "delay_ns").unwrap();
+    let t_a = table::f64_column(&tp, &tf, "angle_rel_deg").unwrap();
+    let t_c = table::i64_column(&tp, &tf, "truth_cluster").unwrap();
+    let n_pos = pos.iter().chain(&t_pos).copied().max().unwrap_or(-1) + 1;
+    let mut rays: Vec<Vec<(f64, f64, i64)>> = vec![Vec::new(); n_pos as usize];
+    for i in 0..t_pos.len() {
+        if t_c[i] >= 0 {
+            rays[t_pos[i] as usize].push((t_d[i], t_a[i], t_c[i]));
+        }
+    }
+    let mut out: Partitions = vec![(Vec::new(), Vec::new(), Vec::new()); n_pos as usize];
+    let mut raw_true: Vec<Vec<i64>> = vec![Vec::new(); n_pos as usize];
+    let mut raw_chosen: Vec<Vec<i64>> = vec![Vec::new(); n_pos as usize];
+    let (mut matched, mut total) = (0usize, 0usize);
+    for i in 0..pos.len() {
+        if cid[i] < 0 {
+            continue; // diffuse
+        }
+        let p = pos[i] as usize;
+        total += 1;
+        let best = rays[p]
+            .iter()
+            .filter(|r| (r.0 - d[i]).abs() <= bin_ns && (r.1 - a[i]).abs() <= STEP_DEG / 2.0)
+            .min_by(|x, y| {
+                let dist = |r: &&(f64, f64, i64)| {
+                    ((r.0 - d[i]) / bin_ns).powi(2) + ((r.1 - a[i]) / (STEP_DEG / 2.0)).powi(2)
+                };
+                dist(x).total_cmp(&dist(y))
+            });
+        let t = match best {
+            Some(r) => {
+                matched += 1;
+                r.2
+            }
+            None => -1 - i as i64, // its own cluster
+        };
+        out[p].0.push([d[i], a[i]]);
+        raw_true[p].push(t);
+        raw_chosen[p].push(cid[i]);
+    }
+    let relabel = |v: &[i64]| -> Vec<usize> {
+        let mut ids = BTreeMap::new();
+        v.iter()
+            .map(|x| {
+                let n = ids.len();
+                *ids.entry(*x).or_insert(n)
+            })
+            .collect()
+    };
+    for p in 0..out.len() {
+        out[p].1 = relabel(&raw_chosen[p]);
+        out[p].2 = relabel(&raw_true[p]);
+    }
+    (out, matched as f64 / total.max(1) as f64)
+}
+
+/// Print the cross-validated criterion (the clustering default) of the true partition
+/// against the chosen one, summed over positions, and how many positions prefer which.
+fn criterion_check(clusters: &Path, truth: &Path, bin_ns: f64) {
+    let (parts, matched) = partitions(clusters, truth, bin_ns);
+    let params = ClusterParams::default().check().unwrap();
+    let (mut sum_true, mut sum_chosen) = (0.0, 0.0);
+    let (mut prefer_true, mut prefer_chosen, mut same) = (0, 0, 0);
+    let (mut k_true, mut k_chosen) = (0usize, 0usize);
+    for (raw, chosen, truth) in parts.iter().filter(|p| !p.0.is_empty()) {
+        let ct = likelihood_criterion(raw, truth, Criterion::CrossValidated, &params);
+        let cc = likelihood_criterion(raw, chosen, Criterion::CrossValidated, &params);
+        sum_true += ct;
+        sum_chosen += cc;
+        k_true += truth.iter().max().unwrap() + 1;
+        k_chosen += chosen.iter().max().unwrap() + 1;
+        if (ct - cc).abs() < 1e-9 {
+            same += 1;
+        } else if ct < cc {
+            prefer_true += 1;
+        } else {
+            prefer_chosen += 1;
+        }
+    }
+    eprintln!(
+        "criterion (cross-validated, smaller is better), summed over positions: true partition {sum_true:.1}, chosen {sum_chosen:.1} (true − chosen {:+.1}); positions preferring true {prefer_true}, chosen {prefer_chosen}, tie {same}; clusters true {k_true}, chosen {k_chosen}; {:.1} % of discrete MPCs matched a truth ray",
+        sum_true - sum_chosen,
+        100.0 * matched
+    );
+}
+
+/// One closed-loop run: a model on a scene, and the quantities asserted (indices into
+/// `PICKS`).
+struct Set {
+    name: &'static str,
+    model: ModelConfig,
+    scene: usize,
+    asserted: &'static [usize],
+}
+
+/// The `[diffuse]` section synth draws the walls from.
+fn walls() -> DiffuseModel {
+    DiffuseModel {
+        wall_rcs_per_m: Quantity::new(0.02, "m2/m", "constant"),
+        lambert_exponent: Quantity::new(1.0, "1", "constant"),
+        power_share: Quantity::new(0.5, "1", "constant"),
+        decay: Quantity::new(10.0, "ns", "exponential"),
+    }
+}
+
 #[test]
-fn closed_loop_recovers_the_model_at_three_parameter_sets() {
+fn closed_loop_recovers_the_drawn_environment() {
+    let t0 = Instant::now();
     let tmp = tempfile::tempdir().unwrap();
-    let cpath = campaign(tmp.path());
-    let c = Campaign::load(&cpath).unwrap();
-    // per set: the quantities asserted within 15 % (indices into `PICKS`)
-    let sets: [(f64, f64, f64, &[usize]); 3] = [
-        (1.0, 8.0, 6.0, &[0, 1, 3, 4, 5, 6]),
-        (0.43, 16.9, 8.0, &[1, 5, 6]),
-        (0.2, 30.0, 10.0, &[5]),
+    let scenes = [Scene::hall(), Scene::l_shape()];
+    let cpaths: Vec<PathBuf> = scenes
+        .iter()
+        .enumerate()
+        .map(|(i, sc)| sc.write(&tmp.path().join(format!("scene{i}"))))
+        .collect();
+    let campaigns: Vec<Campaign> = cpaths.iter().map(|p| Campaign::load(p).unwrap()).collect();
+    let mut table1 = ModelConfig::table1_defaults();
+    table1.diffuse = Some(walls());
+    let sets = [
+        Set {
+            name: "set 1 (λ 1.0/ns, AoA 8°, d_c 6 m)",
+            model: common::hall_model(1.0, 8.0, 6.0),
+            scene: 0,
+            asserted: &[0, 3, 4, 5, 6],
+        },
+        Set {
+            name: "set 2 (λ 0.43/ns, AoA 16.9°, d_c 8 m)",
+            model: common::hall_model(0.43, 16.9, 8.0),
+            scene: 0,
+            asserted: &[1, 5],
+        },
+        Set {
+            name: "set 3 (λ 0.2/ns, AoA 30°, d_c 10 m)",
+            model: common::hall_model(0.2, 30.0, 10.0),
+            scene: 0,
+            asserted: &[1, 5],
+        },
+        Set {
+            name: "Table 1 (table1_defaults + [diffuse])",
+            model: table1,
+            scene: 0,
+            asserted: &[2, 5],
+        },
+        Set {
+            name: "L-shape, set 1's model",
+            model: common::hall_model(1.0, 8.0, 6.0),
+            scene: 1,
+            asserted: &[0, 3, 4, 5],
+        },
     ];
     let fit_params = FitParams {
         bootstrap: 100,
@@ -207,21 +494,76 @@ fn closed_loop_recovers_the_model_at_three_parameter_sets() {
     .check()
     .unwrap();
     let mut failures = Vec::new();
-    for (k, (lambda, aoa, dc, asserted)) in sets.iter().enumerate() {
-        let dir = tmp.path().join(format!("set{}", k + 1));
-        std::fs::create_dir_all(&dir).unwrap();
-        let want = common::hall_model(*lambda, *aoa, *dc);
-        want.save(&dir.join("model.toml")).unwrap();
-        let t = dir.join("e_truth");
-        let f = chain(&dir, &cpath, &dir.join("model.toml"), &t);
-        let got = ModelConfig::load(&f).unwrap();
-        let truth = fit_truth(&t, &c, &fit_params).unwrap().model;
-        eprintln!(
-            "== set {}: λ {lambda} /ns, AoA {aoa}°, d_c {dc} m (d_p 0.4 m, Γ 15 ns, γ 4 ns)",
-            k + 1
+    for (k, set) in sets.iter().enumerate() {
+        let ts = Instant::now();
+        let (sc, cpath, c) = (
+            &scenes[set.scene],
+            &cpaths[set.scene],
+            &campaigns[set.scene],
         );
-        print_environment(&t);
-        failures.extend(score(k + 1, &got, &want, &truth, asserted));
+        let dir = tmp.path().join(format!("set{k}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let model = dir.join("model.toml");
+        set.model.save(&model).unwrap();
+        let (e, t) = synth(&dir, cpath, &model, None);
+        let t_synth = ts.elapsed().as_secs_f64();
+        let (cl, f, t_steps) = chain(&dir, cpath, &e);
+        let t_chain = ts.elapsed().as_secs_f64() - t_synth;
+        let got = ModelConfig::load(&f).unwrap();
+        let truth = fit_truth(&t, c, &fit_params).unwrap().model;
+        let env = environment(&t, sc.perimeter_m());
+        let td = Instant::now();
+        // the extra draws without the walls: synth draws them from their own stream, so the
+        // discrete environment (all fit_truth reads) is the same; checked at the campaign seed
+        let bare = dir.join("bare.toml");
+        let mut m = set.model.clone();
+        m.diffuse = None;
+        m.save(&bare).unwrap();
+        if set.model.diffuse.is_some() {
+            let dd = dir.join("bare77");
+            std::fs::create_dir_all(&dd).unwrap();
+            let (_, t) = synth(&dd, cpath, &bare, None);
+            let b = fit_truth(&t, c, &fit_params).unwrap().model;
+            for (q, pick) in PICKS {
+                assert!(
+                    pick(&b) == pick(&truth) || (pick(&b).is_nan() && pick(&truth).is_nan()),
+                    "{q}: truth without walls {} vs with {}",
+                    pick(&b),
+                    pick(&truth)
+                );
+            }
+            std::fs::remove_dir_all(&dd).unwrap();
+        }
+        let draws: Vec<ModelConfig> = DRAW_SEEDS
+            .iter()
+            .map(|&seed| {
+                let dd = dir.join(format!("draw{seed}"));
+                std::fs::create_dir_all(&dd).unwrap();
+                let (_, t) = synth(&dd, cpath, &bare, Some(seed));
+                let m = fit_truth(&t, c, &fit_params).unwrap().model;
+                std::fs::remove_dir_all(&dd).unwrap();
+                m
+            })
+            .collect();
+        let t_draws = td.elapsed().as_secs_f64();
+        eprintln!("== {} on the {}: {env}", set.name, sc.name);
+        failures.extend(score(
+            set.name,
+            &got,
+            &truth,
+            &set.model,
+            &draws,
+            set.asserted,
+        ));
+        let bin_ns = got.bins.as_ref().unwrap().bin_width_ns;
+        criterion_check(&cl, &t, bin_ns);
+        eprintln!(
+            "times: synth {t_synth:.1} s, {t_steps} (chain {t_chain:.1} s), walls check + {} draws {t_draws:.1} s, set {:.1} s",
+            DRAW_SEEDS.len(),
+            ts.elapsed().as_secs_f64()
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
+    eprintln!("closed loop: {:.1} s", t0.elapsed().as_secs_f64());
     assert!(failures.is_empty(), "outside 15 %: {failures:?}");
 }
