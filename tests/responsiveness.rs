@@ -585,8 +585,10 @@ fn geometry_only_scene_reports_its_scatterers() {
         off.len(),
         mt.chain_per_pos.len()
     );
-    // what holds: the truth of the geometry-only scene has no clutter cluster, and the
-    // chain finds clusters at every position; the count per position is printed above
+    // sanity checks only (the must-show — the count per position within ±1 of the truth —
+    // is NOT MET and printed above): a scene without `[clutter]` labels no path clutter
+    // (fails if the truth labelling is wrong), and the chain finds clusters at every
+    // position
     assert_eq!(clutter_rays, 0);
     assert!(mt.chain_per_pos.iter().all(|&c| c > 0));
 }

@@ -73,15 +73,21 @@ impl Footprint {
 }
 
 impl Footprint {
-    /// The two-way half-power beamwidth, degrees (of the broadside table for mechanical
-    /// steering, of beam 0's for electronic).
-    pub(crate) fn half_power_deg(&self) -> f64 {
+    /// The first beam's weight table and the index of its peak.
+    fn broadside(&self) -> (&[f64], usize) {
         let t = &self.w[0];
         let peak = t
             .iter()
             .enumerate()
             .max_by(|a, b| a.1.total_cmp(b.1))
             .map_or(0, |x| x.0);
+        (t, peak)
+    }
+
+    /// The two-way half-power beamwidth, degrees (of the broadside table for mechanical
+    /// steering, of beam 0's for electronic).
+    pub(crate) fn half_power_deg(&self) -> f64 {
+        let (t, peak) = self.broadside();
         let up = (peak..t.len()).find(|&i| t[i] < 0.5).unwrap_or(t.len() - 1) - peak;
         let down = peak - (0..=peak).rev().find(|&i| t[i] < 0.5).unwrap_or(0);
         (up + down) as f64 * WSTEP
@@ -90,12 +96,7 @@ impl Footprint {
     /// The largest angle from the beam at which the two-way weight still reaches `thr`,
     /// degrees (at most 90°).
     pub(crate) fn reach_deg(&self, thr: f64) -> f64 {
-        let t = &self.w[0];
-        let peak = t
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map_or(0, |x| x.0);
+        let (t, peak) = self.broadside();
         let far = t
             .iter()
             .enumerate()
