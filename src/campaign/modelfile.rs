@@ -190,27 +190,7 @@ impl ModelConfig {
                 format!("unsupported {}", self.schema_version),
             ));
         }
-        let q = [
-            ("inter_cluster_rate", &self.inter_cluster_rate, "1/ns"),
-            ("intra_cluster_rate", &self.intra_cluster_rate, "1/ns"),
-            ("intra_cluster_aoa", &self.intra_cluster_aoa, "deg"),
-            ("perimeter_offset", &self.perimeter_offset, "m"),
-            ("perimeter_spacing", &self.perimeter_spacing, "m"),
-            ("cluster_decay", &self.cluster_decay, "ns"),
-            ("ray_decay", &self.ray_decay, "ns"),
-            ("rays_per_cluster", &self.rays_per_cluster, "count"),
-            ("cluster_rrcs", &self.cluster_rrcs, "m2"),
-        ];
-        let d = self.diffuse.as_ref();
-        let dq = d.into_iter().flat_map(|d| {
-            [
-                ("diffuse.wall_rcs_per_m", &d.wall_rcs_per_m, "m2/m"),
-                ("diffuse.lambert_exponent", &d.lambert_exponent, "1"),
-                ("diffuse.power_share", &d.power_share, "1"),
-                ("diffuse.decay", &d.decay, "ns"),
-            ]
-        });
-        for (name, v, unit) in q.into_iter().chain(dq) {
+        for (name, v, unit) in self.quantities() {
             if v.unit != unit {
                 return Err(Error::param(
                     format!("{name}.unit"),
@@ -257,30 +237,33 @@ impl ModelConfig {
         let mut out: Vec<(String, String)> = self
             .quantities()
             .into_iter()
-            .filter_map(|(n, q)| q.not_estimable.clone().map(|r| (n, r)))
+            .filter_map(|(n, q, _)| q.not_estimable.clone().map(|r| (n.to_string(), r)))
             .collect();
         out.sort();
         out
     }
 
-    /// Every quantity by its file name (`diffuse.` prefix for the dense component's).
-    fn quantities(&self) -> Vec<(String, &Quantity)> {
-        let mut v: Vec<(String, &Quantity)> = vec![
-            ("inter_cluster_rate".into(), &self.inter_cluster_rate),
-            ("intra_cluster_rate".into(), &self.intra_cluster_rate),
-            ("intra_cluster_aoa".into(), &self.intra_cluster_aoa),
-            ("perimeter_offset".into(), &self.perimeter_offset),
-            ("perimeter_spacing".into(), &self.perimeter_spacing),
-            ("cluster_decay".into(), &self.cluster_decay),
-            ("ray_decay".into(), &self.ray_decay),
-            ("rays_per_cluster".into(), &self.rays_per_cluster),
-            ("cluster_rrcs".into(), &self.cluster_rrcs),
+    /// Every quantity by its file name (`diffuse.` prefix for the dense component's), with
+    /// the unit the schema fixes for it.
+    fn quantities(&self) -> Vec<(&'static str, &Quantity, &'static str)> {
+        let mut v = vec![
+            ("inter_cluster_rate", &self.inter_cluster_rate, "1/ns"),
+            ("intra_cluster_rate", &self.intra_cluster_rate, "1/ns"),
+            ("intra_cluster_aoa", &self.intra_cluster_aoa, "deg"),
+            ("perimeter_offset", &self.perimeter_offset, "m"),
+            ("perimeter_spacing", &self.perimeter_spacing, "m"),
+            ("cluster_decay", &self.cluster_decay, "ns"),
+            ("ray_decay", &self.ray_decay, "ns"),
+            ("rays_per_cluster", &self.rays_per_cluster, "count"),
+            ("cluster_rrcs", &self.cluster_rrcs, "m2"),
         ];
         if let Some(d) = &self.diffuse {
-            v.push(("diffuse.wall_rcs_per_m".into(), &d.wall_rcs_per_m));
-            v.push(("diffuse.lambert_exponent".into(), &d.lambert_exponent));
-            v.push(("diffuse.power_share".into(), &d.power_share));
-            v.push(("diffuse.decay".into(), &d.decay));
+            v.extend([
+                ("diffuse.wall_rcs_per_m", &d.wall_rcs_per_m, "m2/m"),
+                ("diffuse.lambert_exponent", &d.lambert_exponent, "1"),
+                ("diffuse.power_share", &d.power_share, "1"),
+                ("diffuse.decay", &d.decay, "ns"),
+            ]);
         }
         v
     }

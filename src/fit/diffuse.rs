@@ -25,6 +25,7 @@
 use crate::campaign::modelfile::{DiffuseModel, Quantity};
 use crate::error::Result;
 use crate::fit::estimators::bootstrap_groups;
+use crate::fit::quantities::ls_line;
 use crate::mpc::{Component, Mpc};
 use std::path::Path;
 
@@ -35,20 +36,6 @@ struct Row {
     x: f64,
     power_db: f64,
     delay_ns: f64,
-}
-
-/// Least-squares slope and intercept of y on x; None for fewer than 2 points or no spread.
-fn line(pts: impl Iterator<Item = (f64, f64)> + Clone) -> Option<(f64, f64)> {
-    let n = pts.clone().count() as f64;
-    if n < 2.0 {
-        return None;
-    }
-    let (sx, sy) = pts.clone().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
-    let (mx, my) = (sx / n, sy / n);
-    let (sxx, sxy) = pts.fold((0.0, 0.0), |a, p| {
-        (a.0 + (p.0 - mx).powi(2), a.1 + (p.0 - mx) * (p.1 - my))
-    });
-    (sxx > 0.0).then(|| (sxy / sxx, my - sxy / sxx * mx))
 }
 
 /// The Lambert exponent of `rows`, or why not.
@@ -67,7 +54,8 @@ fn exponent(rows: &[Row]) -> std::result::Result<f64, String> {
             hi - lo
         ));
     }
-    let (slope, _) = line(rows.iter().map(|r| (r.x, r.y))).ok_or("no spread of incidence")?;
+    let xy: Vec<(f64, f64)> = rows.iter().map(|r| (r.x, r.y)).collect();
+    let (slope, _) = ls_line(&xy).ok_or("no spread of incidence")?;
     Ok((1.0 + slope).max(0.0))
 }
 
@@ -86,7 +74,8 @@ fn level(rows: &[Row], n: f64) -> Option<f64> {
 
 /// The power decay of `rows`, or why not.
 fn decay(rows: &[Row]) -> std::result::Result<f64, String> {
-    let (slope, _) = line(rows.iter().map(|r| (r.delay_ns, r.power_db)))
+    let pairs: Vec<(f64, f64)> = rows.iter().map(|r| (r.delay_ns, r.power_db)).collect();
+    let (slope, _) = ls_line(&pairs)
         .ok_or_else(|| format!("{} diffuse MPCs without spread in delay", rows.len()))?;
     if slope >= 0.0 {
         return Err(format!(

@@ -388,16 +388,22 @@ pub(super) fn decay(pairs: &[(f64, f64)]) -> Option<f64> {
     if pairs.len() < 3 {
         return None;
     }
+    let (slope, _) = ls_line(pairs)?;
+    (slope < 0.0).then(|| -10.0 * std::f64::consts::LOG10_E / slope)
+}
+
+/// Least-squares line (slope, intercept) of y on x; None for fewer than 2 pairs or no spread
+/// in x.
+pub(super) fn ls_line(pairs: &[(f64, f64)]) -> Option<(f64, f64)> {
+    if pairs.len() < 2 {
+        return None;
+    }
     let n = pairs.len() as f64;
     let mx = pairs.iter().map(|p| p.0).sum::<f64>() / n;
     let my = pairs.iter().map(|p| p.1).sum::<f64>() / n;
     let sxx: f64 = pairs.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = pairs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    if sxx <= 0.0 {
-        return None;
-    }
-    let slope = sxy / sxx;
-    (slope < 0.0).then(|| -10.0 * std::f64::consts::LOG10_E / slope)
+    (sxx > 0.0).then(|| (sxy / sxx, my - sxy / sxx * mx))
 }
 
 /// Least-absolute-deviation decay constant of a line through the origin from (excess delay,

@@ -114,6 +114,17 @@ pub struct DiffuseSummary {
     pub level_m2_per_m: f64,
 }
 
+impl DiffuseSummary {
+    /// Nothing labelled (the stage off, or no MPC).
+    pub fn none() -> DiffuseSummary {
+        DiffuseSummary {
+            on_curve: 0,
+            diffuse: 0,
+            level_m2_per_m: f64::NAN,
+        }
+    }
+}
+
 /// Step of the rays cast across a beam, degrees.
 const RAY_STEP_DEG: f64 = 0.1;
 
@@ -156,11 +167,7 @@ pub(crate) fn label(
     params: &DiffuseValid,
 ) -> Result<DiffuseSummary> {
     if !params.enabled || mpcs.is_empty() {
-        return Ok(DiffuseSummary {
-            on_curve: 0,
-            diffuse: 0,
-            level_m2_per_m: f64::NAN,
-        });
+        return Ok(DiffuseSummary::none());
     }
     let m = &c.manifest;
     let layout = Layout::load(&c.layout_path())?;
@@ -204,26 +211,17 @@ pub(crate) fn label(
         })
         .collect();
     let mut on: Vec<f64> = rho.iter().flatten().map(|x| x.0).collect();
-    if !is_dense(&on) {
-        // no dense component to read a level from: every MPC stays discrete
-        for (x, r) in mpcs.iter_mut().zip(&rho) {
-            x.wall = r.map(|r| r.1);
-        }
-        return Ok(DiffuseSummary {
-            on_curve: on.len(),
-            diffuse: 0,
-            level_m2_per_m: f64::NAN,
-        });
-    }
-    on.sort_by(f64::total_cmp);
-    let median = on[on.len() / 2];
-    let level = median / std::f64::consts::LN_2;
-    let limit = level * 10f64.powf(params.discrete_db / 10.0);
+    // no dense component to read a level from: every MPC stays discrete
+    let level = is_dense(&on).then(|| {
+        on.sort_by(f64::total_cmp);
+        on[on.len() / 2] / std::f64::consts::LN_2
+    });
+    let limit = level.map(|l| l * 10f64.powf(params.discrete_db / 10.0));
     let mut diffuse = 0;
     for (x, r) in mpcs.iter_mut().zip(&rho) {
         x.wall = r.map(|r| r.1);
-        x.component = match r {
-            Some((v, _)) if *v <= limit => {
+        x.component = match (r, limit) {
+            (Some((v, _)), Some(limit)) if *v <= limit => {
                 diffuse += 1;
                 Component::Diffuse
             }
@@ -233,7 +231,7 @@ pub(crate) fn label(
     Ok(DiffuseSummary {
         on_curve: on.len(),
         diffuse,
-        level_m2_per_m: level,
+        level_m2_per_m: level.unwrap_or(f64::NAN),
     })
 }
 

@@ -295,11 +295,7 @@ pub fn extract_labelled(
             fp,
             &diffuse_params,
         )?,
-        None => DiffuseSummary {
-            on_curve: 0,
-            diffuse: 0,
-            level_m2_per_m: f64::NAN,
-        },
+        None => DiffuseSummary::none(),
     };
     Ok((mpcs, summary))
 }
