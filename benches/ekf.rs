@@ -282,7 +282,27 @@ fn scalable(b: &Bench) {
     let p = EkfParams::default().check().unwrap();
     let noise = NoiseModel::new(&em.meta, p.model_error, Path::new("floor")).unwrap();
     let mut f = TiledEkf::new(spec.rows, spec.cols, p.tile, &p).unwrap();
-    let st = ekf_run(model, em, kernel, &p, &noise, &mut f, &|_, _| {}).unwrap();
+    // the map job's sight: the OG's detector (P_fa 1e-3, 10 dB mask) and occlusion model
+    let og = pradar::mapping::OgParams::default().check().unwrap();
+    let thr =
+        pradar::mapping::og::detection_threshold(&em.meta, og.pfa, Path::new("floor")).unwrap();
+    let det = pradar::mapping::og::Detector::new(thr, kernel, og.mask_db, model.min_bin);
+    let occlusion = pradar::mapping::grid::Occlusion::new(model, model.min_bin, og.side_db);
+    let sight = pradar::mapping::ekf::Sight {
+        detector: &det,
+        occlusion: &occlusion,
+    };
+    let st = ekf_run(
+        model,
+        em,
+        kernel,
+        &p,
+        &noise,
+        Some(sight),
+        &mut f,
+        &|_, _| {},
+    )
+    .unwrap();
     println!(
             "scalable cells={n} cell_m={cell_m:.3} poses={} updates={} campaign_s={:.2} build_s={:.2} update_s={:.2} per_update_ms={:.3} rows/update={:.0} entries/update={:.0} cov_MB={:.1} peak_MB={:.0} (before filter {base:.0})",
             model.poses.len(),

@@ -454,12 +454,17 @@ fn run_filter(
     f: &mut dyn RrcsFilter,
 ) -> pradar::mapping::ekf::EkfStats {
     let kernel = window_kernel(&l.campaign).unwrap();
+    let occlusion = l.occlusion(&pradar::mapping::OgParams::default().check().unwrap());
     ekf_run(
         &l.model,
         &l.energy,
         &kernel,
         params,
         &noise_of(l, params),
+        Some(pradar::mapping::ekf::Sight {
+            detector: &l.detector,
+            occlusion: &occlusion,
+        }),
         f,
         &|_, _| {},
     )
@@ -530,7 +535,10 @@ fn scalable_matches_dense_on_a_coarse_corridor() {
     let spec = l.model.spec;
     let n = spec.len();
     let reference = l.layout.rasterize(0.3, GridParams::default().margin_m);
-    let region = observable_region(&[&l.model], &reference);
+    let region = pradar::mapping::job::Regions {
+        observable: observable_region(&[&l.model], &l.layout),
+        building: pradar::mapping::job::building_region(&l.layout, &reference),
+    };
     let dp = EkfParams {
         variant: EkfVariant::Dense,
         ..Default::default()
@@ -647,7 +655,7 @@ fn ekf_corridor_map_beats_all_free_and_random() {
     // random maps of equal occupancy on the observable region (5 seeds) from the CSV
     let l = load(c, e, 0.1);
     let reference = l.layout.rasterize(0.1, 0.5);
-    let region = observable_region(&[&l.model], &reference);
+    let region = observable_region(&[&l.model], &l.layout);
     let refo: Vec<bool> = reference
         .cells
         .iter()

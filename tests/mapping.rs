@@ -536,7 +536,10 @@ fn two_trajectories_fused_beat_either_alone() {
     assert_eq!(worst, 0.0);
     // and the library's scores agree with the CLI's
     let reference = loaded[0].layout.rasterize(0.1, 0.5);
-    let region = observable_region(&[&loaded[0].model, &loaded[1].model], &reference);
+    let region = pradar::mapping::job::Regions {
+        observable: observable_region(&[&loaded[0].model, &loaded[1].model], &loaded[0].layout),
+        building: pradar::mapping::job::building_region(&loaded[0].layout, &reference),
+    };
     let sc = score(&f, &reference, &region);
     assert!((sc.observable.psi - fused).abs() < 1e-12);
 }

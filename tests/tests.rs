@@ -18,6 +18,7 @@ mod fit_coverage;
 mod fit_estimators;
 mod mapping;
 mod mpc;
+mod occlusion;
 mod physics;
 mod responsiveness;
 mod synth;

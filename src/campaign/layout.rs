@@ -447,7 +447,13 @@ impl Layout {
 
     /// Rasterise to the reference map over the bounding box plus `margin_m`.
     pub fn rasterize(&self, cell_m: f64, margin_m: f64) -> ReferenceMap {
-        let spec = GridSpec::covering(self.bbox(), cell_m, margin_m);
+        self.rasterize_on(GridSpec::covering(self.bbox(), cell_m, margin_m))
+    }
+
+    /// Rasterise on a given grid: a cell is occupied when a wall crosses it or its centre
+    /// lies in an obstacle, free when its centre is inside the perimeter, outside otherwise.
+    pub fn rasterize_on(&self, spec: GridSpec) -> ReferenceMap {
+        let cell_m = spec.cell_m;
         let lines: Vec<Line<f64>> = self.walls.iter().map(|w| w.line).collect();
         let mut cells = vec![CellClass::Outside; spec.len()];
         for r in 0..spec.rows {

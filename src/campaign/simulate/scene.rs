@@ -60,6 +60,12 @@ pub struct PointTarget {
     pub y_m: f64,
     /// RRCS √σ, m.
     pub rrcs_m: f64,
+    /// Optional `[via_x_m, via_y_m]`: the point the path is seen through — the last
+    /// reflection of a multi-bounce path, the target then being the image of a reflector
+    /// through that wall (image method). Occlusion is tested from the pose to this point,
+    /// not to the target.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub via_m: Option<[f64; 2]>,
 }
 
 fn d_true() -> bool {
@@ -137,10 +143,16 @@ impl ParamGuard for SceneConfig {
             ));
         }
         for (i, t) in self.targets.iter().enumerate() {
-            if !(t.x_m.is_finite() && t.y_m.is_finite() && t.rrcs_m.is_finite() && t.rrcs_m > 0.0) {
+            let via_ok = t.via_m.is_none_or(|v| v.iter().all(|c| c.is_finite()));
+            if !(t.x_m.is_finite()
+                && t.y_m.is_finite()
+                && t.rrcs_m.is_finite()
+                && t.rrcs_m > 0.0
+                && via_ok)
+            {
                 return Err(Error::param(
                     format!("scene.targets[{i}]"),
-                    "x_m, y_m finite and rrcs_m > 0",
+                    "x_m, y_m (and via_m) finite and rrcs_m > 0",
                 ));
             }
         }
@@ -300,11 +312,11 @@ impl Scene {
         }
         for t in &cfg.targets {
             let pos = Coord { x: t.x_m, y: t.y_m };
-            sc.push(Scatterer::point(
-                ScattererKind::Target,
-                pos,
-                Complex64::new(t.rrcs_m, 0.0),
-            ));
+            let mut s = Scatterer::point(ScattererKind::Target, pos, Complex64::new(t.rrcs_m, 0.0));
+            if let Some([x, y]) = t.via_m {
+                s.anchor = Coord { x, y };
+            }
+            sc.push(s);
         }
         Scene {
             scatterers: sc,

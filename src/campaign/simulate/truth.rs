@@ -316,6 +316,7 @@ mod tests {
                 x_m: 1.0,
                 y_m: 2.2,
                 rrcs_m: 0.3,
+                via_m: None,
             }],
         };
         let scene = Scene::build(layout, cfg.check().unwrap(), clutter.as_ref(), 6e9, 11);

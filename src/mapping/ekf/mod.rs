@@ -13,7 +13,13 @@
 //!
 //! Observation of (pose, direction): the energy vector over the usable bins k ≥ `min_bin`
 //! that have at least one illuminated cell (main and side lobes down to the observation
-//! model's floor; soft input, no detection step). Prediction
+//! model's floor; soft input), truncated after the first strong return: with the run's
+//! [`Sight`] (the OG's detector and [`crate::mapping::grid::visibility`]), only the bins up
+//! to the beam's occluder plus the guard g are observed, and only the cells visible from
+//! the pose (depth behind the visibility polygon ≤ g) enter H — a shadowed cell's
+//! coefficient is 0, so late energy (multipath, echoes from behind the wall) is never
+//! explained by RRCS behind the surface. The occluders are confirmed against the filter's
+//! own binary map before the previous pose. Prediction
 //!   h_k(x) = Σ_i c̃_{k,i}·x_i² + N0·TW,
 //!   c̃_{k,i} = Σ_m c_{m,i}·K(k − m),
 //! c_{m,i} the observation model's radar-equation coefficient of cell i in bin m (share of its
@@ -111,7 +117,7 @@ pub use dense::DenseEkf;
 pub use linalg::cholesky;
 pub use observation::{truncate_kernel, Linearized, NoiseModel, Observation};
 pub use params::{normal_cdf, EkfParams, EkfValid, EkfVariant};
-pub use run::{ekf_run, mean_grey, std_grey, EkfMap, EkfReport, EkfStats};
+pub use run::{ekf_run, mean_grey, std_grey, EkfMap, EkfReport, EkfStats, Sight};
 pub use tiled::TiledEkf;
 
 use crate::error::Result;

@@ -136,6 +136,28 @@ impl Observation {
     }
 }
 
+impl Observation {
+    /// Keep only the rows whose bin satisfies `keep` (entries of the others dropped).
+    pub fn retain_rows(&mut self, keep: impl Fn(u32) -> bool) {
+        let mut out = Observation {
+            ptr: vec![0],
+            ..Default::default()
+        };
+        for j in 0..self.rows() {
+            if !keep(self.bin[j]) {
+                continue;
+            }
+            let (a, b) = (self.ptr[j], self.ptr[j + 1]);
+            out.cell.extend_from_slice(&self.cell[a..b]);
+            out.coef.extend_from_slice(&self.coef[a..b]);
+            out.bin.push(self.bin[j]);
+            out.z.push(self.z[j]);
+            out.ptr.push(out.cell.len());
+        }
+        *self = out;
+    }
+}
+
 /// An observation linearised at the mean x⁻: per row the predicted energy h (with the noise
 /// mean), the innovation ν = z − h and R; per entry H = 2·c̃·x⁻ and x⁻.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -1,7 +1,8 @@
 //! Running the EKF over a run ([`ekf_run`]) and reading the result ([`EkfMap`]).
 //!
 //! Takes an [`ObservationModel`], the run's [`EnergyMatrix`], the window kernel, checked
-//! [`EkfValid`] parameters, the run's [`NoiseModel`] and a filter; gives the filter updated
+//! [`EkfValid`] parameters, the run's [`NoiseModel`], optionally what it can see
+//! ([`Sight`]) and a filter; gives the filter updated
 //! by every (pose, direction) in order and [`EkfStats`]. The observations of pose p are
 //! built in parallel over directions (beam, kernel convolution) while those of pose p − 1
 //! are applied, in direction order, on the calling thread, so the result does not depend on
@@ -18,7 +19,8 @@ use super::{
 };
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
-use crate::mapping::grid::ObservationModel;
+use crate::mapping::grid::{ObservationModel, Occlusion};
+use crate::mapping::og::Detector;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -33,6 +35,8 @@ pub struct EkfStats {
     pub entries: u64,
     /// Means reflected by the positivity step.
     pub reflected: u64,
+    /// Detections beyond the occluder of their beam, whose bins were not observed.
+    pub withheld: u64,
     /// Time building observations, s (wall).
     pub build_seconds: f64,
     /// Time in the filter updates, s (wall).
@@ -43,12 +47,14 @@ pub struct EkfStats {
 
 /// Run the filter over one run: every pose, every direction, in order; `progress(done,
 /// total)` counts poses.
+#[allow(clippy::too_many_arguments)]
 pub fn ekf_run(
     model: &ObservationModel,
     energy: &EnergyMatrix,
     kernel: &[f64],
     params: &EkfValid,
     noise: &NoiseModel,
+    sight: Option<Sight<'_>>,
     filter: &mut dyn RrcsFilter,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EkfStats> {
@@ -68,27 +74,86 @@ pub fn ekf_run(
     let np = model.poses.len();
     // the observations of pose p are built (in parallel over directions) while those of
     // pose p − 1 are applied, in order, on the calling thread
-    let build = |p: usize| -> (Vec<Observation>, f64) {
+    // with a sight model, the occluders of pose p are confirmed against the binary map of
+    // the filter before pose p − 1 was applied (the state the observations are built from)
+    let build = |p: usize, occupied: Option<Vec<bool>>| -> (Vec<Observation>, f64, u64) {
         let tb = Instant::now();
         let geom = model.pose_geometry(p);
-        let obs: Vec<Observation> = (0..model.directions())
+        let seen = sight.map(|s| {
+            let dets: Vec<Vec<bool>> = (0..model.directions())
+                .into_par_iter()
+                .map(|d| {
+                    let mut det = Vec::new();
+                    s.detector.detect(energy.profile(p, d), &mut det);
+                    det
+                })
+                .collect();
+            let echoes = s
+                .occlusion
+                .echoes(model, energy, p, dets, occupied.as_deref());
+            let vis = s.occlusion.visibility(model, &geom, &echoes);
+            (echoes, vis, s.occlusion.guard_bins())
+        });
+        let obs: Vec<(Observation, u64)> = (0..model.directions())
             .into_par_iter()
             .map_init(
                 || vec![0.0; n],
                 |scratch, d| {
-                    let beam = model.beam(&geom, d);
                     let prof = energy.profile(p, d);
-                    let bins = prof.len().min(model.bins);
-                    Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch)
+                    let mut bins = prof.len().min(model.bins);
+                    let mut withheld = 0;
+                    let beam = match &seen {
+                        Some((echoes, vis, guard)) => {
+                            let last = echoes.occluder[d].map_or(bins, |o| o + guard);
+                            withheld =
+                                (last + 1..bins).filter(|&k| echoes.det[d][k]).count() as u64;
+                            bins = bins.min(last + 1);
+                            model.beam_seen(&geom, d, Some((vis, last)))
+                        }
+                        None => model.beam(&geom, d),
+                    };
+                    let mut o =
+                        Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch);
+                    if let Some((echoes, _, _)) = &seen {
+                        // the rows around a detection weaker than the occluder before it
+                        // (leakage of a strong echo at another bearing, as in the OG) are not
+                        // observed: no cell of this beam explains them
+                        if let Some(first) = echoes.occluder[d] {
+                            let j = kernel.len().saturating_sub(1);
+                            let det = &echoes.det[d];
+                            let early: Vec<usize> = (0..first).filter(|&k| det[k]).collect();
+                            withheld += early.len() as u64;
+                            if !early.is_empty() {
+                                o.retain_rows(|b| {
+                                    let b = b as usize;
+                                    !early.iter().any(|&k| b.abs_diff(k) <= j)
+                                });
+                            }
+                        }
+                    }
+                    (o, withheld)
                 },
             )
             .collect();
-        (obs, tb.elapsed().as_secs_f64())
+        let withheld = obs.iter().map(|o| o.1).sum();
+        (
+            obs.into_iter().map(|o| o.0).collect(),
+            tb.elapsed().as_secs_f64(),
+            withheld,
+        )
     };
-    let mut current = if np > 0 { Some(build(0)) } else { None };
+    let snapshot =
+        |f: &dyn RrcsFilter| -> Option<Vec<bool>> { sight.map(|_| occupied_cells(f, params)) };
+    let mut current = if np > 0 {
+        Some(build(0, snapshot(&*filter)))
+    } else {
+        None
+    };
     for p in 0..np {
-        let (obs, build_s) = current.take().expect("built");
+        let (obs, build_s, withheld) = current.take().expect("built");
         st.build_seconds += build_s;
+        st.withheld += withheld;
+        let occupied = if p + 1 < np { snapshot(&*filter) } else { None };
         let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
             let tu = Instant::now();
             for o in &obs {
@@ -104,7 +169,7 @@ pub fn ekf_run(
         };
         let (applied, next) = rayon::join(
             || apply(&mut *filter, &mut st),
-            || (p + 1 < np).then(|| build(p + 1)),
+            || (p + 1 < np).then(|| build(p + 1, occupied)),
         );
         applied?;
         current = next;
@@ -112,6 +177,28 @@ pub fn ekf_run(
     }
     st.seconds = t0.elapsed().as_secs_f64();
     Ok(st)
+}
+
+/// What the EKF can see (`map --method ekf` always gives it): the run's detector and its
+/// occlusion model ([`crate::mapping::grid::visibility`]). With it, an observation keeps
+/// only the bins up to its beam's occluder plus the guard and only the visible cells;
+/// without it, every bin and every illuminated cell (the filter's unit tests and the
+/// dense-vs-scalable comparisons on synthetic scenes).
+#[derive(Debug, Clone, Copy)]
+pub struct Sight<'a> {
+    /// Detector of the run.
+    pub detector: &'a Detector,
+    /// Occlusion model of the run.
+    pub occlusion: &'a Occlusion,
+}
+
+/// Binary map of a filter's state: x̂ − κ·σ̂ > μ0.
+fn occupied_cells(f: &dyn RrcsFilter, params: &EkfValid) -> Vec<bool> {
+    f.mean()
+        .iter()
+        .zip(f.variances())
+        .map(|(&m, v)| m - params.kappa * v.max(0.0).sqrt() > params.mu0)
+        .collect()
 }
 
 /// The EKF map: posterior mean and standard deviation per cell, soft and binary maps.

@@ -27,8 +27,8 @@
 //!   the buckets inside its lobes above the floor, so the cost is proportional to the
 //!   illuminated cells.
 //!
-//! Occlusion is not modelled (the inverse sensor models handle it through "free before the
-//! first detection"). Beams are built on demand per pose and reused for every bin and every
+//! What a scan can see (the occluder of each beam, the visibility of each cell) is
+//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Beams are built on demand per pose and reused for every bin and every
 //! pass of a mapper; [`ObservationModel::beams`] builds one pose's beams in parallel.
 
 use crate::campaign::layout::GridSpec;
@@ -39,8 +39,10 @@ use crate::units::{wrap_rad, C0};
 use rayon::prelude::*;
 
 mod gain;
+pub mod visibility;
 use gain::GainModel;
 use std::f64::consts::PI;
+pub use visibility::{Occlusion, ScanEchoes, Visibility};
 
 /// Grid and observation-model parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -321,6 +323,18 @@ impl ObservationModel {
 
     /// The beam of direction `d` from a pose's geometry.
     pub fn beam(&self, geom: &PoseGeometry, d: usize) -> Beam {
+        self.beam_seen(geom, d, None)
+    }
+
+    /// The beam of direction `d` restricted to what it can see: with `seen = (vis, last)`
+    /// only the cells `vis` lets receive occupancy evidence and the bins ≤ `last` (the
+    /// rows of later bins stay empty).
+    pub fn beam_seen(
+        &self,
+        geom: &PoseGeometry,
+        d: usize,
+        seen: Option<(&Visibility, usize)>,
+    ) -> Beam {
         let floor = self.params.floor_weight();
         let gmax = self.gain.gmax[d];
         let k_rad = self.lambda_m * self.lambda_m / (4.0 * PI).powi(3);
@@ -331,6 +345,11 @@ impl ObservationModel {
             let a = geom.bucket[bucket_of(lo)] as usize;
             let b = geom.bucket[bucket_of(hi) + 1] as usize;
             for i in a..b {
+                if let Some((vis, _)) = seen {
+                    if !vis.visible(geom.cell[i]) {
+                        continue;
+                    }
+                }
                 let g = self.gain.gain(d, geom.theta[i]);
                 let w = (g / gmax) * (g / gmax);
                 if w < floor {
@@ -340,6 +359,9 @@ impl ObservationModel {
                 let c0 = g * g * k_rad / (r * r * r * r);
                 for j in geom.ptr[i] as usize..geom.ptr[i + 1] as usize {
                     let k = geom.bin[j];
+                    if seen.is_some_and(|(_, last)| k as usize > last) {
+                        continue;
+                    }
                     let sh = geom.share[j];
                     counts[k as usize + 1] += 1;
                     tmp.push((k, geom.cell[i], w as f32, sh, (c0 * sh as f64) as f32));

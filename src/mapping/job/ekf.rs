@@ -10,15 +10,16 @@
 //! bytes).
 
 use super::{
-    load_runs, runs_region, score_binary, write_metrics_json, write_reference, FusionRow,
-    LoadedRun, MapReport, MapValid, MetricsPair, RunSummary,
+    load_runs, runs_regions, score_binary, write_metrics_json, write_reference, FusionRow,
+    LoadedRun, MapReport, MapValid, MetricsPair, Regions, RunSummary,
 };
 use crate::campaign::layout::{GridSpec, ReferenceMap};
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{
     ekf_run, mean_grey, new_filter, std_grey, truncate_kernel, EkfMap, EkfReport, EkfStats,
-    EkfValid, EkfVariant, NoiseModel, RrcsFilter,
+    EkfValid, EkfVariant, NoiseModel, RrcsFilter, Sight,
 };
+use crate::mapping::grid::Occlusion;
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
 use std::path::Path;
 
@@ -26,9 +27,20 @@ use std::path::Path;
 struct EkfInputs {
     loaded: Vec<LoadedRun>,
     reference: ReferenceMap,
-    region: Vec<bool>,
+    region: Regions,
     kernels: Vec<Vec<f64>>,
     noises: Vec<NoiseModel>,
+    occlusions: Vec<Occlusion>,
+}
+
+impl EkfInputs {
+    /// What run `i`'s filter can see.
+    fn sight(&self, i: usize) -> Sight<'_> {
+        Sight {
+            detector: &self.loaded[i].detector,
+            occlusion: &self.occlusions[i],
+        }
+    }
 }
 
 /// What filtering the runs gave: the fused filter, its statistics per run, the fusion
@@ -70,7 +82,7 @@ pub fn run_map_ekf(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) ->
         cols: spec.cols,
         cell_m: spec.cell_m,
         eta,
-        observable_cells: inputs.region.iter().filter(|&&v| v).count(),
+        observable_cells: inputs.region.observable.iter().filter(|&&v| v).count(),
         metrics,
         runs,
         fusion: f.fusion,
@@ -92,10 +104,12 @@ pub fn run_map_ekf(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) ->
 /// Load the runs, their observable region, window kernels and noise models.
 fn ekf_inputs(opts: &MapValid, params: &EkfValid) -> Result<EkfInputs> {
     let (loaded, reference) = load_runs(opts)?;
-    let region = runs_region(&loaded, &reference);
+    let region = runs_regions(&loaded, &reference);
     let mut kernels = Vec::new();
     let mut noises = Vec::new();
+    let mut occlusions = Vec::new();
     for l in &loaded {
+        occlusions.push(l.occlusion(&opts.og()));
         kernels.push(super::window_kernel(&l.campaign)?);
         noises.push(NoiseModel::new(
             &l.energy.meta,
@@ -109,6 +123,7 @@ fn ekf_inputs(opts: &MapValid, params: &EkfValid) -> Result<EkfInputs> {
         region,
         kernels,
         noises,
+        occlusions,
     })
 }
 
@@ -134,6 +149,7 @@ fn filter_runs(
             &inp.kernels[i],
             params,
             &inp.noises[i],
+            Some(inp.sight(i)),
             filter.as_mut(),
             &|d, _| progress(base + d, total),
         )?;
@@ -158,6 +174,7 @@ fn filter_runs(
                 &inp.kernels[i],
                 params,
                 &inp.noises[i],
+                Some(inp.sight(i)),
                 f.as_mut(),
                 &|_, _| {},
             )?;

@@ -12,7 +12,7 @@ use crate::campaign::layout::{GridSpec, Layout, ReferenceMap};
 use crate::campaign::manifest::{Campaign, Pose};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
-use crate::mapping::grid::{GridValid, ObservationModel};
+use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
 use crate::mapping::og::{detection_threshold, Detector, OgValid};
 use std::path::PathBuf;
 
@@ -34,6 +34,18 @@ pub struct LoadedRun {
     /// The poses the data were recorded at (the manifest's; `model.poses` holds the poses
     /// the mapper believes, which differ under [`super::PoseNoise`]).
     pub true_poses: Vec<Pose>,
+}
+
+impl LoadedRun {
+    /// The run's occlusion model (first usable bin of the model and the detector, the
+    /// side-lobe margin of `og`), shared by both mappers.
+    pub fn occlusion(&self, og: &OgValid) -> Occlusion {
+        Occlusion::new(
+            &self.model,
+            self.model.min_bin.max(self.detector.min_bin),
+            og.side_db,
+        )
+    }
 }
 
 /// First usable bin of an energy table (see the module docs).

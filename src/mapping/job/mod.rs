@@ -57,7 +57,10 @@ pub mod score;
 
 pub use ekf::run_map_ekf;
 pub use load::{load_run, load_runs, min_bin, window_kernel, LoadedRun};
-pub use score::{metrics_table, observable_region, runs_region, score, score_binary, MetricsPair};
+pub use score::{
+    building_region, metrics_table, observable_region, runs_regions, score, score_binary,
+    ClassFigures, MetricsPair, Regions,
+};
 
 use crate::campaign::layout::{CellClass, ReferenceMap};
 use crate::campaign::manifest::Pose;
@@ -296,7 +299,7 @@ pub fn run_map(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
 fn run_map_og(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
     let (loaded, reference) = load_runs(opts)?;
     let (maps, stats) = og_maps(&loaded, &opts.og(), opts.method, progress)?;
-    let region = runs_region(&loaded, &reference);
+    let region = runs_regions(&loaded, &reference);
     let fused = fuse(&maps)?;
     let metrics = score(&fused, &reference, &region);
     let mut runs = Vec::new();
@@ -326,7 +329,7 @@ fn run_map_og(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Resu
         cols: spec.cols,
         cell_m: spec.cell_m,
         eta: 0.5,
-        observable_cells: region.iter().filter(|&&v| v).count(),
+        observable_cells: region.observable.iter().filter(|&&v| v).count(),
         metrics,
         runs,
         fusion,

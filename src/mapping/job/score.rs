@@ -1,40 +1,87 @@
-//! Scoring a map job: the map's and the all-free map's figures on the observable region
-//! and on the whole map ([`MetricsPair`]), the observable region itself, and the metrics
-//! table of the report ([`metrics_table`]).
+//! Scoring a map job: the map's and the all-free map's figures on three regions
+//! ([`MetricsPair`]), the map's errors per reference class ([`ClassFigures`]), the regions
+//! themselves ([`Regions`]), and the metrics table of the report ([`metrics_table`]).
 //!
-//! Observable region = cells inside the −3 dB main lobe of at least one (pose, direction)
-//! of any run, within the usable bins, and not `Outside` in the reference (from the poses
-//! the data were recorded at; mapper-independent, so every method is scored on the same
-//! cells). Whole map = every cell, `Outside` reference cells counted as free.
+//! Regions (mapper-independent, never from the reference's classes, so every method is
+//! scored on the same cells):
+//! * building = the cells inside the layout's perimeter or crossed by one of its walls (the
+//!   layout's geometry);
+//! * observable = the cells in line of sight of some pose within its detection range: inside
+//!   the −3 dB main lobe of at least one (pose, direction), within the usable bins, with the
+//!   segment from the pose to the cell centre crossing no wall of the layout (a wall within
+//!   half a cell diagonal of the centre does not count, so the cells a wall passes through
+//!   are in line of sight from the side they face); from the poses the data were recorded
+//!   at;
+//! * whole map = every cell, `Outside` reference cells counted as free.
+//!
+//! Per class ([`ClassFigures`], on the whole grid): the fraction of the reference's free
+//! cells (inside the perimeter) and of its outside cells (beyond the walls) marked occupied,
+//! and the fraction of the reference's occupied cells in the observable region with a map
+//! occupied cell within one cell (8-neighbourhood).
 
 use super::LoadedRun;
-use crate::campaign::layout::{CellClass, ReferenceMap};
+use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
 use crate::export::{Cell, Column, Table};
 use crate::mapping::grid::ObservationModel;
 use crate::mapping::metrics::{evaluate, MapMetrics};
 use crate::mapping::og::LogOddsMap;
+use rayon::prelude::*;
 use serde::Serialize;
 
-/// Metrics of a map and of the all-free map, on the observable region and the whole map.
+/// Metrics of a map and of the all-free map on the observable region, the building and the
+/// whole map, with the map's errors per reference class.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct MetricsPair {
-    /// The map on the observable region.
+    /// The map on the observable region (line of sight within the detection range).
     pub observable: MapMetrics,
     /// The all-free map on the observable region.
     pub observable_all_free: MapMetrics,
+    /// The map on the building (inside the perimeter or on a wall).
+    pub building: MapMetrics,
+    /// The all-free map on the building.
+    pub building_all_free: MapMetrics,
     /// The map on the whole grid.
     pub whole: MapMetrics,
     /// The all-free map on the whole grid.
     pub whole_all_free: MapMetrics,
+    /// Errors per reference class.
+    pub classes: ClassFigures,
+}
+
+/// A map's errors per reference class (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ClassFigures {
+    /// Fraction of the reference's free cells (inside the perimeter) marked occupied.
+    pub free_marked_occupied: f64,
+    /// Reference free cells.
+    pub free_cells: usize,
+    /// Fraction of the reference's outside cells (beyond the walls) marked occupied.
+    pub outside_marked_occupied: f64,
+    /// Reference outside cells.
+    pub outside_cells: usize,
+    /// Fraction of the reference's occupied cells in the observable region found within one
+    /// cell.
+    pub walls_found_1: f64,
+    /// Reference occupied cells in the observable region.
+    pub observable_wall_cells: usize,
+}
+
+/// The scoring regions of a map job (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Regions {
+    /// Line of sight of some pose within its detection range.
+    pub observable: Vec<bool>,
+    /// Inside the perimeter or on a wall.
+    pub building: Vec<bool>,
 }
 
 /// Score a log-odds map (binary at p > 0.5) against the reference.
-pub fn score(map: &LogOddsMap, reference: &ReferenceMap, observable: &[bool]) -> MetricsPair {
-    score_binary(&map.binary(), reference, observable)
+pub fn score(map: &LogOddsMap, reference: &ReferenceMap, regions: &Regions) -> MetricsPair {
+    score_binary(&map.binary(), reference, regions)
 }
 
 /// Score a binary map (true = occupied) against the reference.
-pub fn score_binary(bin: &[bool], reference: &ReferenceMap, observable: &[bool]) -> MetricsPair {
+pub fn score_binary(bin: &[bool], reference: &ReferenceMap, regions: &Regions) -> MetricsPair {
     let (rows, cols) = (reference.spec.rows, reference.spec.cols);
     let refo: Vec<bool> = reference
         .cells
@@ -43,35 +90,90 @@ pub fn score_binary(bin: &[bool], reference: &ReferenceMap, observable: &[bool])
         .collect();
     let free = vec![false; bin.len()];
     let all = vec![true; bin.len()];
+    let observable = evaluate(bin, &refo, &regions.observable, rows, cols);
+    let marked = |class: CellClass| -> (f64, usize) {
+        let (mut n, mut occ) = (0usize, 0usize);
+        for (c, &b) in reference.cells.iter().zip(bin) {
+            if *c == class {
+                n += 1;
+                occ += b as usize;
+            }
+        }
+        (if n > 0 { occ as f64 / n as f64 } else { 0.0 }, n)
+    };
+    let (free_marked_occupied, free_cells) = marked(CellClass::Free);
+    let (outside_marked_occupied, outside_cells) = marked(CellClass::Outside);
     MetricsPair {
-        observable: evaluate(bin, &refo, observable, rows, cols),
-        observable_all_free: evaluate(&free, &refo, observable, rows, cols),
+        observable,
+        observable_all_free: evaluate(&free, &refo, &regions.observable, rows, cols),
+        building: evaluate(bin, &refo, &regions.building, rows, cols),
+        building_all_free: evaluate(&free, &refo, &regions.building, rows, cols),
         whole: evaluate(bin, &refo, &all, rows, cols),
         whole_all_free: evaluate(&free, &refo, &all, rows, cols),
+        classes: ClassFigures {
+            free_marked_occupied,
+            free_cells,
+            outside_marked_occupied,
+            outside_cells,
+            walls_found_1: observable.recall_1,
+            observable_wall_cells: observable.reference_occupied,
+        },
     }
 }
 
-/// Observable region of a set of runs on a reference (see the module docs).
-pub fn observable_region(runs: &[&ObservationModel], reference: &ReferenceMap) -> Vec<bool> {
-    let mut region: Vec<bool> = reference
+/// The building of a layout on the reference's grid: inside the perimeter or crossed by a
+/// wall ([`Layout::rasterize_on`]).
+pub fn building_region(layout: &Layout, reference: &ReferenceMap) -> Vec<bool> {
+    layout
+        .rasterize_on(reference.spec)
         .cells
         .iter()
         .map(|c| *c != CellClass::Outside)
-        .collect();
-    let mut cov = vec![false; region.len()];
+        .collect()
+}
+
+/// The observable region of a set of runs (module docs): main-lobe coverage within the
+/// usable bins and line of sight through the layout's walls.
+pub fn observable_region(runs: &[&ObservationModel], layout: &Layout) -> Vec<bool> {
+    let mut region = vec![false; runs.first().map_or(0, |m| m.spec.len())];
     for m in runs {
-        for (c, v) in cov.iter_mut().zip(m.main_lobe_coverage()) {
-            *c |= v;
+        let main = m.params.main_weight();
+        let tol = m.spec.cell_m * std::f64::consts::FRAC_1_SQRT_2;
+        let per_pose: Vec<Vec<u32>> = (0..m.poses.len())
+            .into_par_iter()
+            .map(|p| {
+                let g = m.pose_geometry(p);
+                let pose = m.poses[p];
+                let at = geo::Coord {
+                    x: pose.x_m,
+                    y: pose.y_m,
+                };
+                let mut v = Vec::new();
+                for (i, &th) in g.theta.iter().enumerate() {
+                    let c = g.cell[i] as usize;
+                    if region[c] || !(0..m.directions()).any(|d| m.weight(d, th) >= main) {
+                        continue;
+                    }
+                    let centre = m.spec.center(c / m.spec.cols, c % m.spec.cols);
+                    if !layout.occluded(at, centre, tol) {
+                        v.push(g.cell[i]);
+                    }
+                }
+                v
+            })
+            .collect();
+        for v in per_pose {
+            for c in v {
+                region[c as usize] = true;
+            }
         }
-    }
-    for (r, c) in region.iter_mut().zip(cov) {
-        *r &= c;
     }
     region
 }
 
-/// Observable region of loaded runs, from the poses their data were recorded at.
-pub fn runs_region(loaded: &[LoadedRun], reference: &ReferenceMap) -> Vec<bool> {
+/// The regions of loaded runs, from the poses their data were recorded at and the first
+/// run's layout.
+pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Regions {
     let models: Vec<ObservationModel> = loaded
         .iter()
         .map(|l| {
@@ -81,13 +183,17 @@ pub fn runs_region(loaded: &[LoadedRun], reference: &ReferenceMap) -> Vec<bool> 
         })
         .collect();
     let refs: Vec<&ObservationModel> = models.iter().collect();
-    observable_region(&refs, reference)
+    let layout = &loaded[0].layout;
+    Regions {
+        observable: observable_region(&refs, layout),
+        building: building_region(layout, reference),
+    }
 }
 
 /// The metrics table of the report: one row per map (name, its [`MetricsPair`], the link
 /// to its `metrics.json` or `None`): ψ, F1, F1 within one cell and the wrong-cell rate on
-/// the observable region and on the whole map (3 decimals; the whole map's wrong-cell
-/// rate 4).
+/// the observable region, ψ and the wrong-cell rate on the building, the per-class errors,
+/// and ψ, F1 and the wrong-cell rate on the whole map.
 pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
     let mut t = Table::new(vec![
         Column::new("map", "map"),
@@ -95,6 +201,11 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
         Column::new("F1 obs.", "f1_observable"),
         Column::new("F1 (1 cell) obs.", "f1_1_observable"),
         Column::new("wrong cells obs.", "wrong_cell_rate_observable"),
+        Column::new("ψ building", "psi_building"),
+        Column::new("wrong cells building", "wrong_cell_rate_building"),
+        Column::new("free marked occ.", "free_marked_occupied"),
+        Column::new("outside marked occ.", "outside_marked_occupied"),
+        Column::new("walls found (1 cell)", "walls_found_1"),
         Column::new("ψ whole", "psi_whole"),
         Column::new("F1 whole", "f1_whole"),
         Column::new("F1 (1 cell) whole", "f1_1_whole"),
@@ -109,6 +220,11 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
             Cell::fixed(o.f1, 3),
             Cell::fixed(o.f1_1, 3),
             Cell::fixed(o.wrong_cell_rate, 3),
+            Cell::fixed(m.building.psi, 3),
+            Cell::fixed(m.building.wrong_cell_rate, 4),
+            Cell::fixed(m.classes.free_marked_occupied, 3),
+            Cell::fixed(m.classes.outside_marked_occupied, 3),
+            Cell::fixed(m.classes.walls_found_1, 3),
             Cell::fixed(w.psi, 3),
             Cell::fixed(w.f1, 3),
             Cell::fixed(w.f1_1, 3),
@@ -132,8 +248,16 @@ impl MetricsPair {
         MetricsPair {
             observable: self.observable_all_free,
             observable_all_free: self.observable_all_free,
+            building: self.building_all_free,
+            building_all_free: self.building_all_free,
             whole: self.whole_all_free,
             whole_all_free: self.whole_all_free,
+            classes: ClassFigures {
+                free_marked_occupied: 0.0,
+                outside_marked_occupied: 0.0,
+                walls_found_1: 0.0,
+                ..self.classes
+            },
         }
     }
 }

@@ -16,35 +16,25 @@
 //!   not used; a detection must also be a local maximum of the profile not explained by the
 //!   window kernel's range side lobes of a stronger bin ([`Detector`]), so one echo gives
 //!   one detected bin;
-//! * `og` (side-lobe aware): a detection in bin k of direction d is first tested against the
-//!   other directions of the same scan: it is *explained by a side lobe* when
-//!   E_d(k) < β_s·w_d(θ_d')·max_{|k'−k|≤1} E_d'(k') for some direction d' outside the main
-//!   lobe of d (w_d(θ_d') the two-way weight of d towards the boresight of d', β_s =
-//!   `side_db`, 0 dB); the *main-lobe occluder* of the scan is its strongest detection not
-//!   so explained (the first of equals); the cells with w ≥ `free_db` (−10 dB) of every bin
-//!   before it get Δl_i = l_free·s_{k,i}·w_i (a cell
+//! * `og` (side-lobe aware): what the scan can see comes from
+//!   [`crate::mapping::grid::visibility`]: per direction its occluder (the strongest
+//!   detection not explained by a side lobe of another direction, or an earlier one that
+//!   lies on a surface of the current map) and per cell its depth δ behind the pose's
+//!   visibility polygon. Then: the cells with w ≥ `free_db` (−10 dB) of every bin before the
+//!   occluder and in front of the polygon (δ < −g) get Δl_i = l_free·s_{k,i}·w_i (a cell
 //!   wholly in front of it on boresight gets l_free once; weaker illumination, weaker free
-//!   evidence); every detection credits the illuminated cells of its
-//!   range ring (main and side lobes down to −40 dB, [`crate::mapping::grid::Beam`]) with
-//!   Δl_i = l_occ·r_i, r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way weight × the
-//!   cell's share of the bin × current belief: one cause per detection shared by
-//!   responsibility, not a blur by the pattern); for a side-lobe detection before the first
-//!   occluder the main-lobe cells (w ≥ −3 dB) are left out of the ring (they were just
-//!   found free).
-//!   Bins after the occluder without a detection give no evidence (they may be shadowed).
-//!   Why the strongest and not the first detection: at 60 GHz walls and objects are opaque,
-//!   so the surface the main lobe meets first returns its echo at the full two-way main-lobe
-//!   gain, and an earlier but weaker detection is more likely leakage the side-lobe test
-//!   cannot reject (a very strong echo at another bearing: the metal cabinet's corner or the
-//!   specular foot of a wall, 30-45 dB stronger in its own direction and seen through far
-//!   side lobes, quantisation lobes and nulls filled in over the 6 GHz band, where the
-//!   centre-frequency pattern underestimates the leakage; or multipath). With the first
-//!   detection as the occluder such leaks, which appear at the same short range in almost
-//!   every direction, end the free evidence a few decimetres from the radar, so the
-//!   corridor's interior is never cleared and keeps the occupancy credit of later echoes
-//!   (figures: `docs/mapping.md`). The choice has no constant and never reads the
-//!   reference; its cost is that a weak true first surface at the edge of a wide main lobe
-//!   is cleared;
+//!   evidence); every detection up to g beyond the occluder credits the visible cells
+//!   (δ ≤ g) of its range ring (main and side lobes down to −40 dB,
+//!   [`crate::mapping::grid::Beam`]) with Δl_i = l_occ·r_i,
+//!   r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way weight × the cell's share of the
+//!   bin × current belief: one cause per detection shared by responsibility, not a blur by
+//!   the pattern); for a side-lobe detection before the occluder the main-lobe cells
+//!   (w ≥ −3 dB) are left out of the ring (they were just found free). Detections further
+//!   beyond the occluder are withheld (shadowed: multipath or echoes from behind the
+//!   surface; counted in [`OgStats::withheld`]), and bins after the occluder without a
+//!   detection give no evidence. The map the occluders are confirmed against is the belief
+//!   the responsibilities use (binary at p > 0.5): the scan's snapshot, or the previous
+//!   pass's map with `passes` ≥ 2;
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
 //!   boresight ray; a cell gets l_occ if any bin the ray spends in it is detected, l_free if
 //!   the ray leaves it before the first detected bin;
@@ -163,6 +153,8 @@ pub struct OgStats {
     pub scans: u64,
     /// Detected bins.
     pub detections: u64,
+    /// Detections withheld: beyond the occluder of their beam (`og` only).
+    pub withheld: u64,
     /// Cell updates (log-odds increments applied).
     pub cell_updates: u64,
     /// (cell, bin) entries evaluated by the inverse sensor model (beam entries for `og`,

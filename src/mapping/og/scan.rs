@@ -5,63 +5,68 @@
 use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
-use crate::mapping::grid::{Beam, ObservationModel, PoseGeometry};
+use crate::mapping::grid::{
+    Beam, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility,
+};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// One scan's increments (cell, Δl), detections and evaluated entries.
-type ScanResult = (Vec<(u32, f32)>, u64, u64);
+/// One scan's increments (cell, Δl), detections, detections withheld and evaluated entries.
+type ScanResult = (Vec<(u32, f32)>, u64, u64, u64);
 
-/// Side-lobe-aware increments of one scan (beam, detections, profile `prof`) into `out`.
+/// Side-lobe-aware increments of one scan (beam restricted to what it sees, detections,
+/// side-lobe flags, occluder bin `first` (`bins` when none), visibility) into `out`;
+/// returns (detections, detections withheld beyond the occluder).
 #[allow(clippy::too_many_arguments)]
 fn scan_og(
     beam: &Beam,
     det: &[bool],
-    prof: &[f64],
-    side: &[bool],
-    min_bin: usize,
+    first: usize,
+    last: usize,
+    vis: &Visibility,
     belief: &[f32],
-    l_occ: f64,
-    l_free: f64,
-    main_w: f32,
-    free_w: f32,
+    k: &IncrementConstants,
     out: &mut Vec<(u32, f32)>,
-) -> u64 {
+) -> (u64, u64) {
     let bins = det.len().min(beam.ptr.len() - 1);
-    // the main-lobe occluder: the strongest detection not explained by a side lobe (the
-    // first of equals); weaker earlier detections are left to the side lobes
-    let mut first = bins;
-    for k in min_bin..bins {
-        if det[k] && !side[k] && (first == bins || prof[k] > prof[first]) {
-            first = k;
-        }
-    }
-    let lf = l_free as f32;
-    for k in min_bin..first {
-        let rg = beam.bin_range(k);
-        for j in rg {
+    let lf = k.l_free as f32;
+    for b in k.min_bin..first.min(bins) {
+        for j in beam.bin_range(b) {
             let w = beam.weight[j];
-            if w >= free_w {
+            if w >= k.free_w && vis.clearable(beam.cell[j]) {
                 out.push((beam.cell[j], lf * beam.share[j] * w.min(1.0)));
             }
         }
     }
-    let mut dets = 0;
-    for (k, _) in det
+    let (mut dets, mut withheld) = (0, 0);
+    for (b, _) in det
         .iter()
         .enumerate()
         .take(bins)
-        .skip(min_bin)
+        .skip(k.min_bin)
         .filter(|x| *x.1)
     {
         dets += 1;
-        // a side-lobe detection before the first main-lobe one: its main-lobe cells were
-        // just found free, so only the side-lobe cells share it
-        let side_only = k < first;
-        let rg = beam.bin_range(k);
+        if b > last {
+            // beyond the first opaque surface of this beam: not observed
+            withheld += 1;
+            continue;
+        }
+        // a side-lobe detection before the occluder: its main-lobe cells were just found
+        // free, so only the side-lobe cells share it
+        let side_only = b < first;
+        if side_only {
+            // weaker than the occluder and not explained by a side lobe of this scan:
+            // leakage of a strong echo at another bearing (credited by that direction's own
+            // scan) or a weak surface the main lobe just cleared; either way not evidence
+            // of occupancy here
+            withheld += 1;
+            continue;
+        }
+        let rg = beam.bin_range(b);
         let mut denom = 0.0f32;
         for j in rg.clone() {
-            if side_only && beam.weight[j] >= main_w {
+            if side_only && beam.weight[j] >= k.main_w {
                 continue;
             }
             denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
@@ -69,9 +74,9 @@ fn scan_og(
         if denom <= 0.0 {
             continue;
         }
-        let scale = l_occ as f32 / denom;
+        let scale = k.l_occ as f32 / denom;
         for j in rg {
-            if side_only && beam.weight[j] >= main_w {
+            if side_only && beam.weight[j] >= k.main_w {
                 continue;
             }
             let c = beam.cell[j];
@@ -81,45 +86,16 @@ fn scan_og(
             ));
         }
     }
-    dets
+    (dets, withheld)
 }
 
-/// Per bin of direction `d` at pose `p`: true when the detection is explained by a side
-/// lobe of `d` towards another direction d' of the same scan: E_d(k) < β·w_d(θ_d')·E_d'(k'),
-/// k' within ±1 bin, for a d' outside the main lobe of d (w_d(θ_d') < main-lobe weight).
-fn side_lobe_flags(
-    em: &EnergyMatrix,
-    p: usize,
-    d: usize,
-    det: &[bool],
-    cross: &[Vec<f64>],
-    margin: f64,
-    main_w: f64,
-) -> Vec<bool> {
-    let prof = em.profile(p, d);
-    let n = prof.len();
-    let mut side = vec![false; n];
-    for k in 0..n {
-        if !det[k] {
-            continue;
-        }
-        let e = prof[k];
-        side[k] = (0..cross.len()).any(|d2| {
-            if d2 == d {
-                return false;
-            }
-            let w = cross[d][d2];
-            if w <= 0.0 || w >= main_w {
-                return false;
-            }
-            let o = em.profile(p, d2);
-            let lo = k.saturating_sub(1);
-            let hi = (k + 2).min(n);
-            let m = o[lo..hi].iter().cloned().fold(0.0, f64::max);
-            e < margin * w * m
-        });
-    }
-    side
+/// The inverse sensor model's constants.
+struct IncrementConstants {
+    l_occ: f64,
+    l_free: f64,
+    main_w: f32,
+    free_w: f32,
+    min_bin: usize,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -235,22 +211,16 @@ pub fn og_map_stats(
     Ok((map, stats))
 }
 
-/// What the scans of a run share: the model, the energy, the detector and the inverse
-/// sensor model's constants.
+/// What the scans of a run share: the model, the energy, the detector, the occlusion
+/// model and the inverse sensor model's constants.
 struct ScanContext<'a> {
     model: &'a ObservationModel,
     em: &'a EnergyMatrix,
     detector: &'a Detector,
     method: Method,
-    l_occ: f64,
-    l_free: f64,
     clamp: f64,
-    main_w: f32,
-    free_w: f32,
-    min_bin: usize,
-    side_margin: f64,
-    /// cross[d][d'] = two-way weight of direction d towards the boresight of direction d'.
-    cross: Vec<Vec<f64>>,
+    inc: IncrementConstants,
+    occlusion: Occlusion,
 }
 
 impl<'a> ScanContext<'a> {
@@ -261,26 +231,21 @@ impl<'a> ScanContext<'a> {
         method: Method,
         detector: &'a Detector,
     ) -> ScanContext<'a> {
-        let nd = model.directions();
+        let min_bin = model.min_bin.max(detector.min_bin);
         ScanContext {
             model,
             em,
             detector,
             method,
-            l_occ: params.l_occ(),
-            l_free: params.l_free(),
             clamp: params.clamp,
-            main_w: model.params.main_weight() as f32,
-            free_w: 10f64.powf(params.free_db / 10.0) as f32,
-            min_bin: model.min_bin.max(detector.min_bin),
-            side_margin: 10f64.powf(params.side_db / 10.0),
-            cross: (0..nd)
-                .map(|d| {
-                    (0..nd)
-                        .map(|d2| model.weight(d, model.direction_rad(d2)))
-                        .collect()
-                })
-                .collect(),
+            inc: IncrementConstants {
+                l_occ: params.l_occ(),
+                l_free: params.l_free(),
+                main_w: model.params.main_weight() as f32,
+                free_w: 10f64.powf(params.free_db / 10.0) as f32,
+                min_bin,
+            },
+            occlusion: Occlusion::new(model, min_bin, params.side_db),
         }
     }
 
@@ -296,69 +261,75 @@ impl<'a> ScanContext<'a> {
                 det
             })
             .collect();
-        (0..nd)
-            .into_par_iter()
-            .map(|d| self.scan_direction(p, d, &dets[d], geom, bel))
-            .collect()
+        match (geom, self.method) {
+            (Some(g), Method::Og) => {
+                let occupied: Vec<bool> = bel.par_iter().map(|&b| b > 0.5).collect();
+                let echoes = self
+                    .occlusion
+                    .echoes(self.model, self.em, p, dets, Some(&occupied));
+                let vis = self.occlusion.visibility(self.model, g, &echoes);
+                (0..nd)
+                    .into_par_iter()
+                    .map(|d| self.scan_direction_og(d, g, &echoes, &vis, bel))
+                    .collect()
+            }
+            _ => (0..nd)
+                .into_par_iter()
+                .map(|d| {
+                    let ray = self.model.boresight_ray(p, d);
+                    let mut out = Vec::new();
+                    let dets = scan_boresight(
+                        &ray,
+                        &dets[d],
+                        self.inc.min_bin,
+                        self.inc.l_occ,
+                        self.inc.l_free,
+                        &mut out,
+                    );
+                    (out, dets, 0, ray.len() as u64)
+                })
+                .collect(),
+        }
     }
 
-    /// The increments of (pose `p`, direction `d`) with detections `det`.
-    fn scan_direction(
+    /// The side-lobe-aware increments of direction `d` of a pose's scan.
+    fn scan_direction_og(
         &self,
-        p: usize,
         d: usize,
-        det: &[bool],
-        geom: Option<&PoseGeometry>,
+        g: &PoseGeometry,
+        echoes: &ScanEchoes,
+        vis: &Visibility,
         bel: &[f32],
     ) -> ScanResult {
-        let (em, model) = (self.em, self.model);
-        let mut out = Vec::new();
-        let entries;
-        let dets = match (geom, self.method) {
-            (Some(g), Method::Og) => {
-                let beam = model.beam(g, d);
-                entries = beam.len() as u64;
-                let side = side_lobe_flags(
-                    em,
-                    p,
-                    d,
-                    det,
-                    &self.cross,
-                    self.side_margin,
-                    self.main_w as f64,
-                );
-                out.reserve(beam.len() / 2);
-                scan_og(
-                    &beam,
-                    det,
-                    em.profile(p, d),
-                    &side,
-                    self.min_bin,
-                    bel,
-                    self.l_occ,
-                    self.l_free,
-                    self.main_w,
-                    self.free_w,
-                    &mut out,
-                )
-            }
-            _ => {
-                let ray = model.boresight_ray(p, d);
-                entries = ray.len() as u64;
-                scan_boresight(&ray, det, self.min_bin, self.l_occ, self.l_free, &mut out)
-            }
+        let bins = echoes.det[d].len();
+        let (first, last) = match echoes.occluder[d] {
+            Some(o) => (o, o + self.occlusion.guard_bins()),
+            None => (bins, bins),
         };
-        (out, dets, entries)
+        let beam = self.model.beam_seen(g, d, Some((vis, last)));
+        let mut out = Vec::with_capacity(beam.len() / 2);
+        let (dets, withheld) = scan_og(
+            &beam,
+            &echoes.det[d],
+            first,
+            last,
+            vis,
+            bel,
+            &self.inc,
+            &mut out,
+        );
+        (out, dets, withheld, beam.len() as u64)
     }
 }
 
 /// Add a pose's scans to the map in direction order (log-odds clamped to ±`clamp` after
 /// every increment) and count them.
 fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>, clamp: f64) {
-    for (inc, dets, entries) in scans {
+    for (inc, dets, withheld, entries) in scans {
         stats.scans += 1;
         stats.entries += entries;
         stats.detections += dets;
+        stats.withheld += withheld;
         stats.cell_updates += inc.len() as u64;
         for (c, dl) in inc {
             let c = c as usize;

@@ -5,9 +5,9 @@
 //!
 //! Scoring: ψ, F1 and the wrong-cell count of a map on three regions (module docs of
 //! [`super`]): the whole map and the observable region come from the map's own metrics
-//! (`metrics.json`); the interior is the reference's known cells (not
-//! [`CellClass::Outside`]), evaluated here with [`crate::mapping::metrics::evaluate`]. A
-//! wrong-cell count is the metric's rate times the region's cells, rounded.
+//! (`metrics.json`), and so does the interior (the map's building region: inside the
+//! perimeter or on a wall). A wrong-cell count is the metric's rate times the region's
+//! cells, rounded.
 
 use super::super::Progress;
 use super::{Experiment, ExperimentInputs, ExperimentValid};
@@ -105,7 +105,7 @@ pub struct CaseFigures {
     pub all_free_psi_observable: f64,
     /// Wrong cells of the all-free map, whole.
     pub all_free_wrong_whole: usize,
-    /// ψ on the interior (the reference's known cells: inside the perimeter).
+    /// ψ on the interior (the building: inside the perimeter or on a wall).
     pub psi_interior: f64,
     /// Wrong cells on the interior.
     pub wrong_interior: usize,
@@ -113,6 +113,10 @@ pub struct CaseFigures {
     pub f1_interior: f64,
     /// Cells of the interior.
     pub interior_cells: usize,
+    /// Wrong cells of the all-free map on the interior.
+    pub all_free_wrong_interior: usize,
+    /// The map's errors per reference class.
+    pub classes: crate::mapping::job::ClassFigures,
 }
 
 fn count(rate: f64, cells: usize) -> usize {
@@ -120,20 +124,9 @@ fn count(rate: f64, cells: usize) -> usize {
 }
 
 impl CaseFigures {
-    fn new(key: String, case: Case, r: &MapReport, reference: &ReferenceMap) -> CaseFigures {
+    fn new(key: String, case: Case, r: &MapReport) -> CaseFigures {
         let m = &r.metrics;
-        let s = reference.spec;
-        let refo: Vec<bool> = reference
-            .cells
-            .iter()
-            .map(|c| *c == CellClass::Occupied)
-            .collect();
-        let interior: Vec<bool> = reference
-            .cells
-            .iter()
-            .map(|c| *c != CellClass::Outside)
-            .collect();
-        let i = crate::mapping::metrics::evaluate(&r.binary, &refo, &interior, s.rows, s.cols);
+        let i = &m.building;
         CaseFigures {
             psi_interior: i.psi,
             wrong_interior: count(i.wrong_cell_rate, i.cells),
@@ -152,6 +145,8 @@ impl CaseFigures {
             all_free_psi_whole: m.whole_all_free.psi,
             all_free_psi_observable: m.observable_all_free.psi,
             all_free_wrong_whole: count(m.whole_all_free.wrong_cell_rate, m.whole_all_free.cells),
+            all_free_wrong_interior: count(m.building_all_free.wrong_cell_rate, i.cells),
+            classes: m.classes,
         }
     }
 }
@@ -326,10 +321,7 @@ impl<'a> Lab<'a> {
         let mut out = Vec::new();
         for (i, c) in cases.iter().enumerate() {
             let (key, r) = self.map(c)?;
-            out.push((
-                CaseFigures::new(key, *c, &r, &self.reference),
-                r.binary.clone(),
-            ));
+            out.push((CaseFigures::new(key, *c, &r), r.binary.clone()));
             cb(i + 1, cases.len());
         }
         Ok(out)

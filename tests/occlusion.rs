@@ -1,0 +1,270 @@
+//! Maps that look like the building (issue 17): both mappers with the occlusion model of
+//! `mapping::grid::visibility` on the corridor at N = 16 and N = 100 and on a second layout
+//! (`data/tests/office.*`), scored on the building, the observable region and the whole map
+//! with the all-free map's figures beside them; a multi-bounce ghost behind a wall; the
+//! scalable EKF against the dense one. Every figure asserted is printed.
+
+use crate::common;
+
+use common::*;
+use pradar::campaign::layout::{CellClass, Layout};
+use pradar::campaign::manifest::SweepFormat;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Simulate `t` at `n` elements (Parquet sweeps) and its energy into `dir`:
+/// (manifest, energy).
+fn simulated(dir: &Path, t: &toml::Table, n: usize) -> (PathBuf, PathBuf) {
+    let mut t = t.clone();
+    set(&mut t, "array.elements", n as i64);
+    let (c, _) = chain(dir, &t, SweepFormat::Parquet);
+    (c.path.clone(), dir.join("energy.parquet"))
+}
+
+/// The scenes of the must-show, simulated once per test binary: (name, N, manifest, energy).
+fn scenes() -> &'static Vec<(String, usize, PathBuf, PathBuf)> {
+    static RUNS: OnceLock<Vec<(String, usize, PathBuf, PathBuf)>> = OnceLock::new();
+    RUNS.get_or_init(|| {
+        let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("occlusion");
+        let mut out = Vec::new();
+        for (name, t) in [
+            ("corridor", corridor()),
+            ("office", fixture("tests/office.toml")),
+        ] {
+            for n in [16usize, 100] {
+                let (c, e) = simulated(&root.join(format!("{name}_n{n}")), &t, n);
+                out.push((name.to_string(), n, c, e));
+            }
+        }
+        out
+    })
+}
+
+fn map(method: &str, c: &Path, e: &Path, out: &Path, extra: &[&str]) -> Value {
+    let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
+        .args([
+            "map",
+            "--method",
+            method,
+            "--campaign",
+            s(c),
+            "--energy",
+            s(e),
+            "--out",
+            s(out),
+            "--quiet",
+        ])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap()
+}
+
+fn f(v: &Value, path: &[&str]) -> f64 {
+    let mut c = v;
+    for p in path {
+        c = &c[*p];
+    }
+    c.as_f64()
+        .unwrap_or_else(|| panic!("{path:?} missing in metrics.json"))
+}
+
+fn wrong(v: &Value, region: &str) -> f64 {
+    f(v, &["metrics", region, "wrong_cell_rate"]) * f(v, &["metrics", region, "cells"])
+}
+
+#[test]
+fn both_mappers_map_the_building_and_leave_the_outside_free() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for (name, n, c, e) in scenes() {
+        let mut figs = std::collections::HashMap::new();
+        for method in ["og", "og-boresight", "ekf"] {
+            let j = map(
+                method,
+                c,
+                e,
+                &tmp.path().join(format!("{name}_{n}_{method}")),
+                &[],
+            );
+            let g = |p: &[&str]| f(&j, p);
+            eprintln!(
+                "{name} N={n} {method:>12}: building wrong {:.0} (all-free {:.0}) psi {:.2} (all-free {:.2}) | whole wrong {:.0} (all-free {:.0}) psi {:.2} | observable wrong {:.0} (all-free {:.0}) psi {:.2} (all-free {:.2}) | walls found (1 cell) {:.3} of {:.0} | free marked occupied {:.4} of {:.0} | outside marked occupied {:.4} of {:.0}",
+                wrong(&j, "building"),
+                wrong(&j, "building_all_free"),
+                g(&["metrics", "building", "psi"]),
+                g(&["metrics", "building_all_free", "psi"]),
+                wrong(&j, "whole"),
+                wrong(&j, "whole_all_free"),
+                g(&["metrics", "whole", "psi"]),
+                wrong(&j, "observable"),
+                wrong(&j, "observable_all_free"),
+                g(&["metrics", "observable", "psi"]),
+                g(&["metrics", "observable_all_free", "psi"]),
+                g(&["metrics", "classes", "walls_found_1"]),
+                g(&["metrics", "classes", "observable_wall_cells"]),
+                g(&["metrics", "classes", "free_marked_occupied"]),
+                g(&["metrics", "classes", "free_cells"]),
+                g(&["metrics", "classes", "outside_marked_occupied"]),
+                g(&["metrics", "classes", "outside_cells"]),
+            );
+            figs.insert(method, j);
+        }
+        for method in ["og", "ekf"] {
+            let j = &figs[method];
+            let mut check = |ok: bool, what: String| {
+                if !ok {
+                    failures.push(format!("{name} N={n} {method}: {what}"));
+                }
+            };
+            check(
+                wrong(j, "building") < wrong(j, "building_all_free"),
+                "building: not fewer wrong cells than all-free".into(),
+            );
+            check(
+                wrong(j, "whole") < wrong(j, "whole_all_free"),
+                "whole map: not fewer wrong cells than all-free".into(),
+            );
+            let found = f(j, &["metrics", "classes", "walls_found_1"]);
+            check(
+                found >= 0.85,
+                format!("walls found within one cell {found:.3} < 0.85"),
+            );
+            let fo = f(j, &["metrics", "classes", "free_marked_occupied"]);
+            check(
+                fo <= 0.05,
+                format!("free cells marked occupied {fo:.4} > 0.05"),
+            );
+            let oo = f(j, &["metrics", "classes", "outside_marked_occupied"]);
+            check(
+                oo <= 0.05,
+                format!("outside cells marked occupied {oo:.4} > 0.05"),
+            );
+        }
+        let (og, bs) = (&figs["og"], &figs["og-boresight"]);
+        for region in ["building", "observable"] {
+            let (po, pb) = (
+                f(og, &["metrics", region, "psi"]),
+                f(bs, &["metrics", region, "psi"]),
+            );
+            if po >= pb {
+                failures.push(format!(
+                    "{name} N={n}: og psi on the {region} {po:.3} not below boresight {pb:.3}"
+                ));
+            }
+            let (wo, wb) = (wrong(og, region), wrong(bs, region));
+            if wo >= wb {
+                failures.push(format!(
+                    "{name} N={n}: og wrong cells on the {region} {wo:.0} not below boresight {wb:.0}"
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "NOT MET:\n{}", failures.join("\n"));
+}
+
+/// The ghost scene: the office with a strong reflector seen only through the north wall
+/// (the image of a reflector through the wall, path seen via the wall), no clutter.
+fn ghost_scene() -> (toml::Table, [f64; 2]) {
+    let mut t = fixture("tests/office.toml");
+    t.remove("clutter");
+    let image = [3.0, 6.0];
+    let mut target = toml::Table::new();
+    target.insert("x_m".into(), image[0].into());
+    target.insert("y_m".into(), image[1].into());
+    target.insert("rrcs_m".into(), 0.3.into());
+    target.insert(
+        "via_m".into(),
+        toml::Value::Array(vec![3.0.into(), 4.5.into()]),
+    );
+    let scene = t.get_mut("scene").unwrap().as_table_mut().unwrap();
+    scene.insert(
+        "targets".into(),
+        toml::Value::Array(vec![toml::Value::Table(target)]),
+    );
+    (t, image)
+}
+
+#[test]
+fn a_multi_bounce_ghost_leaves_no_occupied_cell_beyond_the_wall() {
+    let (t, image) = ghost_scene();
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("occlusion_ghost");
+    let (c, e) = simulated(&root, &t, 100);
+    let campaign = pradar::campaign::Campaign::load(&c).unwrap();
+    let layout = Layout::load(&campaign.layout_path()).unwrap();
+    let reference = layout.rasterize(0.1, 0.5);
+    let spec = reference.spec;
+    // the cells beyond the wall within 1 m of the image
+    let ghost_cells: Vec<usize> = (0..spec.len())
+        .filter(|&i| {
+            let p = spec.center(i / spec.cols, i % spec.cols);
+            reference.cells[i] == CellClass::Outside
+                && (p.x - image[0]).hypot(p.y - image[1]) <= 1.0
+        })
+        .collect();
+    let mut res = Vec::new();
+    for method in ["og-boresight", "og", "ekf"] {
+        let out = root.join(format!("map_{method}"));
+        map(method, &c, &e, &out, &[]);
+        let bin = read_binary_pgm(&out.join(format!("{method}_binary.pgm")));
+        let occ = ghost_cells.iter().filter(|&&i| bin[i]).count();
+        let outside = (0..spec.len())
+            .filter(|&i| reference.cells[i] == CellClass::Outside && bin[i])
+            .count();
+        eprintln!(
+            "{method:>12}: {occ} of {} cells within 1 m of the ghost (beyond the wall) occupied; {outside} outside cells occupied in all",
+            ghost_cells.len()
+        );
+        res.push(occ);
+    }
+    assert!(res[0] > 0, "the boresight map should show the ghost");
+    assert_eq!(
+        res[1], 0,
+        "og: the ghost left occupied cells beyond the wall"
+    );
+    assert_eq!(
+        res[2], 0,
+        "ekf: the ghost left occupied cells beyond the wall"
+    );
+}
+
+/// A binary PGM map read back (row 0 of the file is the northern row): true = occupied,
+/// row-major from the lowest y.
+fn read_binary_pgm(path: &Path) -> Vec<bool> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut fields = Vec::new();
+    let mut i = 0;
+    while fields.len() < 4 {
+        while bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if bytes[i] == b'#' {
+            while bytes[i] != b'\n' {
+                i += 1;
+            }
+            continue;
+        }
+        let start = i;
+        while !bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..i]).to_string());
+    }
+    i += 1;
+    let (w, h): (usize, usize) = (fields[1].parse().unwrap(), fields[2].parse().unwrap());
+    let px = &bytes[i..i + w * h];
+    let mut out = vec![false; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            out[(h - 1 - r) * w + c] = px[r * w + c] < 128;
+        }
+    }
+    out
+}
