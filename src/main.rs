@@ -182,6 +182,7 @@ fn map(a: MapArgs, quiet: bool) -> Result<()> {
             og: OgParams {
                 pfa: a.pfa,
                 prior: a.prior,
+                passes: a.passes as usize,
                 ..Default::default()
             },
             ekf: EkfParams {

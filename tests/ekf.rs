@@ -528,6 +528,8 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
     );
 }
 
+/// Item 4 of issue 17: the scalable EKF against the dense one on a grid where the dense one
+/// runs (the corridor at 0.3 m cells).
 #[test]
 fn scalable_matches_dense_on_a_coarse_corridor() {
     let (c, e) = corridor100();
@@ -599,23 +601,57 @@ fn scalable_matches_dense_on_a_coarse_corridor() {
         "kept cross-covariances ({pairs} ordered pairs): max |ΔP_ij|/sqrt(P_ii P_jj) {:.2e}, max |ΔP_ij|/max|P_ij| {:.2e}, mean {:.2e}; variances max relative difference {:.2e}",
         worst_corr, worst_rel, sum_rel / pairs as f64, var_rel
     );
+    // the acceptance criterion of the scalable filter (issue 17): psi within 10 % of the
+    // dense map's, per-cell means within 10 % (RMS relative over the updated cells) and
+    // never over-confident (std >= 0.9x the dense std in >= 99 % of the updated cells)
+    let updated: Vec<usize> = (0..n)
+        .filter(|&i| dense.covariance(i, i).unwrap() < dp.sigma0 * dp.sigma0 * (1.0 - 1e-9))
+        .collect();
+    // RMS relative: ‖x̂_scalable − x̂_dense‖ / ‖x̂_dense‖ over the updated cells (a per-cell
+    // ratio would divide by means the data drove to ~0)
+    let rms_mean = (updated
+        .iter()
+        .map(|&i| (ms.mean[i] - md.mean[i]).powi(2))
+        .sum::<f64>()
+        / updated.iter().map(|&i| md.mean[i].powi(2)).sum::<f64>())
+    .sqrt();
+    let confident = updated
+        .iter()
+        .filter(|&&i| ms.std[i] >= 0.9 * md.std[i])
+        .count() as f64
+        / updated.len() as f64;
+    let worst_std = updated
+        .iter()
+        .map(|&i| ms.std[i] / md.std[i])
+        .fold(f64::INFINITY, f64::min);
+    eprintln!(
+        "criterion over {} updated cells: psi within {:.1}% (<= 10%), means RMS relative {:.2}% (<= 10%), std >= 0.9x dense in {:.2}% of cells (>= 99%; lowest ratio {worst_std:.3})",
+        updated.len(),
+        100.0 * rel_psi,
+        100.0 * rms_mean,
+        100.0 * confident
+    );
+    assert!(updated.len() > 50, "too few updated cells");
     assert!(rel_psi <= 0.10, "psi differs by {rel_psi}");
-    if std::env::var("PRADAR_EKF_STRICT_COV").is_ok() {
+    if std::env::var("PRADAR_EKF_CRITERION").is_ok() {
+        assert!(rms_mean <= 0.10, "means differ by {rms_mean} RMS relative");
         assert!(
-            worst_rel <= 0.01,
-            "kept cross-covariances differ by {worst_rel}"
+            confident >= 0.99,
+            "std >= 0.9x dense in only {confident} of the cells"
         );
     }
 }
 
-/// Issue 6 asks for the kept cross-covariances within 1% of the dense ones. The tiled
-/// approximation does not meet it on the corridor (it drops the covariance a range ring
-/// creates between tiles, and later updates compound it): this test states the criterion
-/// and fails; run it with `--ignored`.
+/// Item 4 of issue 17 in full: psi within 10 %, means within 10 % RMS relative and std
+/// >= 0.9x the dense std in >= 99 % of the updated cells. The tiled filter meets the first
+/// only (figures printed by `scalable_matches_dense_on_a_coarse_corridor`: means 185 % RMS
+/// relative, std >= 0.9x dense in 64 % of the cells, lowest ratio 0.014): it drops the
+/// negative cross-tile covariances a range ring creates, so later rows reduce each tile's
+/// variance as if they informed it alone. Run with `--ignored`.
 #[test]
-#[ignore = "unmet by the tiled approximation: see the figures printed by scalable_matches_dense_on_a_coarse_corridor"]
-fn scalable_kept_covariances_within_one_percent_of_dense() {
-    std::env::set_var("PRADAR_EKF_STRICT_COV", "1");
+#[ignore = "unmet by the tiled approximation: means 185 % RMS relative, std >= 0.9x dense in 64 % of cells"]
+fn scalable_meets_the_dense_criterion() {
+    std::env::set_var("PRADAR_EKF_CRITERION", "1");
     scalable_matches_dense_on_a_coarse_corridor();
 }
 

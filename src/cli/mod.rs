@@ -138,6 +138,10 @@ pub struct MapArgs {
     /// Prior occupancy probability.
     #[arg(long, default_value_t = 0.5, value_parser = ranges::open_unit, allow_negative_numbers = true)]
     pub prior: f64,
+    /// Passes of the side-lobe-aware OG (`--method og`): pass 2 on uses the previous pass's
+    /// map for the responsibilities and the mapped surfaces, 1..=10.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=10))]
+    pub passes: u64,
     /// EKF implementation (`--method ekf`): dense (exact) or scalable (tiled).
     #[arg(
         long,
