@@ -14,15 +14,17 @@
 //! Observation of (pose, direction): the energy vector over the usable bins k ≥ `min_bin`
 //! that have at least one illuminated cell (main and side lobes down to the observation
 //! model's floor; soft input), truncated after the first strong return: with the run's
-//! [`Sight`] (the OG's detector and the occluders of [`crate::mapping::grid::visibility`]),
-//! only the bins up to the beam's occluder plus the guard g are observed, so late energy
-//! (multipath, echoes from behind the wall) is never explained by RRCS behind the surface,
-//! and the rows within the kernel's half-width of a weaker detection before the occluder
-//! (leakage of a strong echo at another bearing, withheld by the OG too) are dropped. The
-//! occluders are confirmed against the filter's own binary map before the previous pose.
-//! Every illuminated cell stays in H: removing the cells behind the visibility polygon as
-//! well concentrates the energy of a wall's bin on the in-room part of its range ring
-//! (measured: `docs/mapping.md`). Prediction
+//! [`Sight`] (the OG's detector and [`crate::mapping::grid::visibility`]), only the bins up
+//! to the beam's occluder plus the guard g are observed, so late energy (multipath, echoes
+//! from behind the wall) is never explained by RRCS behind the surface; the rows within
+//! the kernel's half-width of a weaker detection before the occluder (leakage of a strong
+//! echo at another bearing, withheld by the OG too) are dropped; and only the cells visible
+//! from the pose (depth behind the visibility polygon ≤ g) enter H — a shadowed cell's
+//! coefficient is 0. The occluders are confirmed against the filter's own binary map
+//! before the previous pose. The cost of removing shadowed cells (measured,
+//! `docs/mapping.md`): a wall's bin is explained by the in-room part of its range ring
+//! only, so more room cells rise above μ0 than when the cells behind share it; keeping them
+//! instead fills the space behind the walls on model data. Prediction
 //!   h_k(x) = Σ_i c̃_{k,i}·x_i² + N0·TW,
 //!   c̃_{k,i} = Σ_m c_{m,i}·K(k − m),
 //! c_{m,i} the observation model's radar-equation coefficient of cell i in bin m (share of its

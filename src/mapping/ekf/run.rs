@@ -91,7 +91,8 @@ pub fn ekf_run(
             let echoes = s
                 .occlusion
                 .echoes(model, energy, p, dets, occupied.as_deref());
-            (echoes, s.occlusion.guard_bins())
+            let vis = s.occlusion.visibility(model, &geom, &echoes);
+            (echoes, vis, s.occlusion.guard_bins())
         });
         let obs: Vec<(Observation, u64)> = (0..model.directions())
             .into_par_iter()
@@ -102,18 +103,18 @@ pub fn ekf_run(
                     let mut bins = prof.len().min(model.bins);
                     let mut withheld = 0;
                     let beam = match &seen {
-                        Some((echoes, guard)) => {
+                        Some((echoes, vis, guard)) => {
                             let last = echoes.occluder[d].map_or(bins, |o| o + guard);
                             withheld =
                                 (last + 1..bins).filter(|&k| echoes.det[d][k]).count() as u64;
                             bins = bins.min(last + 1);
-                            model.beam(&geom, d)
+                            model.beam_seen(&geom, d, Some((vis, last)))
                         }
                         None => model.beam(&geom, d),
                     };
                     let mut o =
                         Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch);
-                    if let Some((echoes, _)) = &seen {
+                    if let Some((echoes, _, _)) = &seen {
                         // the rows around a detection weaker than the occluder before it
                         // (leakage of a strong echo at another bearing, as in the OG) are not
                         // observed: no cell of this beam explains them
@@ -181,7 +182,8 @@ pub fn ekf_run(
 /// What the EKF can see (`map --method ekf` always gives it): the run's detector and its
 /// occlusion model ([`crate::mapping::grid::visibility`]). With it, an observation keeps
 /// only the bins up to its beam's occluder plus the guard, less the rows around weaker
-/// detections before the occluder; without it, every bin (the filter's unit tests).
+/// detections before the occluder, and only the cells visible from the pose; without it,
+/// every bin and every illuminated cell (the filter's unit tests).
 #[derive(Debug, Clone, Copy)]
 pub struct Sight<'a> {
     /// Detector of the run.
