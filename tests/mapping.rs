@@ -191,7 +191,7 @@ fn all_free_map_has_f1_zero() {
 // ---------------------------------------------------------------- files
 
 /// Independent binary PGM (P5) reader: (width, height, maxval, pixels).
-fn read_pgm(path: &Path) -> (usize, usize, usize, Vec<u8>) {
+pub fn read_pgm(path: &Path) -> (usize, usize, usize, Vec<u8>) {
     let bytes = std::fs::read(path).unwrap();
     let mut fields = Vec::new();
     let mut i = 0;

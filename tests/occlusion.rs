@@ -290,31 +290,10 @@ fn a_multi_bounce_ghost_leaves_no_occupied_cell_beyond_the_wall() {
     );
 }
 
-/// A binary PGM map read back (row 0 of the file is the northern row): true = occupied,
-/// row-major from the lowest y.
+/// A binary PGM map read back by the mapping tests' independent reader (row 0 of the file
+/// is the northern row): true = occupied, row-major from the lowest y.
 fn read_binary_pgm(path: &Path) -> Vec<bool> {
-    let bytes = std::fs::read(path).unwrap();
-    let mut fields = Vec::new();
-    let mut i = 0;
-    while fields.len() < 4 {
-        while bytes[i].is_ascii_whitespace() {
-            i += 1;
-        }
-        if bytes[i] == b'#' {
-            while bytes[i] != b'\n' {
-                i += 1;
-            }
-            continue;
-        }
-        let start = i;
-        while !bytes[i].is_ascii_whitespace() {
-            i += 1;
-        }
-        fields.push(String::from_utf8_lossy(&bytes[start..i]).to_string());
-    }
-    i += 1;
-    let (w, h): (usize, usize) = (fields[1].parse().unwrap(), fields[2].parse().unwrap());
-    let px = &bytes[i..i + w * h];
+    let (w, h, _, px) = crate::mapping::read_pgm(path);
     let mut out = vec![false; w * h];
     for r in 0..h {
         for c in 0..w {

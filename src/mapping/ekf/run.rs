@@ -104,7 +104,7 @@ pub fn ekf_run(
                     let mut withheld = 0;
                     let beam = match &seen {
                         Some((echoes, vis, guard)) => {
-                            let last = echoes.occluder[d].map_or(bins, |o| o + guard);
+                            let last = echoes.last_observed(d, *guard, bins);
                             withheld =
                                 (last + 1..bins).filter(|&k| echoes.det[d][k]).count() as u64;
                             bins = bins.min(last + 1);

@@ -302,10 +302,8 @@ impl<'a> ScanContext<'a> {
         bel: &[f32],
     ) -> ScanResult {
         let bins = echoes.det[d].len();
-        let (first, last) = match echoes.occluder[d] {
-            Some(o) => (o, o + self.occlusion.guard_bins()),
-            None => (bins, bins),
-        };
+        let first = echoes.occluder[d].unwrap_or(bins);
+        let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
         let mut out = Vec::with_capacity(beam.len() / 2);
         let (dets, withheld) = scan_og(
