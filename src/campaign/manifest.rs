@@ -305,7 +305,7 @@ impl Processing {
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum SweepFormat {
-    /// One Touchstone v1 `.s2p` per (position, direction, pulse).
+    /// One Touchstone file (v1 `.sNp` or v2) per (position, direction, pulse).
     #[default]
     #[value(name = "touchstone", help = None::<&str>)]
     Touchstone,
@@ -346,6 +346,10 @@ pub struct SweepsConfig {
     /// The Parquet table (format = "parquet").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathBuf>,
+    /// The S-parameter read from Touchstone files (`"S21"`, `"S11"`, any `"Sij"`); absent:
+    /// S21, or S11 for a one-port file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<crate::campaign::touchstone::SParam>,
 }
 
 /// The analysis view of `campaign.toml`.
