@@ -21,6 +21,7 @@ mod mpc;
 mod physics;
 mod responsiveness;
 mod synth;
+mod touchstone;
 
 /// With `autotests = false` cargo builds only this file: a `tests/*.rs` left out of the
 /// `mod` list above would never run, so it is an error.

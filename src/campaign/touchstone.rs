@@ -32,7 +32,9 @@
 //! What is refused, in one line naming the file, the line and the reason: a parameter type
 //! other than S (Y, Z, G, H), mixed-mode data, an unknown keyword or option, a token that is
 //! not a number, NaN or ±inf (other than a dB magnitude of −inf), a point that does not start
-//! a line or ends inside one (the port count does not fit the data), a frequency that does
+//! a line or ends inside one, or a continuation line with an odd count of numbers (the port
+//! count does not fit the data: points start with f, continuation lines hold pairs; this is
+//! what tells one-port data named `.s2p` from two-port data), a frequency that does
 //! not increase, a truncated last point, a v1 file without an `.sNp` name, and a port count
 //! of the name that disagrees with `[Number of Ports]`.
 //!
@@ -517,6 +519,20 @@ impl<'a> Parser<'a> {
             self.start_points(lineno)?;
         }
         let n = self.ports.expect("set by start_points");
+        if !self.row.is_empty() {
+            // a continuation line holds (a, b) pairs only: an odd count means the point
+            // started earlier than the port count says (e.g. one-port data named .s2p)
+            let count = line.split_ascii_whitespace().count();
+            if count % 2 == 1 {
+                return Err(self.err(
+                    lineno,
+                    format!(
+                        "{count} numbers on a continuation line (pairs expected): a {n}-port point has {} numbers; is the port count right?",
+                        self.per_point
+                    ),
+                ));
+            }
+        }
         let mut toks = line.split_ascii_whitespace();
         let mut first = true;
         while let Some(tok) = toks.next() {
