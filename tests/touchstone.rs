@@ -116,8 +116,9 @@ fn refusals_name_file_line_and_reason() {
         ("nan.s2p", two.replacen("0.16000000000000003", "NaN", 1), "line 4: non-finite value `NaN`"),
         ("word.s2p", two.replacen("0.17", "0.1.7", 1), "line 4: cannot parse `0.1.7` as a number"),
         ("z.s2p", two.replacen("# Hz S RI", "# Hz Z RI", 1), "line 2: parameter type `Z` not supported (only S)"),
-        ("down.s2p", {
-            let mut l: Vec<&str> = two.lines().collect();
+        // (a falling frequency in a v1 two-port file starts its noise block, as in skrf)
+        ("down.s1p", {
+            let mut l: Vec<&str> = one.lines().collect();
             l.swap(4, 5);
             l.join("\n")
         }, "line 6: frequency 57500000000 Hz not increasing"),
