@@ -7,6 +7,7 @@
 
 mod common;
 
+mod calibration;
 mod cli;
 mod closed_loop;
 mod cluster;

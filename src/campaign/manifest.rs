@@ -352,6 +352,20 @@ pub struct SweepsConfig {
     pub parameter: Option<crate::campaign::touchstone::SParam>,
 }
 
+/// `[calibration]`: calibration sweeps applied by the energy stage
+/// ([`crate::energy::calibration`]); names relative to the manifest, templates with
+/// `{direction}` / `{position}` as in `[sweeps] pattern`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationConfig {
+    /// Empty-scene (or absorber) sweep(s), subtracted coherently before the IFFT.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub background: Option<String>,
+    /// System-response sweep(s) (a thru, or cables + arrays alone), divided out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
+}
+
 /// The analysis view of `campaign.toml`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Manifest {
@@ -382,6 +396,9 @@ pub struct Manifest {
     /// `[sweeps]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweeps: Option<SweepsConfig>,
+    /// `[calibration]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationConfig>,
 }
 
 fn default_pulses() -> usize {
