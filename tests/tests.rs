@@ -17,6 +17,7 @@ mod experiment;
 mod fit_cli;
 mod fit_coverage;
 mod fit_estimators;
+mod import;
 mod mapping;
 mod mpc;
 mod physics;
