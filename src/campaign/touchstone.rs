@@ -259,10 +259,30 @@ fn parse_complex(tok: &str) -> Option<Complex64> {
 }
 
 /// Lines split at LF, CRLF or CR, numbered from 1; `Clone` gives a look-ahead.
+///
+/// A text with any LF splits at LF (memchr-fast `str::find`) and drops a CR before it, as
+/// `str::lines`; a text with CR only (classic Mac) splits at CR.
 #[derive(Clone)]
 struct Lines<'a> {
     rest: &'a str,
     lineno: usize,
+    sep: char,
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Lines<'a> {
+        let b = text.as_bytes();
+        let sep = if !b.contains(&b'\n') && b.contains(&b'\r') {
+            '\r'
+        } else {
+            '\n'
+        };
+        Lines {
+            rest: text,
+            lineno: 0,
+            sep,
+        }
+    }
 }
 
 impl<'a> Iterator for Lines<'a> {
@@ -272,24 +292,15 @@ impl<'a> Iterator for Lines<'a> {
             return None;
         }
         self.lineno += 1;
-        let b = self.rest.as_bytes();
-        match b.iter().position(|&c| c == b'\n' || c == b'\r') {
+        let line = match self.rest.find(self.sep) {
             Some(i) => {
                 let line = &self.rest[..i];
-                let skip = if b[i] == b'\r' && b.get(i + 1) == Some(&b'\n') {
-                    2
-                } else {
-                    1
-                };
-                self.rest = &self.rest[i + skip..];
-                Some((self.lineno, line))
+                self.rest = &self.rest[i + 1..];
+                line
             }
-            None => {
-                let line = self.rest;
-                self.rest = "";
-                Some((self.lineno, line))
-            }
-        }
+            None => std::mem::take(&mut self.rest),
+        };
+        Some((self.lineno, line.strip_suffix('\r').unwrap_or(line)))
     }
 }
 
@@ -514,82 +525,78 @@ impl<'a> Parser<'a> {
         Ok(n)
     }
 
+    /// One data line (a `!` comment ends it). The hot path of the energy stage: the
+    /// point's numbers are gathered in a local buffer, the fields read once.
     fn data_line(&mut self, line: &str, lineno: usize) -> Result<()> {
         if self.per_point == 0 {
             self.start_points(lineno)?;
         }
         let n = self.ports.expect("set by start_points");
+        let per = self.per_point;
         if !self.row.is_empty() {
             // a continuation line holds (a, b) pairs only: an odd count means the point
             // started earlier than the port count says (e.g. one-port data named .s2p)
-            let count = line.split_ascii_whitespace().count();
+            let count = Tokens::new(line).count();
             if count % 2 == 1 {
                 return Err(self.err(
                     lineno,
                     format!(
-                        "{count} numbers on a continuation line (pairs expected): a {n}-port point has {} numbers; is the port count right?",
-                        self.per_point
+                        "{count} numbers on a continuation line (pairs expected): a {n}-port point has {per} numbers; is the port count right?"
                     ),
                 ));
             }
         }
-        let mut toks = line.split_ascii_whitespace();
-        let mut first = true;
-        while let Some(tok) = toks.next() {
-            let v: f64 = tok
-                .parse()
-                .map_err(|_| self.err(lineno, format!("cannot parse `{tok}` as a number")))?;
-            let idx = self.row.len();
-            if !v.is_finite() {
+        let db = self.fmt == TsFormat::Db;
+        let mut row = std::mem::take(&mut self.row);
+        let mut toks = Tokens::new(line);
+        let result = (|| {
+            while let Some(tok) = toks.next() {
+                let v: f64 = tok
+                    .parse()
+                    .map_err(|_| self.err(lineno, format!("cannot parse `{tok}` as a number")))?;
+                let idx = row.len();
                 // scikit-rf writes 20·log10(0) = -inf for |S| = 0
-                let db_zero = self.fmt == TsFormat::Db && idx % 2 == 1 && v == f64::NEG_INFINITY;
-                if !db_zero {
+                if !v.is_finite() && !(db && idx % 2 == 1 && v == f64::NEG_INFINITY) {
                     return Err(self.err(lineno, format!("non-finite value `{tok}`")));
                 }
-            }
-            if idx == 0 {
-                if !first {
-                    return Err(self.err(
-                        lineno,
-                        format!(
-                            "a point ends inside the line: a {n}-port point has {} numbers; is the port count right?",
-                            self.per_point
-                        ),
-                    ));
-                }
-                let f = v * self.scale;
-                if let Some(&last) = self.freq_hz.last() {
-                    if f < last && n == 2 && self.version == 1 {
-                        // v1 two-port noise parameters follow the S data
-                        self.noise = Some((lineno, 1));
-                        return Ok(());
+                if idx == 0 {
+                    let f = v * self.scale;
+                    if let Some(&last) = self.freq_hz.last() {
+                        if f < last && n == 2 && self.version == 1 {
+                            // v1 two-port noise parameters follow the S data
+                            self.noise = Some((lineno, 1));
+                            return Ok(());
+                        }
+                        if f <= last {
+                            return Err(
+                                self.err(lineno, format!("frequency {f} Hz not increasing"))
+                            );
+                        }
                     }
-                    if f <= last {
-                        return Err(self.err(lineno, format!("frequency {f} Hz not increasing")));
+                    self.point_line = lineno;
+                }
+                row.push(v);
+                if row.len() == per {
+                    self.finish_point(n, &row);
+                    row.clear();
+                    if toks.next().is_some() {
+                        return Err(self.err(
+                            lineno,
+                            format!(
+                                "more numbers after a complete point: a {n}-port point has {per} numbers; is the port count right?"
+                            ),
+                        ));
                     }
+                    return Ok(());
                 }
-                self.point_line = lineno;
             }
-            first = false;
-            self.row.push(v);
-            if self.row.len() == self.per_point {
-                self.finish_point(n);
-                if toks.next().is_some() {
-                    return Err(self.err(
-                        lineno,
-                        format!(
-                            "more numbers after a complete point: a {n}-port point has {} numbers; is the port count right?",
-                            self.per_point
-                        ),
-                    ));
-                }
-                return Ok(());
-            }
-        }
-        Ok(())
+            Ok(())
+        })();
+        self.row = row;
+        result
     }
 
-    fn finish_point(&mut self, n: usize) {
+    fn finish_point(&mut self, n: usize, row: &[f64]) {
         let fmt = self.fmt;
         let pair = |a: f64, b: f64| -> Complex64 {
             match fmt {
@@ -600,8 +607,8 @@ impl<'a> Parser<'a> {
                 }
             }
         };
-        self.freq_hz.push(self.row[0] * self.scale);
-        let vals = self.row[1..].chunks_exact(2).map(|c| pair(c[0], c[1]));
+        self.freq_hz.push(row[0] * self.scale);
+        let vals = row[1..].chunks_exact(2).map(|c| pair(c[0], c[1]));
         let base = self.s.len();
         self.s.resize(base + n * n, Complex64::new(0.0, 0.0));
         let m = &mut self.s[base..];
@@ -633,7 +640,42 @@ impl<'a> Parser<'a> {
                 }
             }
         }
-        self.row.clear();
+    }
+}
+
+/// Whitespace-separated tokens of a data line, up to a `!` comment (bytes ≤ space
+/// separate; a non-ASCII byte stays in its token, which then fails to parse).
+struct Tokens<'a> {
+    s: &'a str,
+    pos: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn new(s: &'a str) -> Tokens<'a> {
+        Tokens { s, pos: 0 }
+    }
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a str;
+    #[inline]
+    fn next(&mut self) -> Option<&'a str> {
+        let b = self.s.as_bytes();
+        let mut i = self.pos;
+        while i < b.len() && b[i] <= b' ' {
+            i += 1;
+        }
+        if i >= b.len() || b[i] == b'!' {
+            self.pos = b.len();
+            return None;
+        }
+        let start = i;
+        while i < b.len() && b[i] > b' ' && b[i] != b'!' {
+            i += 1;
+        }
+        self.pos = i;
+        // split at ASCII bytes only: char boundaries
+        Some(&self.s[start..i])
     }
 }
 
@@ -700,10 +742,7 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
         per_point: 0,
         point_line: 0,
     };
-    let mut lines = Lines {
-        rest: text,
-        lineno: 0,
-    };
+    let mut lines = Lines::new(text);
     let mut noise_rows = 0usize;
     while let Some((lineno, raw)) = lines.next() {
         let t = raw.trim();
@@ -718,16 +757,16 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
             }
             continue;
         }
-        let line = strip_comment(t);
-        if line.starts_with('#') {
+        if t.starts_with('#') {
+            let line = strip_comment(t);
             if !p.option_seen {
                 p.option_line(line, lineno)?;
                 p.option_seen = true;
             }
             continue;
         }
-        if line.starts_with('[') {
-            if !p.keyword(line, lineno, &mut lines)? {
+        if t.starts_with('[') {
+            if !p.keyword(strip_comment(t), lineno, &mut lines)? {
                 break;
             }
             continue;
@@ -739,7 +778,7 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
         if !p.in_network {
             return Err(p.err(lineno, "data before [Network Data]"));
         }
-        p.data_line(line, lineno)?;
+        p.data_line(t, lineno)?;
         if p.noise.is_some() {
             noise_rows += 1;
         }
