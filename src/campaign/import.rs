@@ -120,7 +120,13 @@ impl std::fmt::Display for ImportOutcome {
 type PoseRow = (i64, f64, f64, f64);
 
 /// Rows of a small CSV (no quoting): header names lower-cased, then (line number, cells).
-fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<(usize, Vec<String>)>)> {
+/// A small CSV: the lower-cased header, then (line number, cells) per row.
+type CsvRows = (Vec<String>, Vec<(usize, Vec<String>)>);
+
+/// One sweep file as `import` reads it: its grid and reader notes, or the refusal.
+type FileRead = std::result::Result<(Vec<f64>, Vec<String>), String>;
+
+fn read_csv(path: &Path) -> Result<CsvRows> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let text = decode(&bytes);
     let mut rows = text
@@ -141,21 +147,14 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<(usize, Vec<String>)>)> {
     Ok((header, body))
 }
 
-fn column(path: &Path, header: &[String], names: &[&str]) -> Result<Option<usize>> {
-    Ok(header
-        .iter()
-        .position(|h| names.contains(&h.as_str()))
-        .or(None))
-    .and_then(|c| {
-        if c.is_none() && names.first().is_some_and(|n| !n.starts_with('?')) {
-            Err(Error::input(
-                path,
-                format!("no column `{}` in the header", names[0]),
-            ))
-        } else {
-            Ok(c)
-        }
-    })
+/// The column named by any of `names`: an error naming the file when absent.
+fn column(path: &Path, header: &[String], names: &[&str]) -> Result<usize> {
+    optional_column(header, names)
+        .ok_or_else(|| Error::input(path, format!("no column `{}` in the header", names[0])))
+}
+
+fn optional_column(header: &[String], names: &[&str]) -> Option<usize> {
+    header.iter().position(|h| names.contains(&h.as_str()))
 }
 
 fn cell<T: std::str::FromStr>(
@@ -172,10 +171,10 @@ fn cell<T: std::str::FromStr>(
 
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
     let (h, rows) = read_csv(path)?;
-    let cp = column(path, &h, &["position"])?.expect("required");
-    let cx = column(path, &h, &["x", "x_m"])?.expect("required");
-    let cy = column(path, &h, &["y", "y_m"])?.expect("required");
-    let ch = column(path, &h, &["heading", "heading_deg"])?.expect("required");
+    let cp = column(path, &h, &["position"])?;
+    let cx = column(path, &h, &["x", "x_m"])?;
+    let cy = column(path, &h, &["y", "y_m"])?;
+    let ch = column(path, &h, &["heading", "heading_deg"])?;
     let mut out: Vec<PoseRow> = Vec::with_capacity(rows.len());
     for (n, r) in &rows {
         let row = (
@@ -250,15 +249,14 @@ fn parse_pattern(p: &str) -> Result<Vec<Piece>> {
     if !rest.is_empty() {
         out.push(Piece::Lit(rest.to_string()));
     }
-    for f in 0..2 {
-        if !out.contains(&Piece::Field(f, None))
-            && !out
-                .iter()
-                .any(|p| matches!(p, Piece::Field(g, Some(_)) if *g == f))
+    for (f, name) in FIELDS.iter().enumerate().take(2) {
+        if !out
+            .iter()
+            .any(|q| matches!(q, Piece::Field(g, _) if *g == f))
         {
             return Err(Error::param(
                 "--name-pattern",
-                format!("`{p}` has no {{{}}}", FIELDS[f]),
+                format!("`{p}` has no {{{name}}}"),
             ));
         }
     }
@@ -397,10 +395,10 @@ fn cells_from_glob(glob_pat: &str, pattern: &str) -> Result<Cells> {
 
 fn cells_from_index(path: &Path) -> Result<Cells> {
     let (h, rows) = read_csv(path)?;
-    let cp = column(path, &h, &["position"])?.expect("required");
-    let cd = column(path, &h, &["direction"])?.expect("required");
-    let ck = column(path, &h, &["?pulse", "pulse"])?;
-    let cf = column(path, &h, &["path"])?.expect("required");
+    let cp = column(path, &h, &["position"])?;
+    let cd = column(path, &h, &["direction"])?;
+    let ck = optional_column(&h, &["pulse"]);
+    let cf = column(path, &h, &["path"])?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut cells: BTreeMap<(i64, i64, i64), Vec<PathBuf>> = BTreeMap::new();
     for (n, r) in &rows {
@@ -557,7 +555,7 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
     // read every file (in parallel): grid, parameter, reader refusals
     let present: Vec<&PathBuf> = table.iter().flatten().collect();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let reads: Vec<std::result::Result<(Vec<f64>, Vec<String>), String>> = present
+    let reads: Vec<FileRead> = present
         .par_iter()
         .map(|path| {
             let r = (|| -> Result<(Vec<f64>, Vec<String>)> {

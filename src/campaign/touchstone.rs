@@ -556,7 +556,7 @@ impl<'a> Parser<'a> {
                     .map_err(|_| self.err(lineno, format!("cannot parse `{tok}` as a number")))?;
                 let idx = row.len();
                 // scikit-rf writes 20·log10(0) = -inf for |S| = 0
-                if !v.is_finite() && !(db && idx % 2 == 1 && v == f64::NEG_INFINITY) {
+                if !(v.is_finite() || (db && idx % 2 == 1 && v == f64::NEG_INFINITY)) {
                     return Err(self.err(lineno, format!("non-finite value `{tok}`")));
                 }
                 if idx == 0 {
