@@ -6,19 +6,9 @@
 use crate::common::*;
 use pradar::campaign::manifest::SweepFormat;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn pradar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pradar"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use crate::common::{path_str as s, pradar_quiet as pradar};
 
 /// A simulated campaign (2 positions, 401 points, 37 directions) in `dir/sim` with its
 /// energy in `dir/energy.parquet`; its sweeps copied to `dir/raw/pos{10·(p+1)}_dir{d}.s2p`
