@@ -15,7 +15,7 @@ use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::Parser;
 use cli::{
-    Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs, MapArgs,
+    Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs, ImportArgs, MapArgs,
     ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use indicatif::{ProgressBar, ProgressStyle};
@@ -58,6 +58,7 @@ fn parse_args() -> Cli {
 fn run(cli: Cli) -> Result<()> {
     let quiet = cli.quiet;
     match cli.cmd {
+        Cmd::Import(a) => import(a, quiet),
         Cmd::Simulate(a) => simulate(a, quiet),
         Cmd::Energy(a) => energy(a, quiet),
         Cmd::Synth(a) => synth(a, quiet),
@@ -115,6 +116,52 @@ fn stage_bar(quiet: bool, label: &str, total: usize) -> Box<dyn Fn(usize, usize)
             pb.finish_and_clear();
         }
     })
+}
+
+/// `import`: the problems found before processing go to stderr one per line, then one
+/// `error:` line with their count (exit 1, nothing written).
+fn import(a: ImportArgs, quiet: bool) -> Result<()> {
+    use pradar::campaign::import::{ImportParams, SweepFiles};
+    let sweeps = match (a.sweeps, a.name_pattern, a.index) {
+        (Some(glob), Some(pattern), _) => SweepFiles::Glob { glob, pattern },
+        (_, _, Some(index)) => SweepFiles::Index(index),
+        _ => anyhow::bail!("import: give --sweeps GLOB --name-pattern PATTERN, or --index CSV"),
+    };
+    let params = ImportParams {
+        poses: a.poses,
+        sweeps,
+        directions: a.directions,
+        layout: a.layout,
+        base: a.base,
+        name: a.name,
+        elements: a.elements,
+        out: a.out,
+        to_parquet: a.to_parquet,
+    };
+    let pb = bar(quiet, "import", 0);
+    let r = pradar::campaign::import::run(&params, &|d, t| {
+        pb.set_length(t as u64);
+        pb.set_position(d as u64)
+    });
+    pb.finish_and_clear();
+    let outcome = r?;
+    if !outcome.problems.is_empty() {
+        for p in &outcome.problems {
+            eprintln!("{p}");
+        }
+        let count = |k: &str| outcome.problems.iter().filter(|p| p.starts_with(k)).count();
+        anyhow::bail!(
+            "import: {} problem(s) before processing ({} missing, {} duplicated, {} extra, {} unreadable, {} grid); nothing written",
+            outcome.problems.len(),
+            count("missing"),
+            count("duplicated"),
+            count("extra"),
+            count("unreadable"),
+            count("grid")
+        );
+    }
+    report(quiet, outcome);
+    Ok(())
 }
 
 fn simulate(a: SimulateArgs, quiet: bool) -> Result<()> {

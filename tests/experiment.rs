@@ -3,23 +3,10 @@
 
 use crate::common;
 
-use common::assert_one_line_error;
+use common::{assert_one_line_error, path_str as s, pradar_quiet as pradar};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::sync::OnceLock;
-
-fn pradar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pradar"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

@@ -7,6 +7,7 @@
 
 mod common;
 
+mod calibration;
 mod cli;
 mod closed_loop;
 mod cluster;
@@ -16,12 +17,14 @@ mod experiment;
 mod fit_cli;
 mod fit_coverage;
 mod fit_estimators;
+mod import;
 mod mapping;
 mod mpc;
 mod occlusion;
 mod physics;
 mod responsiveness;
 mod synth;
+mod touchstone;
 
 /// With `autotests = false` cargo builds only this file: a `tests/*.rs` left out of the
 /// `mod` list above would never run, so it is an error.

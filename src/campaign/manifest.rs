@@ -305,7 +305,7 @@ impl Processing {
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum SweepFormat {
-    /// One Touchstone v1 `.s2p` per (position, direction, pulse).
+    /// One Touchstone file (v1 `.sNp` or v2) per (position, direction, pulse).
     #[default]
     #[value(name = "touchstone", help = None::<&str>)]
     Touchstone,
@@ -346,6 +346,24 @@ pub struct SweepsConfig {
     /// The Parquet table (format = "parquet").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathBuf>,
+    /// The S-parameter read from Touchstone files (`"S21"`, `"S11"`, any `"Sij"`); absent:
+    /// S21, or S11 for a one-port file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<crate::campaign::touchstone::SParam>,
+}
+
+/// `[calibration]`: calibration sweeps applied by the energy stage
+/// ([`crate::energy::calibration`]); names relative to the manifest, templates with
+/// `{direction}` / `{position}` as in `[sweeps] pattern`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationConfig {
+    /// Empty-scene (or absorber) sweep(s), subtracted coherently before the IFFT.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub background: Option<String>,
+    /// System-response sweep(s) (a thru, or cables + arrays alone), divided out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
 }
 
 /// The analysis view of `campaign.toml`.
@@ -378,6 +396,9 @@ pub struct Manifest {
     /// `[sweeps]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweeps: Option<SweepsConfig>,
+    /// `[calibration]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationConfig>,
 }
 
 fn default_pulses() -> usize {

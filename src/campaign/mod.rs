@@ -1,6 +1,8 @@
 //! Campaign stage: manifest, layout, array patterns, sweep formats (Touchstone, Parquet),
-//! model-file schema and the physics-based simulator.
+//! model-file schema, the physics-based simulator and `import` (a manifest from a folder of
+//! measured sweeps).
 
+pub mod import;
 pub mod layout;
 pub mod manifest;
 pub mod modelfile;

@@ -1,4 +1,4 @@
-//! Sweep storage: one Touchstone `.s2p` per (position, direction, pulse), or one Parquet long
+//! Sweep storage: one Touchstone file per (position, direction, pulse), or one Parquet long
 //! table `position, direction, pulse, frequency_hz, re, im` (rows sorted by position,
 //! direction, pulse, frequency; one row group per position as `simulate` writes it).
 //!
@@ -6,9 +6,13 @@
 //! most one position's sweeps are in memory. Every file is checked against the manifest's
 //! band (same number of points, frequencies within 1e-6 of a step): a wrong band, a missing
 //! file, NaN or a truncated row is an error naming the file (and line or row).
+//!
+//! From a Touchstone file of any port count the reader keeps one S-parameter, `[sweeps]
+//! parameter` (S21 by default, S11 for a one-port file when the manifest names none); a file
+//! without it is an error naming the file and its port count.
 
 use crate::campaign::manifest::{expand_pattern, Band, Campaign, SweepFormat};
-use crate::campaign::touchstone::{parse_s2p, write_s2p, TsFormat};
+use crate::campaign::touchstone::{decode, parse_touchstone, write_s2p, SParam, TsFormat};
 use crate::error::{Error, Result};
 use crate::table;
 use num_complex::Complex64;
@@ -26,7 +30,7 @@ pub struct PositionSweeps {
     pub pulses: usize,
     /// Frequency points.
     pub points: usize,
-    /// S21 values.
+    /// The swept parameter (`[sweeps] parameter`, S21 by default).
     pub s21: Vec<Complex64>,
 }
 
@@ -39,7 +43,7 @@ impl PositionSweeps {
 }
 
 enum Source {
-    Touchstone(Vec<PathBuf>),
+    Touchstone(Vec<PathBuf>, Option<SParam>),
     Parquet(PathBuf),
 }
 
@@ -76,6 +80,21 @@ pub fn check_grid(path: &Path, freq_hz: &[f64], band: &Band) -> Result<()> {
             ),
         ))
     }
+}
+
+/// Read one Touchstone sweep's parameter `param` (None: [`SParam::default_for`] its port
+/// count) into `out`, checking its grid against `band`.
+pub fn read_sweep(
+    path: &Path,
+    param: Option<SParam>,
+    band: &Band,
+    out: &mut [Complex64],
+) -> Result<()> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let net = parse_touchstone(&decode(&bytes), path)?;
+    check_grid(path, &net.freq_hz, band)?;
+    let p = param.unwrap_or(SParam::default_for(net.ports));
+    net.param_into(p, path, out)
 }
 
 impl SweepReader {
@@ -128,7 +147,7 @@ impl SweepReader {
                         format!("sweep file listed in {} not found", c.path.display()),
                     ));
                 }
-                Source::Touchstone(paths)
+                Source::Touchstone(paths, cfg.parameter)
             }
             SweepFormat::Parquet => {
                 let p = dir.join(cfg.path.as_ref().expect("checked"));
@@ -169,7 +188,7 @@ impl SweepReader {
     /// chunk, whatever the campaign size.
     pub fn chunk_positions(&self) -> usize {
         match self.source {
-            Source::Touchstone(_) => 1,
+            Source::Touchstone(..) => 1,
             Source::Parquet(_) => {
                 let rows = self.directions * self.pulses * self.band.points;
                 ((1usize << 20) / rows.max(1)).clamp(1, self.positions.max(1))
@@ -189,7 +208,7 @@ impl SweepReader {
         let n = nd * nk * nf;
         let mut out = Vec::with_capacity(count);
         match &self.source {
-            Source::Touchstone(paths) => {
+            Source::Touchstone(paths, param) => {
                 for p in p0..p0 + count {
                     let mut s21 = vec![Complex64::new(0.0, 0.0); n];
                     let base = p * nd * nk;
@@ -197,13 +216,7 @@ impl SweepReader {
                         .enumerate()
                         .try_for_each(|(i, out)| -> Result<()> {
                             let path = &paths[base + i];
-                            let text = crate::io::read_text(path)?;
-                            let ts = parse_s2p(&text, path)?;
-                            check_grid(path, &ts.freq_hz, &self.band)?;
-                            for (o, s) in out.iter_mut().zip(&ts.s) {
-                                *o = s[1];
-                            }
-                            Ok(())
+                            read_sweep(path, *param, &self.band, out)
                         })?;
                     out.push(PositionSweeps {
                         position: p,

@@ -1,10 +1,42 @@
-//! Touchstone v1 two-port files (`.s2p`) as a VNA writes them and scikit-rf reads them.
+//! Touchstone files (v1 `.sNp` and v2) as a VNA, an EM solver or scikit-rf writes them.
 //!
-//! Takes text with `!` comments (whole-line or trailing), an option line
-//! `# <Hz|kHz|MHz|GHz> S <RI|MA|DB> R <z0>` anywhere before the first data line (defaults
-//! `GHz S MA R 50` when absent), and data rows `f S11 S21 S12 S22` (two numbers each; rows
-//! may wrap, tokens are grouped nine at a time). Gives the frequency grid in Hz and the four
-//! complex S-parameters. MA and DB angles are in degrees; DB magnitude is 20·log10|S|.
+//! Takes the bytes of a file and its path (the extension `.sNp` gives the port count of a v1
+//! file; a v2 file gives it with `[Number of Ports]`). Gives a [`Network`]: the frequency grid
+//! in Hz, the full S matrix per frequency, the reference impedance per frequency and port
+//! (complex), and notes on what was recognised and skipped. [`Network::param`] picks one
+//! S-parameter ([`SParam`], e.g. S21) for the energy stage.
+//!
+//! What is read (scikit-rf 2.2's `skrf.io.touchstone` is the reference reader; the fixtures
+//! in `data/touchstone/` were written by it, `scripts/make_skrf_fixture.py`):
+//! * text: a UTF-8 byte-order mark is dropped; a file that is not UTF-8 is read as Latin-1
+//!   (vendor comments with `°`); lines end in LF, CRLF or CR;
+//! * `!` comments, whole-line or trailing; the option line `# <Hz|kHz|MHz|GHz> S <RI|MA|DB>
+//!   R <z0 …>` (first one wins, defaults `GHz S MA R 50`); `R` takes one value or one per
+//!   port, real or complex (`(10+10j)`, as scikit-rf writes it);
+//! * data: a point is `f` and 2·n² numbers (n(n+1) for a v2 `[Matrix Format] Lower|Upper`),
+//!   wrapped over as many lines as the writer likes, each point starting a line. Two-port
+//!   points are S11 S21 S12 S22 (v1, and v2 `[Two-Port Data Order] 21_12`) or S11 S12 S21
+//!   S22 (`12_21`); other port counts are row-major. RI as given; MA is |S|·e^{jθ}, DB is
+//!   10^(a/20)·e^{jθ} with θ in degrees (θ·π/180, as scikit-rf), and `-inf` dB (scikit-rf
+//!   writes it for |S| = 0) is 0;
+//! * v2 keywords `[Version]`, `[Number of Ports]`, `[Two-Port Data Order]`, `[Number of
+//!   Frequencies]` (checked), `[Number of Noise Frequencies]`, `[Reference]` (one value per
+//!   port, may continue on the next lines), `[Matrix Format]`, `[Begin Information]` …
+//!   `[End Information]` (skipped), `[Network Data]`, `[Noise Data]`, `[End]`;
+//! * noise parameters: a v2 `[Noise Data]` block, or in a v1 two-port file the rows after
+//!   the frequency first falls, are recognised, skipped and noted;
+//! * HFSS exports: `! Port Impedance re im …` after each point (one complex value per port,
+//!   or the full matrix whose diagonal is taken, continued on `!` lines of numbers) set the
+//!   reference impedance of that point, as scikit-rf does.
+//!
+//! What is refused, in one line naming the file, the line and the reason: a parameter type
+//! other than S (Y, Z, G, H), mixed-mode data, an unknown keyword or option, a token that is
+//! not a number, NaN or ±inf (other than a dB magnitude of −inf), a point that does not start
+//! a line or ends inside one, or a continuation line with an odd count of numbers (the port
+//! count does not fit the data: points start with f, continuation lines hold pairs; this is
+//! what tells one-port data named `.s2p` from two-port data), a frequency that does
+//! not increase, a truncated last point, a v1 file without an `.sNp` name, and a port count
+//! of the name that disagrees with `[Number of Ports]`.
 //!
 //! Why not the `touchstone` crate (0.17, evaluated): it parses into its own network type
 //! with an allocation per row and reports errors without file line numbers; the energy stage
@@ -13,6 +45,7 @@
 
 use crate::error::{Error, Result};
 use num_complex::Complex64;
+use std::borrow::Cow;
 use std::io::Write;
 use std::path::Path;
 
@@ -27,15 +60,164 @@ pub enum TsFormat {
     Db,
 }
 
-/// A parsed two-port network.
+/// One S-parameter S_ij (i = output port, j = input port, both from 1), e.g. S21.
+///
+/// Written `S21` (ports 1..9) or `S10,2` (any ports); `[sweeps] parameter` in the manifest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub struct SParam {
+    /// Output (receiving) port, from 1.
+    pub to_port: usize,
+    /// Input (driven) port, from 1.
+    pub from_port: usize,
+}
+
+impl SParam {
+    /// S21: the transmission from port 1 to port 2 (the quasi-monostatic pair's default).
+    pub const S21: SParam = SParam {
+        to_port: 2,
+        from_port: 1,
+    };
+    /// S11: the reflection at port 1 (a monostatic one-port).
+    pub const S11: SParam = SParam {
+        to_port: 1,
+        from_port: 1,
+    };
+
+    /// The default for a file of `ports` ports: S11 for a one-port, S21 otherwise.
+    pub fn default_for(ports: usize) -> SParam {
+        if ports == 1 {
+            SParam::S11
+        } else {
+            SParam::S21
+        }
+    }
+}
+
+impl std::fmt::Display for SParam {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.to_port < 10 && self.from_port < 10 {
+            write!(f, "S{}{}", self.to_port, self.from_port)
+        } else {
+            write!(f, "S{},{}", self.to_port, self.from_port)
+        }
+    }
+}
+
+impl std::str::FromStr for SParam {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let bad = || format!("`{s}` is not an S-parameter (write e.g. S21, S11 or S10,2)");
+        let rest = s
+            .strip_prefix('S')
+            .or_else(|| s.strip_prefix('s'))
+            .ok_or_else(bad)?;
+        let (i, j) = match rest.split_once(',') {
+            Some((i, j)) => (i.trim().parse().ok(), j.trim().parse().ok()),
+            None if rest.len() == 2 && rest.bytes().all(|b| b.is_ascii_digit()) => {
+                (rest[..1].parse().ok(), rest[1..].parse().ok())
+            }
+            None => (None, None),
+        };
+        match (i, j) {
+            (Some(i), Some(j)) if i >= 1 && j >= 1 => Ok(SParam {
+                to_port: i,
+                from_port: j,
+            }),
+            _ => Err(bad()),
+        }
+    }
+}
+
+impl TryFrom<String> for SParam {
+    type Error = String;
+    fn try_from(s: String) -> std::result::Result<Self, String> {
+        s.parse()
+    }
+}
+
+impl From<SParam> for String {
+    fn from(p: SParam) -> String {
+        p.to_string()
+    }
+}
+
+/// A parsed network of any port count.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Touchstone {
-    /// Frequencies, Hz.
+pub struct Network {
+    /// Number of ports n.
+    pub ports: usize,
+    /// Touchstone version of the file (1 or 2).
+    pub version: u8,
+    /// Frequencies, Hz, increasing.
     pub freq_hz: Vec<f64>,
-    /// S11, S21, S12, S22 per frequency.
-    pub s: Vec<[Complex64; 4]>,
-    /// Reference impedance, ohm.
-    pub z0: f64,
+    /// S matrices, row-major per point: `s[(k·n + i)·n + j]` = S_{i+1, j+1}(f_k).
+    pub s: Vec<Complex64>,
+    /// Reference impedance per point and port, ohm: `z0_ohm[k·n + i]`.
+    pub z0_ohm: Vec<Complex64>,
+    /// What was recognised and skipped (noise parameters), one sentence each.
+    pub notes: Vec<String>,
+}
+
+impl Network {
+    /// S_ij at point `k` (`i`, `j` from 0).
+    pub fn get(&self, k: usize, i: usize, j: usize) -> Complex64 {
+        self.s[(k * self.ports + i) * self.ports + j]
+    }
+
+    /// Check that `p` exists in this network; the error names `path` and the reason.
+    pub fn check_param(&self, p: SParam, path: &Path) -> Result<()> {
+        if p.to_port > self.ports || p.from_port > self.ports {
+            let hint = if self.ports == 1 {
+                " (a one-port file holds S11 only: set [sweeps] parameter = \"S11\")"
+            } else {
+                ""
+            };
+            return Err(Error::input(
+                path,
+                format!(
+                    "parameter {p} does not exist in a {}-port file{hint}",
+                    self.ports
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Copy parameter `p` at every point into `out` (of `freq_hz.len()` values).
+    pub fn param_into(&self, p: SParam, path: &Path, out: &mut [Complex64]) -> Result<()> {
+        self.check_param(p, path)?;
+        let n = self.ports;
+        let off = (p.to_port - 1) * n + (p.from_port - 1);
+        for (k, o) in out.iter_mut().enumerate().take(self.freq_hz.len()) {
+            *o = self.s[k * n * n + off];
+        }
+        Ok(())
+    }
+
+    /// Parameter `p` at every point.
+    pub fn param(&self, p: SParam, path: &Path) -> Result<Vec<Complex64>> {
+        let mut out = vec![Complex64::new(0.0, 0.0); self.freq_hz.len()];
+        self.param_into(p, path, &mut out)?;
+        Ok(out)
+    }
+}
+
+/// The text of a Touchstone file: UTF-8 without its byte-order mark, or Latin-1 when the
+/// bytes are not UTF-8 (Latin-1 maps every byte to a character, so it never fails).
+pub fn decode(bytes: &[u8]) -> Cow<'_, str> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(s) => Cow::Borrowed(s),
+        Err(_) => Cow::Owned(bytes.iter().map(|&b| b as char).collect()),
+    }
+}
+
+/// Port count from a `.sNp` extension (any case), if the name has one.
+pub fn ports_from_name(path: &Path) -> Option<usize> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    let digits = ext.strip_prefix('s')?.strip_suffix('p')?;
+    digits.parse().ok().filter(|&n| n >= 1)
 }
 
 fn unit_scale(tok: &str) -> Option<f64> {
@@ -48,159 +230,655 @@ fn unit_scale(tok: &str) -> Option<f64> {
     }
 }
 
-fn to_complex(fmt: TsFormat, a: f64, b: f64) -> Complex64 {
-    match fmt {
-        TsFormat::Ri => Complex64::new(a, b),
-        TsFormat::Ma => Complex64::from_polar(a, b.to_radians()),
-        TsFormat::Db => Complex64::from_polar(10f64.powf(a / 20.0), b.to_radians()),
+/// Parse a real or complex number as scikit-rf's option line takes it (`50`, `(10+10j)`,
+/// `10-5j`, `5j`).
+fn parse_complex(tok: &str) -> Option<Complex64> {
+    let t = tok.trim_start_matches('(').trim_end_matches(')');
+    if let Ok(v) = t.parse::<f64>() {
+        return Some(Complex64::new(v, 0.0));
+    }
+    let body = t.strip_suffix(['j', 'J', 'i', 'I'])?;
+    // the sign that starts the imaginary part: the last + or - not at the start and not
+    // after an exponent marker
+    let b = body.as_bytes();
+    let split = (1..b.len())
+        .rev()
+        .find(|&i| (b[i] == b'+' || b[i] == b'-') && !matches!(b[i - 1], b'e' | b'E'));
+    match split {
+        Some(i) => {
+            let re = body[..i].parse::<f64>().ok()?;
+            let im = match &body[i..] {
+                "+" => 1.0,
+                "-" => -1.0,
+                s => s.parse::<f64>().ok()?,
+            };
+            Some(Complex64::new(re, im))
+        }
+        None => Some(Complex64::new(0.0, body.parse::<f64>().ok()?)),
     }
 }
 
-struct Options {
+/// Lines split at LF, CRLF or CR, numbered from 1; `Clone` gives a look-ahead.
+///
+/// A text with any LF splits at LF (memchr-fast `str::find`) and drops a CR before it, as
+/// `str::lines`; a text with CR only (classic Mac) splits at CR.
+#[derive(Clone)]
+struct Lines<'a> {
+    rest: &'a str,
+    lineno: usize,
+    sep: char,
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Lines<'a> {
+        let b = text.as_bytes();
+        let sep = if !b.contains(&b'\n') && b.contains(&b'\r') {
+            '\r'
+        } else {
+            '\n'
+        };
+        Lines {
+            rest: text,
+            lineno: 0,
+            sep,
+        }
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (usize, &'a str);
+    fn next(&mut self) -> Option<(usize, &'a str)> {
+        if self.rest.is_empty() {
+            return None;
+        }
+        self.lineno += 1;
+        let line = match self.rest.find(self.sep) {
+            Some(i) => {
+                let line = &self.rest[..i];
+                self.rest = &self.rest[i + 1..];
+                line
+            }
+            None => std::mem::take(&mut self.rest),
+        };
+        Some((self.lineno, line.strip_suffix('\r').unwrap_or(line)))
+    }
+}
+
+/// Order of the numbers of a point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MatrixFormat {
+    Full,
+    Lower,
+    Upper,
+}
+
+struct Parser<'a> {
+    path: &'a Path,
+    version: u8,
+    ports: Option<usize>,
+    name_ports: Option<usize>,
     scale: f64,
     fmt: TsFormat,
-    z0: f64,
+    option_seen: bool,
+    r_option: Vec<Complex64>,
+    reference: Option<Vec<Complex64>>,
+    legacy_two_port: bool,
+    matrix: MatrixFormat,
+    declared_points: Option<(usize, usize)>,
+    in_network: bool,
+    noise: Option<(usize, usize)>,
+    freq_hz: Vec<f64>,
+    s: Vec<Complex64>,
+    hfss_z0: Vec<Vec<f64>>,
+    row: Vec<f64>,
+    per_point: usize,
+    point_line: usize,
 }
 
-fn parse_option_line(line: &str, path: &Path, lineno: usize) -> Result<Options> {
-    let mut o = Options {
-        scale: 1e9,
-        fmt: TsFormat::Ma,
-        z0: 50.0,
-    };
-    let mut toks = line[1..].split_ascii_whitespace();
-    while let Some(t) = toks.next() {
-        if let Some(s) = unit_scale(t) {
-            o.scale = s;
-            continue;
-        }
-        match t.to_ascii_lowercase().as_str() {
-            "s" => {}
-            "y" | "z" | "h" | "g" => {
-                return Err(Error::input(
-                    path,
-                    format!("line {lineno}: parameter type `{t}` not supported (only S)"),
-                ))
-            }
-            "ri" => o.fmt = TsFormat::Ri,
-            "ma" => o.fmt = TsFormat::Ma,
-            "db" => o.fmt = TsFormat::Db,
-            "r" => {
-                let v = toks.next().ok_or_else(|| {
-                    Error::input(path, format!("line {lineno}: option `R` without a value"))
-                })?;
-                o.z0 = v.parse().map_err(|_| {
-                    Error::input(
-                        path,
-                        format!("line {lineno}: bad reference impedance `{v}`"),
-                    )
-                })?;
-            }
-            _ => {
-                return Err(Error::input(
-                    path,
-                    format!("line {lineno}: unknown option `{t}` in option line"),
-                ))
-            }
-        }
+impl<'a> Parser<'a> {
+    fn err(&self, lineno: usize, msg: impl std::fmt::Display) -> Error {
+        Error::input(self.path, format!("line {lineno}: {msg}"))
     }
-    Ok(o)
-}
 
-/// Parse the text of a `.s2p` file; `path` names it in errors.
-pub fn parse_s2p(text: &str, path: &Path) -> Result<Touchstone> {
-    let mut opts: Option<Options> = None;
-    let mut freq_hz = Vec::new();
-    let mut s = Vec::new();
-    let mut row = [0f64; 9];
-    let mut n = 0usize;
-    let mut row_line = 0usize;
-    for (i, raw) in text.lines().enumerate() {
-        let lineno = i + 1;
-        let line = match raw.find('!') {
-            Some(p) => &raw[..p],
-            None => raw,
-        }
-        .trim();
-        if line.is_empty() {
-            continue;
-        }
-        if line.starts_with('#') {
-            if opts.is_none() && freq_hz.is_empty() && n == 0 {
-                opts = Some(parse_option_line(line, path, lineno)?);
+    fn option_line(&mut self, line: &str, lineno: usize) -> Result<()> {
+        let mut toks = line[1..].split_ascii_whitespace().peekable();
+        while let Some(t) = toks.next() {
+            if let Some(s) = unit_scale(t) {
+                self.scale = s;
+                continue;
             }
-            continue;
+            match t.to_ascii_lowercase().as_str() {
+                "s" => {}
+                "y" | "z" | "h" | "g" => {
+                    return Err(self.err(
+                        lineno,
+                        format!("parameter type `{t}` not supported (only S)"),
+                    ))
+                }
+                "ri" => self.fmt = TsFormat::Ri,
+                "ma" => self.fmt = TsFormat::Ma,
+                "db" => self.fmt = TsFormat::Db,
+                "r" => {
+                    // one value, one per port, or none (HFSS: `! Port Impedance` follows)
+                    let mut r = Vec::new();
+                    while let Some(v) = toks.peek().and_then(|v| parse_complex(v)) {
+                        r.push(v);
+                        toks.next();
+                    }
+                    self.r_option = r;
+                }
+                _ => return Err(self.err(lineno, format!("unknown option `{t}` in option line"))),
+            }
         }
-        if line.starts_with('[') {
-            return Err(Error::input(
-                path,
-                format!("line {lineno}: Touchstone v2 keyword `{line}` not supported (write v1)"),
-            ));
-        }
-        let o = opts.get_or_insert(Options {
-            scale: 1e9,
-            fmt: TsFormat::Ma,
-            z0: 50.0,
-        });
-        for tok in line.split_ascii_whitespace() {
-            let v: f64 = tok.parse().map_err(|_| {
-                Error::input(
-                    path,
-                    format!("line {lineno}: cannot parse `{tok}` as a number"),
-                )
-            })?;
-            if !v.is_finite() {
-                return Err(Error::input(
-                    path,
-                    format!("line {lineno}: non-finite value `{tok}`"),
+        Ok(())
+    }
+
+    fn set_ports(&mut self, n: usize, lineno: usize) -> Result<()> {
+        if let Some(m) = self.name_ports {
+            if m != n {
+                return Err(self.err(
+                    lineno,
+                    format!("[Number of Ports] {n} but the file name says {m} ports (.s{m}p)"),
                 ));
             }
-            if n == 0 {
-                row_line = lineno;
+        }
+        if n == 0 {
+            return Err(self.err(lineno, "[Number of Ports] must be at least 1"));
+        }
+        self.ports = Some(n);
+        Ok(())
+    }
+
+    /// A `[keyword]` line; `lines` gives the continuation of `[Reference]`.
+    fn keyword(&mut self, line: &str, lineno: usize, lines: &mut Lines<'_>) -> Result<bool> {
+        let close = line
+            .find(']')
+            .ok_or_else(|| self.err(lineno, format!("keyword `{line}` without `]`")))?;
+        let key = line[1..close].trim().to_ascii_lowercase();
+        let arg = line[close + 1..].trim();
+        let number = |p: &Parser<'_>| -> Result<usize> {
+            arg.split_ascii_whitespace()
+                .next()
+                .and_then(|v| v.parse().ok())
+                .ok_or_else(|| {
+                    p.err(
+                        lineno,
+                        format!("[{}] needs a whole number", &line[1..close]),
+                    )
+                })
+        };
+        match key.as_str() {
+            "version" => {
+                if !arg.starts_with('2') && !arg.starts_with('1') {
+                    return Err(self.err(
+                        lineno,
+                        format!("Touchstone version `{arg}` not supported (1.x, 2.x)"),
+                    ));
+                }
+                self.version = if arg.starts_with('2') { 2 } else { 1 };
+                self.in_network = self.version == 1;
             }
-            row[n] = v;
-            n += 1;
-            if n == 9 {
-                let f = row[0] * o.scale;
-                if let Some(&last) = freq_hz.last() {
-                    if f <= last {
-                        return Err(Error::input(
-                            path,
-                            format!("line {row_line}: frequency {f} Hz not increasing"),
-                        ));
+            "number of ports" => {
+                let n = number(self)?;
+                self.set_ports(n, lineno)?;
+            }
+            "two-port data order" => {
+                self.legacy_two_port = match arg {
+                    a if a.starts_with("21_12") => true,
+                    a if a.starts_with("12_21") => false,
+                    _ => {
+                        return Err(self.err(
+                            lineno,
+                            format!("[Two-Port Data Order] `{arg}` (expected 12_21 or 21_12)"),
+                        ))
                     }
                 }
-                freq_hz.push(f);
-                s.push([
-                    to_complex(o.fmt, row[1], row[2]),
-                    to_complex(o.fmt, row[3], row[4]),
-                    to_complex(o.fmt, row[5], row[6]),
-                    to_complex(o.fmt, row[7], row[8]),
-                ]);
-                n = 0;
+            }
+            "number of frequencies" => self.declared_points = Some((number(self)?, lineno)),
+            "number of noise frequencies" => {}
+            "reference" => {
+                let n = self
+                    .ports
+                    .ok_or_else(|| self.err(lineno, "[Reference] before [Number of Ports]"))?;
+                let mut vals = Vec::with_capacity(n);
+                let mut text = arg.to_string();
+                loop {
+                    for t in text.split_ascii_whitespace() {
+                        let v = parse_complex(t).ok_or_else(|| {
+                            self.err(
+                                lineno,
+                                format!("[Reference]: cannot parse `{t}` as an impedance"),
+                            )
+                        })?;
+                        vals.push(v);
+                    }
+                    if vals.len() >= n {
+                        break;
+                    }
+                    match lines.next() {
+                        Some((_, l)) => text = strip_comment(l).to_string(),
+                        None => break,
+                    }
+                }
+                if vals.len() != n {
+                    return Err(self.err(
+                        lineno,
+                        format!("[Reference] has {} values for {n} ports", vals.len()),
+                    ));
+                }
+                self.reference = Some(vals);
+            }
+            "matrix format" => {
+                self.matrix = match arg.to_ascii_lowercase().as_str() {
+                    "full" => MatrixFormat::Full,
+                    "lower" => MatrixFormat::Lower,
+                    "upper" => MatrixFormat::Upper,
+                    _ => {
+                        return Err(self.err(
+                            lineno,
+                            format!("[Matrix Format] `{arg}` (expected Full, Lower or Upper)"),
+                        ))
+                    }
+                }
+            }
+            "mixed-mode order" => {
+                return Err(self.err(lineno, "mixed-mode data ([Mixed-Mode Order]) not supported"))
+            }
+            "begin information" => {
+                for (_, l) in lines.by_ref() {
+                    if l.trim()
+                        .to_ascii_lowercase()
+                        .starts_with("[end information]")
+                    {
+                        break;
+                    }
+                }
+            }
+            "network data" => self.in_network = true,
+            "noise data" => {
+                self.in_network = false;
+                self.noise = Some((lineno, 0));
+            }
+            "end" => return Ok(false),
+            _ => return Err(self.err(lineno, format!("unknown keyword `[{}]`", &line[1..close]))),
+        }
+        Ok(true)
+    }
+
+    fn start_points(&mut self, lineno: usize) -> Result<usize> {
+        let n = match self.ports {
+            Some(n) => n,
+            None if self.version == 2 => {
+                return Err(self.err(lineno, "data before [Number of Ports]"))
+            }
+            None => return Err(Error::input(
+                self.path,
+                "cannot tell the port count: a Touchstone v1 file must be named .sNp (e.g. .s2p)",
+            )),
+        };
+        let values = match self.matrix {
+            MatrixFormat::Full => n * n,
+            MatrixFormat::Lower | MatrixFormat::Upper => n * (n + 1) / 2,
+        };
+        self.per_point = 1 + 2 * values;
+        self.row = Vec::with_capacity(self.per_point);
+        Ok(n)
+    }
+
+    /// One data line (a `!` comment ends it). The hot path of the energy stage: the
+    /// point's numbers are gathered in a local buffer, the fields read once.
+    fn data_line(&mut self, line: &str, lineno: usize) -> Result<()> {
+        if self.per_point == 0 {
+            self.start_points(lineno)?;
+        }
+        let n = self.ports.expect("set by start_points");
+        let per = self.per_point;
+        if !self.row.is_empty() {
+            // a continuation line holds (a, b) pairs only: an odd count means the point
+            // started earlier than the port count says (e.g. one-port data named .s2p)
+            let count = Tokens::new(line).count();
+            if count % 2 == 1 {
+                return Err(self.err(
+                    lineno,
+                    format!(
+                        "{count} numbers on a continuation line (pairs expected): a {n}-port point has {per} numbers; is the port count right?"
+                    ),
+                ));
+            }
+        }
+        let db = self.fmt == TsFormat::Db;
+        let mut row = std::mem::take(&mut self.row);
+        let mut toks = Tokens::new(line);
+        let result = (|| {
+            while let Some(tok) = toks.next() {
+                let v: f64 = tok
+                    .parse()
+                    .map_err(|_| self.err(lineno, format!("cannot parse `{tok}` as a number")))?;
+                let idx = row.len();
+                // scikit-rf writes 20·log10(0) = -inf for |S| = 0
+                if !(v.is_finite() || (db && idx % 2 == 1 && v == f64::NEG_INFINITY)) {
+                    return Err(self.err(lineno, format!("non-finite value `{tok}`")));
+                }
+                if idx == 0 {
+                    let f = v * self.scale;
+                    if let Some(&last) = self.freq_hz.last() {
+                        if f < last && n == 2 && self.version == 1 {
+                            // v1 two-port noise parameters follow the S data
+                            self.noise = Some((lineno, 1));
+                            return Ok(());
+                        }
+                        if f <= last {
+                            return Err(
+                                self.err(lineno, format!("frequency {f} Hz not increasing"))
+                            );
+                        }
+                    }
+                    self.point_line = lineno;
+                }
+                row.push(v);
+                if row.len() == per {
+                    self.finish_point(n, &row);
+                    row.clear();
+                    if toks.next().is_some() {
+                        return Err(self.err(
+                            lineno,
+                            format!(
+                                "more numbers after a complete point: a {n}-port point has {per} numbers; is the port count right?"
+                            ),
+                        ));
+                    }
+                    return Ok(());
+                }
+            }
+            Ok(())
+        })();
+        self.row = row;
+        result
+    }
+
+    fn finish_point(&mut self, n: usize, row: &[f64]) {
+        let fmt = self.fmt;
+        let pair = |a: f64, b: f64| -> Complex64 {
+            match fmt {
+                TsFormat::Ri => Complex64::new(a, b),
+                TsFormat::Ma => Complex64::from_polar(a, b * std::f64::consts::PI / 180.0),
+                TsFormat::Db => {
+                    Complex64::from_polar(10f64.powf(a / 20.0), b * std::f64::consts::PI / 180.0)
+                }
+            }
+        };
+        self.freq_hz.push(row[0] * self.scale);
+        let vals = row[1..].chunks_exact(2).map(|c| pair(c[0], c[1]));
+        let base = self.s.len();
+        self.s.resize(base + n * n, Complex64::new(0.0, 0.0));
+        let m = &mut self.s[base..];
+        match self.matrix {
+            MatrixFormat::Full if n == 2 && self.legacy_two_port => {
+                // S11 S21 S12 S22
+                for (idx, v) in [0, 2, 1, 3].into_iter().zip(vals) {
+                    m[idx] = v;
+                }
+            }
+            MatrixFormat::Full => {
+                for (o, v) in m.iter_mut().zip(vals) {
+                    *o = v;
+                }
+            }
+            MatrixFormat::Lower | MatrixFormat::Upper => {
+                let lower = self.matrix == MatrixFormat::Lower;
+                let cells = (0..n).flat_map(|i| {
+                    let js: Box<dyn Iterator<Item = usize>> = if lower {
+                        Box::new(0..=i)
+                    } else {
+                        Box::new(i..n)
+                    };
+                    js.map(move |j| (i, j))
+                });
+                for ((i, j), v) in cells.zip(vals) {
+                    m[i * n + j] = v;
+                    m[j * n + i] = v;
+                }
             }
         }
     }
-    if n != 0 {
-        return Err(Error::input(
-            path,
-            format!("line {row_line}: truncated data row ({n} of 9 numbers)"),
+}
+
+/// Whitespace-separated tokens of a data line, up to a `!` comment (bytes ≤ space
+/// separate; a non-ASCII byte stays in its token, which then fails to parse).
+struct Tokens<'a> {
+    s: &'a str,
+    pos: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn new(s: &'a str) -> Tokens<'a> {
+        Tokens { s, pos: 0 }
+    }
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a str;
+    #[inline]
+    fn next(&mut self) -> Option<&'a str> {
+        let b = self.s.as_bytes();
+        let mut i = self.pos;
+        while i < b.len() && b[i] <= b' ' {
+            i += 1;
+        }
+        if i >= b.len() || b[i] == b'!' {
+            self.pos = b.len();
+            return None;
+        }
+        let start = i;
+        while i < b.len() && b[i] > b' ' && b[i] != b'!' {
+            i += 1;
+        }
+        self.pos = i;
+        // split at ASCII bytes only: char boundaries
+        Some(&self.s[start..i])
+    }
+}
+
+fn strip_comment(raw: &str) -> &str {
+    match raw.find('!') {
+        Some(p) => &raw[..p],
+        None => raw,
+    }
+    .trim()
+}
+
+/// Floats of an HFSS comment block (`! Port Impedance re im …`) and its continuation lines
+/// (comments holding only numbers).
+fn hfss_block(first: &str, lines: &mut Lines<'_>) -> Vec<f64> {
+    let mut vals: Vec<f64> = first
+        .split_ascii_whitespace()
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    loop {
+        let mut ahead = lines.clone();
+        let Some((_, l)) = ahead.next() else { break };
+        let Some(body) = l.trim().strip_prefix('!') else {
+            break;
+        };
+        let more: Option<Vec<f64>> = body
+            .split_ascii_whitespace()
+            .map(|t| t.parse().ok())
+            .collect();
+        match more {
+            Some(m) if !m.is_empty() => {
+                vals.extend(m);
+                *lines = ahead;
+            }
+            _ => break,
+        }
+    }
+    vals
+}
+
+/// Parse the text of a Touchstone file; `path` names it in errors and gives the port count
+/// of a v1 file (`.sNp`).
+pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let name_ports = ports_from_name(path);
+    let mut p = Parser {
+        path,
+        version: 1,
+        ports: name_ports,
+        name_ports,
+        scale: 1e9,
+        fmt: TsFormat::Ma,
+        option_seen: false,
+        r_option: vec![Complex64::new(50.0, 0.0)],
+        reference: None,
+        legacy_two_port: true,
+        matrix: MatrixFormat::Full,
+        declared_points: None,
+        in_network: true,
+        noise: None,
+        freq_hz: Vec::new(),
+        s: Vec::new(),
+        hfss_z0: Vec::new(),
+        row: Vec::new(),
+        per_point: 0,
+        point_line: 0,
+    };
+    let mut lines = Lines::new(text);
+    let mut noise_rows = 0usize;
+    while let Some((lineno, raw)) = lines.next() {
+        let t = raw.trim();
+        if t.is_empty() {
+            continue;
+        }
+        if let Some(c) = t.strip_prefix('!') {
+            let c = c.trim_start();
+            if c.len() >= 14 && c[..14].eq_ignore_ascii_case("port impedance") {
+                let vals = hfss_block(&c[14..], &mut lines);
+                p.hfss_z0.push(vals);
+            }
+            continue;
+        }
+        if t.starts_with('#') {
+            let line = strip_comment(t);
+            if !p.option_seen {
+                p.option_line(line, lineno)?;
+                p.option_seen = true;
+            }
+            continue;
+        }
+        if t.starts_with('[') {
+            if !p.keyword(strip_comment(t), lineno, &mut lines)? {
+                break;
+            }
+            continue;
+        }
+        if p.noise.is_some() {
+            noise_rows += 1;
+            continue;
+        }
+        if !p.in_network {
+            return Err(p.err(lineno, "data before [Network Data]"));
+        }
+        p.data_line(t, lineno)?;
+        if p.noise.is_some() {
+            noise_rows += 1;
+        }
+    }
+    if !p.row.is_empty() {
+        return Err(p.err(
+            p.point_line,
+            format!(
+                "truncated data row ({} of {} numbers)",
+                p.row.len(),
+                p.per_point
+            ),
         ));
     }
-    if freq_hz.is_empty() {
+    if p.freq_hz.is_empty() {
         return Err(Error::input(path, "no data rows"));
     }
-    Ok(Touchstone {
-        freq_hz,
-        s,
-        z0: opts.map(|o| o.z0).unwrap_or(50.0),
+    let n = p.ports.expect("data rows imply a port count");
+    let points = p.freq_hz.len();
+    if let Some((want, lineno)) = p.declared_points {
+        if want != points {
+            return Err(p.err(
+                lineno,
+                format!("[Number of Frequencies] {want} but the file holds {points} points"),
+            ));
+        }
+    }
+    let mut notes = Vec::new();
+    if let Some((lineno, _)) = p.noise {
+        notes.push(format!(
+            "noise parameters from line {lineno} ({noise_rows} rows) recognised and skipped"
+        ));
+    }
+    // reference impedance: HFSS comments per point, else [Reference], else the option line
+    let z0_ohm = if !p.hfss_z0.is_empty() {
+        if p.hfss_z0.len() != points {
+            return Err(Error::input(
+                path,
+                format!(
+                    "{} `! Port Impedance` blocks for {points} frequency points",
+                    p.hfss_z0.len()
+                ),
+            ));
+        }
+        let mut z = Vec::with_capacity(points * n);
+        for (k, b) in p.hfss_z0.iter().enumerate() {
+            let c: Vec<Complex64> = b
+                .chunks_exact(2)
+                .map(|c| Complex64::new(c[0], c[1]))
+                .collect();
+            if c.len() == n * n && n != 1 {
+                z.extend((0..n).map(|i| c[i * n + i]));
+            } else if c.len() == n && b.len() == 2 * n {
+                z.extend(c);
+            } else {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "`! Port Impedance` block {} has {} numbers, expected {} or {} for {n} ports",
+                        k + 1,
+                        b.len(),
+                        2 * n,
+                        2 * n * n
+                    ),
+                ));
+            }
+        }
+        z
+    } else {
+        let r = match &p.reference {
+            Some(r) => r.clone(),
+            None if p.r_option.len() == 1 => vec![p.r_option[0]; n],
+            None if p.r_option.len() == n => p.r_option.clone(),
+            None if p.r_option.is_empty() => vec![Complex64::new(50.0, 0.0); n],
+            None => {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "option line gives {} reference impedances for {n} ports",
+                        p.r_option.len()
+                    ),
+                ))
+            }
+        };
+        (0..points).flat_map(|_| r.iter().copied()).collect()
+    };
+    Ok(Network {
+        ports: n,
+        version: p.version,
+        freq_hz: p.freq_hz,
+        s: p.s,
+        z0_ohm,
+        notes,
     })
 }
 
-/// Read a `.s2p` file.
-pub fn read_s2p(path: &Path) -> Result<Touchstone> {
-    let text = crate::io::read_text(path)?;
-    parse_s2p(&text, path)
+/// Read a Touchstone file (bytes decoded by [`decode`]).
+pub fn read_touchstone(path: &Path) -> Result<Network> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_touchstone(&decode(&bytes), path)
 }
 
 /// Write a two-port network as Touchstone v1 with the given format and `digits` significant
@@ -245,48 +923,145 @@ pub fn write_s2p<W: Write>(
 mod tests {
     use super::*;
 
+    fn p(text: &str, name: &str) -> Result<Network> {
+        parse_touchstone(text, Path::new(name))
+    }
+
     #[test]
     fn options_anywhere_before_data_and_units() {
         let t = "! comment\n!another\n\n# MHz S RI R 50\n! mid\n100 1 0 0.5 -0.5 0.5 -0.5 0 1 ! trailing\n200 1 0 0.25 0 0.25 0 0 1\n";
-        let ts = parse_s2p(t, Path::new("a.s2p")).unwrap();
+        let ts = p(t, "a.s2p").unwrap();
         assert_eq!(ts.freq_hz, vec![100e6, 200e6]);
-        assert_eq!(ts.s[0][1], Complex64::new(0.5, -0.5));
+        assert_eq!(ts.get(0, 1, 0), Complex64::new(0.5, -0.5));
+        assert_eq!(ts.get(0, 1, 1), Complex64::new(0.0, 1.0));
     }
 
     #[test]
     fn default_options_are_ghz_ma() {
-        let ts = parse_s2p("60 0 0 2 90 0 0 0 0\n", Path::new("a.s2p")).unwrap();
+        let ts = p("60 0 0 2 90 0 0 0 0\n", "a.s2p").unwrap();
         assert_eq!(ts.freq_hz[0], 60e9);
-        assert!((ts.s[0][1] - Complex64::new(0.0, 2.0)).norm() < 1e-12);
+        assert!((ts.get(0, 1, 0) - Complex64::new(0.0, 2.0)).norm() < 1e-12);
+        assert_eq!(ts.z0_ohm, vec![Complex64::new(50.0, 0.0); 2]);
     }
 
     #[test]
-    fn db_format() {
-        let ts = parse_s2p(
-            "# Hz S DB R 50\n1 0 0 -20 180 0 0 0 0\n",
-            Path::new("a.s2p"),
-        )
-        .unwrap();
-        assert!((ts.s[0][1] - Complex64::new(-0.1, 0.0)).norm() < 1e-12);
+    fn db_format_and_minus_inf() {
+        let ts = p("# Hz S DB R 50\n1 -inf 0 -20 180 0 0 0 0\n", "a.S2P").unwrap();
+        assert!((ts.get(0, 1, 0) - Complex64::new(-0.1, 0.0)).norm() < 1e-12);
+        assert_eq!(ts.get(0, 0, 0), Complex64::new(0.0, 0.0));
+        // -inf is only a dB magnitude
+        let e = p("# Hz S RI R 50\n1 -inf 0 0 0 0 0 0 0\n", "a.s2p").unwrap_err();
+        assert!(e.to_string().contains("line 2: non-finite"), "{e}");
+    }
+
+    /// The old reader regrouped a one-port file nine numbers at a time (silently wrong
+    /// when the point count was a multiple of 3).
+    #[test]
+    fn one_port_points_are_three_numbers() {
+        let t = "# GHz S RI R 50\n1 0.1 0.2\n2 0.3 0.4\n3 0.5 0.6\n";
+        let ts = p(t, "m.s1p").unwrap();
+        assert_eq!(ts.ports, 1);
+        assert_eq!(ts.freq_hz, vec![1e9, 2e9, 3e9]);
+        assert_eq!(ts.get(2, 0, 0), Complex64::new(0.5, 0.6));
+        let e = ts.param(SParam::S21, Path::new("m.s1p")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("m.s1p: parameter S21 does not exist in a 1-port file"),
+            "{e}"
+        );
+        assert_eq!(
+            ts.param(SParam::S11, Path::new("m.s1p")).unwrap()[1],
+            Complex64::new(0.3, 0.4)
+        );
+        // a two-port file named .s1p: the point ends inside the line
+        let e = p("# GHz S RI R 50\n1 0 0 1 0 1 0 0 0\n", "x.s1p").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("x.s1p: line 2: more numbers after a complete point"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn three_port_wrapped_row_major() {
+        let t = "# Hz S RI R 50\n1 11 0 12 0 13 0\n 21 0 22 0 23 0\n 31 0 32 0 33 0\n2 1 0 2 0 3 0\n 4 0 5 0 6 0\n 7 0 8 0 9 0\n";
+        let ts = p(t, "a.s3p").unwrap();
+        assert_eq!(ts.ports, 3);
+        assert_eq!(ts.get(0, 1, 2), Complex64::new(23.0, 0.0));
+        assert_eq!(ts.get(1, 2, 0), Complex64::new(7.0, 0.0));
+        assert_eq!(
+            ts.param("S3,1".parse().unwrap(), Path::new("a")).unwrap(),
+            vec![Complex64::new(31.0, 0.0), Complex64::new(7.0, 0.0)]
+        );
+    }
+
+    #[test]
+    fn version_two_with_reference_matrix_format_and_noise() {
+        let t = "[Version] 2.0\r\n# GHz S MA R 50\r\n[Number of Ports] 2\r\n[Two-Port Data Order] 12_21\r\n[Number of Frequencies] 2\r\n[Reference] 50\r\n 75\r\n[Matrix Format] Full\r\n[Network Data]\r\n1 1 0 2 0 3 0 4 0\r\n2 1 0 2 0 3 0 4 0\r\n[Noise Data]\r\n1 1 0.5 10 0.3\r\n[End]\r\n";
+        let ts = p(t, "a.ts").unwrap();
+        assert_eq!(ts.version, 2);
+        assert_eq!(ts.get(0, 0, 1), Complex64::new(2.0, 0.0));
+        assert_eq!(ts.z0_ohm[1], Complex64::new(75.0, 0.0));
+        assert_eq!(ts.notes.len(), 1, "{:?}", ts.notes);
+        let lower = "[Version] 2.0\n# Hz S RI R 50\n[Number of Ports] 3\n[Matrix Format] Lower\n[Network Data]\n1 11 0\n 21 0 22 0\n 31 0 32 0 33 0\n[End]\n";
+        let ts = p(lower, "b.ts").unwrap();
+        assert_eq!(ts.get(0, 0, 2), Complex64::new(31.0, 0.0));
+        assert_eq!(ts.get(0, 2, 1), Complex64::new(32.0, 0.0));
+        let e = p("[Version] 2.0\n[Number of Ports] 4\n", "c.s2p").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("c.s2p: line 2: [Number of Ports] 4 but the file name says 2"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn v1_noise_block_after_two_port_data() {
+        let t = "# GHz S MA R 50\n1 0 0 1 0 1 0 0 0\n2 0 0 1 0 1 0 0 0\n! Noise\n1 1.5 0.3 20 0.2\n2 1.6 0.3 21 0.2\n";
+        let ts = p(t, "n.s2p").unwrap();
+        assert_eq!(ts.freq_hz.len(), 2);
+        assert!(ts.notes[0].contains("line 5 (2 rows)"), "{:?}", ts.notes);
+    }
+
+    #[test]
+    fn bom_latin1_cr_complex_and_per_port_reference() {
+        let mut bytes =
+            b"\xEF\xBB\xBF! 25\xB0C\r# Hz S RI R 50 (10+10j)\r1 1 0 0 0 0 0 1 0\r".to_vec();
+        let ts = parse_touchstone(&decode(&bytes), Path::new("a.s2p")).unwrap();
+        assert_eq!(ts.z0_ohm[1], Complex64::new(10.0, 10.0));
+        assert_eq!(ts.get(0, 1, 1), Complex64::new(1.0, 0.0));
+        bytes.drain(..3);
+        assert!(parse_touchstone(&decode(&bytes), Path::new("a.s2p")).is_ok());
+    }
+
+    #[test]
+    fn hfss_port_impedance_comments() {
+        let t = "# GHz S MA R\n1 0 0 1 0 1 0 0 0\n! Port Impedance 49.5 0.1 50.5 -0.2\n2 0 0 1 0 1 0 0 0\n! Port Impedance 49 0 51\n! 0\n";
+        let ts = p(t, "h.s2p").unwrap();
+        assert_eq!(ts.z0_ohm[0], Complex64::new(49.5, 0.1));
+        assert_eq!(ts.z0_ohm[3], Complex64::new(51.0, 0.0));
     }
 
     #[test]
     fn errors_name_line() {
-        let e = parse_s2p("# Hz S RI R 50\n1 0 0 x 0 0 0 0 0\n", Path::new("b.s2p")).unwrap_err();
+        let e = p("# Hz S RI R 50\n1 0 0 x 0 0 0 0 0\n", "b.s2p").unwrap_err();
+        assert!(e.to_string().contains("b.s2p: line 2"), "{e}");
+        let e = p("# Hz S RI R 50\n1 0 0 NaN 0 0 0 0 0\n", "b.s2p").unwrap_err();
+        assert!(e.to_string().contains("non-finite"), "{e}");
+        let e = p("# Hz S RI R 50\n1 0 0 1 0 0 0 0 0\n2 0 0 1\n", "b.s2p").unwrap_err();
+        assert!(e.to_string().contains("line 3: truncated"), "{e}");
+        let e = p("# Hz Z RI R 50\n", "b.s2p").unwrap_err();
+        assert!(e.to_string().contains("only S"), "{e}");
+        let e = p("# Hz S RI R 50\n1 0 0\n", "b.txt").unwrap_err();
+        assert!(e.to_string().contains("must be named .sNp"), "{e}");
+        let e = p("# Hz S RI R 50\n2 0 0\n1 0 0\n", "b.s1p").unwrap_err();
         assert!(
-            e.to_string().contains("b.s2p") && e.to_string().contains("line 2"),
+            e.to_string()
+                .contains("line 3: frequency 1 Hz not increasing"),
             "{e}"
         );
-        let e = parse_s2p("# Hz S RI R 50\n1 0 0 NaN 0 0 0 0 0\n", Path::new("b.s2p")).unwrap_err();
-        assert!(e.to_string().contains("non-finite"), "{e}");
-        let e = parse_s2p(
-            "# Hz S RI R 50\n1 0 0 1 0 0 0 0 0\n2 0 0 1\n",
-            Path::new("b.s2p"),
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("truncated"), "{e}");
-        let e = parse_s2p("# Hz Z RI R 50\n", Path::new("b.s2p")).unwrap_err();
-        assert!(e.to_string().contains("only S"), "{e}");
+        assert!("S2".parse::<SParam>().is_err() && "S0,1".parse::<SParam>().is_err());
+        assert_eq!("s12".parse::<SParam>().unwrap().to_string(), "S12");
     }
 
     #[test]
@@ -301,15 +1076,21 @@ mod tests {
         for fmt in [TsFormat::Ri, TsFormat::Ma, TsFormat::Db] {
             let mut buf = Vec::new();
             write_s2p(&mut buf, &f, &s, fmt, 12, "test").unwrap();
-            let back = parse_s2p(std::str::from_utf8(&buf).unwrap(), Path::new("m")).unwrap();
+            let back = p(std::str::from_utf8(&buf).unwrap(), "m.s2p").unwrap();
             assert_eq!(back.freq_hz, f);
-            for (a, b) in s.iter().zip(&back.s) {
+            for (k, a) in s.iter().enumerate() {
+                // written S11 S21 S12 S22
+                let b = [
+                    back.get(k, 0, 0),
+                    back.get(k, 1, 0),
+                    back.get(k, 0, 1),
+                    back.get(k, 1, 1),
+                ];
                 for i in 0..4 {
                     if fmt == TsFormat::Ri {
-                        // exact to the printed digits
-                        let p = |v: f64| format!("{v:.12e}").parse::<f64>().unwrap();
-                        assert_eq!(b[i].re, p(a[i].re));
-                        assert_eq!(b[i].im, p(a[i].im));
+                        let q = |v: f64| format!("{v:.12e}").parse::<f64>().unwrap();
+                        assert_eq!(b[i].re, q(a[i].re));
+                        assert_eq!(b[i].im, q(a[i].im));
                     } else {
                         assert!((a[i] - b[i]).norm() < 1e-11 * a[i].norm().max(1e-3));
                     }

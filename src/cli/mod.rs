@@ -33,6 +33,8 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Cmd {
+    /// Build and validate a manifest from a poses CSV and a folder of sweep files.
+    Import(ImportArgs),
     /// Simulate a campaign: sweeps (Touchstone or Parquet), manifest with [sweeps], truth/.
     Simulate(SimulateArgs),
     /// Energy matrices from a campaign's sweeps.
@@ -51,6 +53,50 @@ pub enum Cmd {
     Reproduce(ReproduceArgs),
     /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
     Experiment(ExperimentArgs),
+}
+
+// `pradar import`
+#[derive(Args)]
+pub struct ImportArgs {
+    /// Poses CSV: position, x, y, heading (m, degrees).
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// Sweep files: a glob, e.g. 'raw/*.s2p' (with --name-pattern).
+    #[arg(
+        long,
+        requires = "name_pattern",
+        conflicts_with = "index",
+        required_unless_present = "index"
+    )]
+    pub sweeps: Option<String>,
+    /// File-name pattern with {position}, {direction}, {pulse} ({position:03}: fixed width).
+    #[arg(long)]
+    pub name_pattern: Option<String>,
+    /// Index CSV: position, direction, [pulse,] path (instead of --sweeps).
+    #[arg(long)]
+    pub index: Option<PathBuf>,
+    /// Directions START:STOP:STEP, degrees (else the base's [directions]).
+    #[arg(long, value_parser = ranges::directions, allow_hyphen_values = true)]
+    pub directions: Option<pradar::campaign::manifest::Directions>,
+    /// Layout GeoJSON (else the base's `layout`).
+    #[arg(long)]
+    pub layout: Option<PathBuf>,
+    /// Base manifest fragment: name, seed, [array], [noise], [processing], [calibration],
+    /// [sweeps] parameter.
+    #[arg(long)]
+    pub base: Option<PathBuf>,
+    /// Campaign name (else the base's, else the output folder's name).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// [array] elements (16, 100, 400; else the base's).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Output manifest (campaign.toml).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also convert the sweeps to the Parquet sweep table (sweeps.parquet beside --out).
+    #[arg(long)]
+    pub to_parquet: bool,
 }
 
 // `pradar simulate`

@@ -78,6 +78,21 @@ pub fn name_value(s: &str) -> Result<(String, f64), String> {
     Ok((name.to_string(), real(v)?))
 }
 
+/// `START:STOP:STEP` degrees (`--directions`: `Directions::check`).
+pub fn directions(s: &str) -> Result<pradar::campaign::manifest::Directions, String> {
+    let v: Vec<&str> = s.split(':').collect();
+    if v.len() != 3 {
+        return Err("expected START:STOP:STEP in degrees, e.g. -90:90:5".into());
+    }
+    let d = pradar::campaign::manifest::Directions {
+        start_deg: real(v[0])?,
+        stop_deg: real(v[1])?,
+        step_deg: real(v[2])?,
+    };
+    d.check().map_err(|e| e.to_string())?;
+    Ok(d)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

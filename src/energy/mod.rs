@@ -6,6 +6,8 @@
 //! `window`, `coupling`, `gate_ns`, `oversample`, `noise_bin_mean`, `band`).
 //!
 //! Per sweep S_k (k = 0..K−1, K points, step Δf, B = (K−1)Δf):
+//! * `[calibration]` ([`calibration`]): S ← (S − background) / reference, recorded in the
+//!   metadata (`calibration_background`, `calibration_reference`) when present;
 //! * coupling removal, recorded in the metadata: `mean` subtracts the complex mean sweep over
 //!   the directions of the same position and pulse (the coupling does not rotate with the
 //!   beam), `gate` zeroes the CIR at signed delays in [−gate, gate), `none` keeps it;
@@ -32,6 +34,7 @@
 //! campaign check), [`writer`] (table and metadata); [`run`] streams a campaign through them
 //! and estimates N0.
 
+pub mod calibration;
 pub mod matrix;
 pub mod processor;
 pub mod writer;
@@ -43,6 +46,7 @@ pub use writer::{table_metadata, write_table};
 use crate::campaign::manifest::Campaign;
 use crate::campaign::sweeps::SweepReader;
 use crate::error::{Error, Result};
+use calibration::Calibration;
 use std::path::Path;
 
 /// Angle wrapping into (−180°, 180°] (re-exported from [`crate::units`]).
@@ -84,6 +88,7 @@ pub fn run(
 ) -> Result<EnergyReport> {
     let m = &campaign.manifest;
     let reader = SweepReader::open(campaign)?;
+    let cal = Calibration::load(campaign)?;
     let proc = EnergyProcessor::new(m.band, m.processing)
         .map_err(|e| Error::input(&campaign.path, e.to_string()))?;
     let np = m.positions();
@@ -111,7 +116,8 @@ pub fn run(
     let chunk = reader.chunk_positions();
     let mut p0 = 0;
     while p0 < np {
-        for sw in reader.read_positions(p0, chunk)? {
+        for mut sw in reader.read_positions(p0, chunk)? {
+            cal.apply(&mut sw);
             let e = proc.position_energy(&sw);
             for d in 0..nd {
                 let prof = &e[d * nbf..(d + 1) * nbf];
@@ -125,7 +131,8 @@ pub fn run(
     }
     let noise_bin_mean = noise_sum / noise_n as f64;
     let n0 = noise_bin_mean / proc.tw();
-    let meta = table_metadata(m, &proc, n0, noise_bin_mean);
+    let mut meta = table_metadata(m, &proc, n0, noise_bin_mean);
+    meta.extend(cal.metadata());
     write_table(out, m, nb, &energies, meta)?;
     Ok(EnergyReport {
         sweeps: np * nd * m.pulses,

@@ -13,14 +13,15 @@ use crate::table;
 use std::path::Path;
 
 /// The key-value metadata of an energy table (DESIGN §3 plus `tw`, `window`, `coupling`,
-/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `campaign`, `band`).
+/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `campaign`, `band`, and
+/// `parameter` when `[sweeps] parameter` is not S21).
 pub fn table_metadata(
     m: &Manifest,
     proc: &EnergyProcessor,
     n0: f64,
     noise_bin_mean: f64,
 ) -> Vec<(String, String)> {
-    vec![
+    let mut meta = vec![
         ("schema_version".to_string(), SCHEMA_VERSION.to_string()),
         (
             "bin_width_ns".into(),
@@ -52,7 +53,14 @@ pub fn table_metadata(
             "band".into(),
             format!("{} {} {}", m.band.start_hz, m.band.stop_hz, m.band.points),
         ),
-    ]
+    ];
+    // recorded only when not the default, so default campaigns' tables are unchanged
+    if let Some(p) = m.sweeps.as_ref().and_then(|s| s.parameter) {
+        if p != crate::campaign::touchstone::SParam::S21 {
+            meta.push(("parameter".into(), p.to_string()));
+        }
+    }
+    meta
 }
 
 /// Write an energy table (`energies` as `[position][direction][bin]`, `nb` bins per

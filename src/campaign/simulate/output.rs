@@ -88,12 +88,14 @@ pub(super) fn write_manifest(c: &Campaign, out_dir: &Path, format: SweepFormat) 
             pattern: Some(TOUCHSTONE_PATTERN.to_string()),
             files: vec![],
             path: None,
+            parameter: None,
         },
         SweepFormat::Parquet => SweepsConfig {
             format,
             pattern: None,
             files: vec![],
             path: Some("sweeps.parquet".into()),
+            parameter: None,
         },
     };
     t.insert(

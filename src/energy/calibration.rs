@@ -1,0 +1,175 @@
+//! Calibration sweeps (`[calibration]`), applied to every sweep before the window and IFFT.
+//!
+//! Takes the manifest's `[calibration]`: `background` and `reference`, each a Touchstone
+//! file name relative to the manifest, or a name template with `{direction}` (and
+//! `{position}`) expanded as in `[sweeps] pattern`, so there may be one sweep for the whole
+//! campaign, one per direction, or one per (position, direction). Each is read like the
+//! campaign's sweeps (same `[sweeps] parameter`, grid checked against `[band]`).
+//! Gives, per sweep S(f) of position p, direction d and every pulse:
+//!
+//!   S_cal(f) = (S(f) − B_{p,d}(f)) / R_{p,d}(f)
+//!
+//! * B, the **background**: an empty-scene or absorber sweep, as channel engineers record
+//!   it. Subtracted coherently (complex, before the IFFT), it removes every static term —
+//!   the Tx→Rx coupling, the device's housing, a fixed clutter return — exactly, whatever
+//!   its delay; gating (`[processing] coupling`) still runs afterwards as configured.
+//! * R, the **reference**: a thru (the arrays replaced by a cable/attenuator of known unit
+//!   response) or any measurement of the system response alone: cables, the VNA's
+//!   frequency response, the arrays' group delay. Dividing by it leaves the scene's
+//!   response, so delays are measured from the reference plane of the thru and amplitudes
+//!   are relative to it (a thru of unit gain keeps the radar equation's scale). A reference
+//!   with |R| = 0 (or not finite) at a point is refused, naming the file and the point: the
+//!   division would be undefined there.
+//!
+//! The order (subtract, then divide) follows the measurement model S = H·(scene) + B with
+//! the background measured through the same system: (S − B)/R is the scene when R = H.
+//! What was applied is recorded in the energy metadata (`calibration_background`,
+//! `calibration_reference`: the templates as written); a campaign without `[calibration]`
+//! adds no keys, so its energy table is unchanged.
+
+use crate::campaign::manifest::{expand_pattern, Campaign};
+use crate::campaign::sweeps::{read_sweep, PositionSweeps};
+use crate::error::{Error, Result};
+use num_complex::Complex64;
+use std::collections::BTreeMap;
+
+/// One kind of calibration sweep, loaded for every (position, direction) it applies to.
+#[derive(Debug, Clone)]
+struct CalSweeps {
+    template: String,
+    by_position: bool,
+    by_direction: bool,
+    sweeps: BTreeMap<(usize, usize), Vec<Complex64>>,
+}
+
+impl CalSweeps {
+    fn key(&self, p: usize, d: usize) -> (usize, usize) {
+        (
+            if self.by_position { p } else { 0 },
+            if self.by_direction { d } else { 0 },
+        )
+    }
+
+    fn load(c: &Campaign, template: &str, field: &str, reference: bool) -> Result<CalSweeps> {
+        let m = &c.manifest;
+        let param = m.sweeps.as_ref().and_then(|s| s.parameter);
+        let by_position = template.contains("{position");
+        let by_direction = template.contains("{direction");
+        if template.contains("{pulse") {
+            return Err(Error::input(
+                &c.path,
+                format!("{field}: `{{pulse}}` is not allowed (one calibration sweep per position and direction)"),
+            ));
+        }
+        let mut sweeps = BTreeMap::new();
+        let dir = c.dir();
+        for p in 0..if by_position { m.positions() } else { 1 } {
+            for d in 0..if by_direction {
+                m.directions.count()
+            } else {
+                1
+            } {
+                let path = dir.join(expand_pattern(template, p, d, 0));
+                if !path.is_file() {
+                    return Err(Error::input(
+                        &path,
+                        format!("{field} sweep named in {} not found", c.path.display()),
+                    ));
+                }
+                let mut s = vec![Complex64::new(0.0, 0.0); m.band.points];
+                read_sweep(&path, param, &m.band, &mut s)?;
+                if reference {
+                    if let Some(k) = s
+                        .iter()
+                        .position(|v| !(v.norm() > 0.0 && v.norm().is_finite()))
+                    {
+                        return Err(Error::input(
+                            &path,
+                            format!("{field}: |R| = {} at point {k} ({:.6} GHz): the system response cannot be divided out", s[k].norm(), m.band.freq(k) / 1e9),
+                        ));
+                    }
+                }
+                sweeps.insert((p, d), s);
+            }
+        }
+        Ok(CalSweeps {
+            template: template.to_string(),
+            by_position,
+            by_direction,
+            sweeps,
+        })
+    }
+}
+
+/// The loaded `[calibration]` of a campaign.
+#[derive(Debug, Clone, Default)]
+pub struct Calibration {
+    background: Option<CalSweeps>,
+    reference: Option<CalSweeps>,
+}
+
+impl Calibration {
+    /// Load the sweeps named by `[calibration]` (none when the section is absent).
+    pub fn load(c: &Campaign) -> Result<Calibration> {
+        let Some(cfg) = &c.manifest.calibration else {
+            return Ok(Calibration::default());
+        };
+        Ok(Calibration {
+            background: cfg
+                .background
+                .as_deref()
+                .map(|t| CalSweeps::load(c, t, "calibration.background", false))
+                .transpose()?,
+            reference: cfg
+                .reference
+                .as_deref()
+                .map(|t| CalSweeps::load(c, t, "calibration.reference", true))
+                .transpose()?,
+        })
+    }
+
+    /// Whether anything is applied.
+    pub fn is_empty(&self) -> bool {
+        self.background.is_none() && self.reference.is_none()
+    }
+
+    /// S ← (S − B) / R for every sweep of one position.
+    pub fn apply(&self, sw: &mut PositionSweeps) {
+        if self.is_empty() {
+            return;
+        }
+        let nf = sw.points;
+        for d in 0..sw.directions {
+            let b = self
+                .background
+                .as_ref()
+                .map(|c| &c.sweeps[&c.key(sw.position, d)]);
+            let r = self
+                .reference
+                .as_ref()
+                .map(|c| &c.sweeps[&c.key(sw.position, d)]);
+            for k in 0..sw.pulses {
+                let i = (d * sw.pulses + k) * nf;
+                let s = &mut sw.s21[i..i + nf];
+                if let Some(b) = b {
+                    s.iter_mut().zip(b).for_each(|(v, b)| *v -= b);
+                }
+                if let Some(r) = r {
+                    s.iter_mut().zip(r).for_each(|(v, r)| *v /= r);
+                }
+            }
+        }
+    }
+
+    /// Energy metadata of what was applied (empty when nothing was).
+    pub fn metadata(&self) -> Vec<(String, String)> {
+        let mut out = Vec::new();
+        if let Some(b) = &self.background {
+            out.push(("calibration_background".into(), b.template.clone()));
+        }
+        if let Some(r) = &self.reference {
+            out.push(("calibration_reference".into(), r.template.clone()));
+        }
+        out
+    }
+}
