@@ -532,6 +532,11 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
 /// runs (the corridor at 0.3 m cells).
 #[test]
 fn scalable_matches_dense_on_a_coarse_corridor() {
+    scalable_against_dense(false);
+}
+
+/// The scalable filter against the dense one; `strict` asserts item 4 in full.
+fn scalable_against_dense(strict: bool) {
     let (c, e) = corridor100();
     let l = load(c, e, 0.3);
     let spec = l.model.spec;
@@ -639,7 +644,7 @@ fn scalable_matches_dense_on_a_coarse_corridor() {
         fs.psi,
         fd.psi
     );
-    if std::env::var("PRADAR_EKF_CRITERION").is_ok() {
+    if strict {
         assert!(rel_psi <= 0.10, "psi differs by {rel_psi}");
         assert!(rms_mean <= 0.10, "means differ by {rms_mean} RMS relative");
         assert!(
@@ -659,8 +664,7 @@ fn scalable_matches_dense_on_a_coarse_corridor() {
 #[test]
 #[ignore = "unmet by the tiled approximation: psi 17.7 % apart, means 82 % RMS relative, std >= 0.9x dense in 54 % of cells"]
 fn scalable_meets_the_dense_criterion() {
-    std::env::set_var("PRADAR_EKF_CRITERION", "1");
-    scalable_matches_dense_on_a_coarse_corridor();
+    scalable_against_dense(true);
 }
 
 #[test]

@@ -13,12 +13,14 @@
 //!
 //! Observation of (pose, direction): the energy vector over the usable bins k ≥ `min_bin`
 //! that have at least one illuminated cell (main and side lobes down to the observation
-//! model's floor; soft input), truncated after the first strong return: with the run's
+//! model's floor; soft input), truncated after the occluder (the strongest echo, or an
+//! earlier one on a mapped surface): with the run's
 //! [`Sight`] (the OG's detector and [`crate::mapping::grid::visibility`]), only the bins up
 //! to the beam's occluder plus the guard g are observed, so late energy (multipath, echoes
 //! from behind the wall) is never explained by RRCS behind the surface; the rows within
-//! the kernel's half-width of a weaker detection before the occluder (leakage of a strong
-//! echo at another bearing, withheld by the OG too) are dropped; and only the cells visible
+//! the kernel's half-width of a detection before the occluder (weaker, or explained by a
+//! side lobe: leakage of an echo at another bearing, withheld by the OG too; every
+//! detection of a beam without an occluder) are dropped, except the occluder's own; and only the cells visible
 //! from the pose (depth behind the visibility polygon ≤ g) enter H — a shadowed cell's
 //! coefficient is 0. The occluders are confirmed against the filter's own binary map
 //! before the previous pose. The cost of removing shadowed cells (measured,

@@ -35,7 +35,8 @@ pub struct EkfStats {
     pub entries: u64,
     /// Means reflected by the positivity step.
     pub reflected: u64,
-    /// Detections beyond the occluder of their beam, whose bins were not observed.
+    /// Detections whose rows were not observed: more than the guard beyond the occluder of
+    /// their beam, or before it (the occluder's own rows are always kept).
     pub withheld: u64,
     /// Time building observations, s (wall).
     pub build_seconds: f64,
@@ -115,20 +116,21 @@ pub fn ekf_run(
                     let mut o =
                         Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch);
                     if let Some((echoes, _, _)) = &seen {
-                        // the rows around a detection weaker than the occluder before it
-                        // (leakage of a strong echo at another bearing, as in the OG) are not
-                        // observed: no cell of this beam explains them
-                        if let Some(first) = echoes.occluder[d] {
-                            let j = kernel.len().saturating_sub(1);
-                            let det = &echoes.det[d];
-                            let early: Vec<usize> = (0..first).filter(|&k| det[k]).collect();
-                            withheld += early.len() as u64;
-                            if !early.is_empty() {
-                                o.retain_rows(|b| {
-                                    let b = b as usize;
-                                    !early.iter().any(|&k| b.abs_diff(k) <= j)
-                                });
-                            }
+                        // the rows around a detection before the occluder (leakage of a strong
+                        // echo at another bearing, withheld by the OG too) are not observed:
+                        // no cell of this beam explains them; with no occluder every detection
+                        // is explained by a side lobe
+                        let first = echoes.occluder[d].unwrap_or(bins);
+                        let j = kernel.len().saturating_sub(1);
+                        let det = &echoes.det[d];
+                        let early: Vec<usize> =
+                            (0..first.min(det.len())).filter(|&k| det[k]).collect();
+                        withheld += early.len() as u64;
+                        if !early.is_empty() {
+                            o.retain_rows(|b| {
+                                let b = b as usize;
+                                b.abs_diff(first) <= j || !early.iter().any(|&k| b.abs_diff(k) <= j)
+                            });
                         }
                     }
                     (o, withheld)

@@ -368,6 +368,10 @@ mod tests {
             occluder: vec![Some(20), None],
         };
         assert_eq!(e.last_observed(0, 3, 50), 23);
-        assert_eq!(e.last_observed(1, 3, 50), 50, "no occluder: every bin observed");
+        assert_eq!(
+            e.last_observed(1, 3, 50),
+            50,
+            "no occluder: every bin observed"
+        );
     }
 }

@@ -8,17 +8,19 @@
 //! * `<m>_binary.png/.pgm/.yaml` — the binary map (p > η = 0.5);
 //! * `reference.png/.pgm/.yaml` — the reference map rasterised from the layout on the same
 //!   grid (occupied 0, free 254, outside 205);
-//! * `metrics.json` — figures on the observable region and on the whole map, each beside the
-//!   all-free map's; with several runs also every single run's figures and the fused map's
+//! * `metrics.json` — figures on the observable region, the building and the whole map, each
+//!   beside the all-free map's, and the per-class figures ([`score`](mod@score)); with several runs also every single run's figures and the fused map's
 //!   figures for the first n runs, n = 1..R (metrics vs number of runs).
 //!
 //! Choices:
 //! * the grid is the reference raster's ([`Layout::rasterize`](crate::campaign::layout::Layout::rasterize): cell 0.1 m, margin 0.5 m);
 //!   fused runs must share the layout's grid;
-//! * observable region = cells inside the −3 dB main lobe of at least one (pose, direction)
-//!   of any run, within the usable bins (coupling gate to the last bin), and not `Outside` in
-//!   the reference (mapper-independent, so all methods are scored on the same cells);
-//! * whole map = every cell of the grid, `Outside` reference cells counted as free;
+//! * regions ([`score`](mod@score)): observable = cells in line of sight of a pose through
+//!   the layout's walls, inside the −3 dB main lobe of one of its directions, within the
+//!   usable bins (coupling gate to the last bin); building = inside the perimeter or on a
+//!   wall; whole map = every cell, `Outside` reference cells counted as free. None comes
+//!   from the reference, and all are mapper-independent, so every method is scored on the
+//!   same cells; fused runs use the first run's layout (load checks they share its grid);
 //! * usable bins start after the coupling gate (`gate_ns` from the energy metadata when the
 //!   coupling removal was `gate`) plus 2 bins (the Hann kernel's half-width), and never
 //!   before bin 2;

@@ -8,10 +8,10 @@
 //!   layout's geometry);
 //! * observable = the cells in line of sight of some pose within its detection range: inside
 //!   the −3 dB main lobe of at least one (pose, direction), within the usable bins, with the
-//!   segment from the pose to the cell centre crossing no wall of the layout (a wall within
-//!   half a cell diagonal of the centre does not count, so the cells a wall passes through
-//!   are in line of sight from the side they face); from the poses the data were recorded
-//!   at;
+//!   segment from the pose to the cell centre crossing no wall of the layout (a crossing
+//!   within half a cell diagonal of the centre, measured along the segment, does not count,
+//!   so the cells a wall passes through are in line of sight from the side they face); from
+//!   the poses the data were recorded at (fused runs: the first run's layout);
 //! * whole map = every cell, `Outside` reference cells counted as free.
 //!
 //! Per class ([`ClassFigures`], on the whole grid): the fraction of the reference's free

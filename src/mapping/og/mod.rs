@@ -28,13 +28,13 @@
 //!   [`crate::mapping::grid::Beam`]) with Δl_i = l_occ·r_i,
 //!   r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way weight × the cell's share of the
 //!   bin × current belief: one cause per detection shared by responsibility, not a blur by
-//!   the pattern); for a side-lobe detection before the occluder the main-lobe cells
-//!   (w ≥ −3 dB) are left out of the ring (they were just found free). Detections further
-//!   beyond the occluder are withheld (shadowed: multipath or echoes from behind the
-//!   surface; counted in [`OgStats::withheld`]), and bins after the occluder without a
-//!   detection give no evidence. The map the occluders are confirmed against is the belief
-//!   the responsibilities use (binary at p > 0.5): the scan's snapshot, or the previous
-//!   pass's map with `passes` ≥ 2;
+//!   the pattern). Detections before the occluder (weaker, or explained by a side lobe:
+//!   leakage of an echo another direction credits, or a surface the main lobe just
+//!   cleared) and detections more than g beyond it (shadowed: multipath or echoes from
+//!   behind the surface) are withheld, counted in [`OgStats::withheld`]; bins after the
+//!   occluder without a detection give no evidence. The map the occluders are confirmed
+//!   against is the belief the responsibilities use, a cell being a surface when
+//!   p > max(0.5, p0): the scan's snapshot, or the previous pass's map with `passes` ≥ 2;
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
 //!   boresight ray; a cell gets l_occ if any bin the ray spends in it is detected, l_free if
 //!   the ray leaves it before the first detected bin;
@@ -153,7 +153,8 @@ pub struct OgStats {
     pub scans: u64,
     /// Detected bins.
     pub detections: u64,
-    /// Detections withheld: beyond the occluder of their beam (`og` only).
+    /// Detections withheld (`og` only): before the occluder of their beam, or more than the
+    /// guard beyond it.
     pub withheld: u64,
     /// Cell updates (log-odds increments applied).
     pub cell_updates: u64,

@@ -52,23 +52,17 @@ fn scan_og(
             withheld += 1;
             continue;
         }
-        // a side-lobe detection before the occluder: its main-lobe cells were just found
-        // free, so only the side-lobe cells share it
-        let side_only = b < first;
-        if side_only {
-            // weaker than the occluder and not explained by a side lobe of this scan:
-            // leakage of a strong echo at another bearing (credited by that direction's own
-            // scan) or a weak surface the main lobe just cleared; either way not evidence
-            // of occupancy here
+        if b < first {
+            // weaker than the occluder (or explained by a side lobe) and before it: leakage
+            // of a strong echo at another bearing (credited by that direction's own scan)
+            // or a weak surface the main lobe just cleared; either way not evidence of
+            // occupancy here
             withheld += 1;
             continue;
         }
         let rg = beam.bin_range(b);
         let mut denom = 0.0f32;
         for j in rg.clone() {
-            if side_only && beam.weight[j] >= k.main_w {
-                continue;
-            }
             denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
         }
         if denom <= 0.0 {
@@ -76,9 +70,6 @@ fn scan_og(
         }
         let scale = k.l_occ as f32 / denom;
         for j in rg {
-            if side_only && beam.weight[j] >= k.main_w {
-                continue;
-            }
             let c = beam.cell[j];
             out.push((
                 c,
@@ -93,7 +84,6 @@ fn scan_og(
 struct IncrementConstants {
     l_occ: f64,
     l_free: f64,
-    main_w: f32,
     free_w: f32,
     min_bin: usize,
 }
@@ -219,6 +209,8 @@ struct ScanContext<'a> {
     detector: &'a Detector,
     method: Method,
     clamp: f64,
+    /// Belief above which a cell is a mapped surface: max(0.5, p0).
+    surface_p: f32,
     inc: IncrementConstants,
     occlusion: Occlusion,
 }
@@ -238,10 +230,10 @@ impl<'a> ScanContext<'a> {
             detector,
             method,
             clamp: params.clamp,
+            surface_p: (super::sigmoid(params.l0()).max(0.5)) as f32,
             inc: IncrementConstants {
                 l_occ: params.l_occ(),
                 l_free: params.l_free(),
-                main_w: model.params.main_weight() as f32,
                 free_w: 10f64.powf(params.free_db / 10.0) as f32,
                 min_bin,
             },
@@ -263,7 +255,10 @@ impl<'a> ScanContext<'a> {
             .collect();
         match (geom, self.method) {
             (Some(g), Method::Og) => {
-                let occupied: Vec<bool> = bel.par_iter().map(|&b| b > 0.5).collect();
+                // mapped surfaces: more likely occupied than free and above the prior (a
+                // prior above 0.5 does not make unobserved cells surfaces)
+                let t = self.surface_p;
+                let occupied: Vec<bool> = bel.par_iter().map(|&b| b > t).collect();
                 let echoes = self
                     .occlusion
                     .echoes(self.model, self.em, p, dets, Some(&occupied));

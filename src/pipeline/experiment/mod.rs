@@ -27,9 +27,9 @@
 //! * **figures** per map: ψ, F1 and the wrong-cell count on three regions, each the same
 //!   for every N, mapper, prior and pose noise of a campaign except (b): (a) the *whole map*
 //!   (every cell of the grid, cells outside the perimeter counted as free), (b) the
-//!   *observable region* of that run (cells in some −3 dB main lobe; it widens with the beam,
-//!   so N = 16 is scored on slightly more cells than N = 100) and (c) the *interior*: the
-//!   reference's known cells (inside the perimeter; its PGM marks the outside unknown), where
+//!   *observable region* of that run (cells in line of sight of a pose inside some −3 dB
+//!   main lobe; it widens with the beam, so N = 16 is scored on slightly more cells than
+//!   N = 100) and (c) the *interior*: the building (inside the perimeter or on a wall), where
 //!   wrong cells are what an indoor map gets wrong. Each beside the all-free map's;
 //! * **fig6 statement**: the paper's "N = 16 has more wrong cells than N = 100" is checked per
 //!   mapper and seed on the interior and on the whole map, and on the campaign's sweeps
