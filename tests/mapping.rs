@@ -64,7 +64,7 @@ fn map(l: &LoadedRun, method: Method) -> LogOddsMap {
     .unwrap()
 }
 
-fn pradar(args: &[&str], threads: Option<&str>) -> std::process::Output {
+pub fn pradar(args: &[&str], threads: Option<&str>) -> std::process::Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_pradar"));
     c.args(args).arg("--quiet");
     if let Some(t) = threads {
@@ -335,11 +335,11 @@ fn side_lobe_ghost_is_rejected_by_the_side_lobe_aware_map() {
 
 // ---------------------------------------------------------------- corridor
 
-fn metrics_json(dir: &Path) -> serde_json::Value {
+pub fn metrics_json(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap()
 }
 
-fn fig(v: &serde_json::Value, path: &[&str]) -> f64 {
+pub fn fig(v: &serde_json::Value, path: &[&str]) -> f64 {
     let mut c = v;
     for p in path {
         c = &c[*p];

@@ -11,8 +11,6 @@ use pradar::campaign::layout::{CellClass, Layout};
 use pradar::campaign::manifest::SweepFormat;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
 use std::sync::OnceLock;
 
 fn s(p: &Path) -> &str {
@@ -47,35 +45,25 @@ fn scenes() -> &'static Vec<(String, usize, PathBuf, PathBuf)> {
     })
 }
 
-fn map(method: &str, c: &Path, e: &Path, out: &Path, extra: &[&str]) -> Value {
-    let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
-        .args([
-            "map",
-            "--method",
-            method,
-            "--campaign",
-            s(c),
-            "--energy",
-            s(e),
-            "--out",
-            s(out),
-            "--quiet",
-        ])
-        .args(extra)
-        .output()
-        .unwrap();
+/// `pradar map --method METHOD` on one run (the mapping tests' runner); its metrics.json.
+fn map(method: &str, c: &Path, e: &Path, out: &Path) -> Value {
+    let args = [
+        "map",
+        "--method",
+        method,
+        "--campaign",
+        s(c),
+        "--energy",
+        s(e),
+        "--out",
+        s(out),
+    ];
+    let o = crate::mapping::pradar(&args, None);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap()
+    crate::mapping::metrics_json(out)
 }
 
-fn f(v: &Value, path: &[&str]) -> f64 {
-    let mut c = v;
-    for p in path {
-        c = &c[*p];
-    }
-    c.as_f64()
-        .unwrap_or_else(|| panic!("{path:?} missing in metrics.json"))
-}
+use crate::mapping::fig as f;
 
 fn wrong(v: &Value, region: &str) -> f64 {
     f(v, &["metrics", region, "wrong_cell_rate"]) * f(v, &["metrics", region, "cells"])
@@ -97,7 +85,7 @@ fn figures() -> &'static Figures {
         for (name, n, c, e) in scenes() {
             let mut figs = std::collections::HashMap::new();
             for method in ["og", "og-boresight", "ekf"] {
-                let j = map(method, c, e, &root.join(format!("{name}_{n}_{method}")), &[]);
+                let j = map(method, c, e, &root.join(format!("{name}_{n}_{method}")));
                 let g = |p: &[&str]| f(&j, p);
                 eprintln!(
                     "{name} N={n} {method:>12}: building wrong {:.0} (all-free {:.0}) psi {:.2} (all-free {:.2}) | whole wrong {:.0} (all-free {:.0}) psi {:.2} | observable wrong {:.0} (all-free {:.0}) psi {:.2} (all-free {:.2}) | walls found (1 cell) {:.3} of {:.0} | free marked occupied {:.4} of {:.0} | outside marked occupied {:.4} of {:.0}",
@@ -267,7 +255,7 @@ fn a_multi_bounce_ghost_leaves_no_occupied_cell_beyond_the_wall() {
     let mut res = Vec::new();
     for method in ["og-boresight", "og", "ekf"] {
         let out = root.join(format!("map_{method}"));
-        map(method, &c, &e, &out, &[]);
+        map(method, &c, &e, &out);
         let bin = read_binary_pgm(&out.join(format!("{method}_binary.pgm")));
         let occ = ghost_cells.iter().filter(|&&i| bin[i]).count();
         let outside = (0..spec.len())
