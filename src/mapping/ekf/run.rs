@@ -81,14 +81,7 @@ pub fn ekf_run(
         let tb = Instant::now();
         let geom = model.pose_geometry(p);
         let seen = sight.map(|s| {
-            let dets: Vec<Vec<bool>> = (0..model.directions())
-                .into_par_iter()
-                .map(|d| {
-                    let mut det = Vec::new();
-                    s.detector.detect(energy.profile(p, d), &mut det);
-                    det
-                })
-                .collect();
+            let dets = s.detector.detect_pose(energy, p);
             let echoes = s
                 .occlusion
                 .echoes(model, energy, p, dets, occupied.as_deref());
@@ -144,8 +137,10 @@ pub fn ekf_run(
             withheld,
         )
     };
-    let snapshot =
-        |f: &dyn RrcsFilter| -> Option<Vec<bool>> { sight.map(|_| occupied_cells(f, params)) };
+    // the filter's binary map (EkfMap's rule)
+    let snapshot = |f: &dyn RrcsFilter| -> Option<Vec<bool>> {
+        sight.map(|_| EkfMap::from_filter(f, model.spec.rows, model.spec.cols, params).binary())
+    };
     let mut current = if np > 0 {
         Some(build(0, snapshot(&*filter)))
     } else {
@@ -192,15 +187,6 @@ pub struct Sight<'a> {
     pub detector: &'a Detector,
     /// Occlusion model of the run.
     pub occlusion: &'a Occlusion,
-}
-
-/// Binary map of a filter's state: x̂ − κ·σ̂ > μ0.
-fn occupied_cells(f: &dyn RrcsFilter, params: &EkfValid) -> Vec<bool> {
-    f.mean()
-        .iter()
-        .zip(f.variances())
-        .map(|(&m, v)| m - params.kappa * v.max(0.0).sqrt() > params.mu0)
-        .collect()
 }
 
 /// The EKF map: posterior mean and standard deviation per cell, soft and binary maps.

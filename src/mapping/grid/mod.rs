@@ -28,8 +28,9 @@
 //!   illuminated cells.
 //!
 //! What a scan can see (the occluder of each beam, the visibility of each cell) is
-//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Beams are built on demand per pose and reused for every bin and every
-//! pass of a mapper; [`ObservationModel::beams`] builds one pose's beams in parallel.
+//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Beams are built
+//! on demand per pose and reused for every bin and every pass of a mapper;
+//! [`ObservationModel::beams`] builds one pose's beams in parallel.
 
 use crate::campaign::layout::GridSpec;
 use crate::campaign::manifest::{Manifest, Pose};

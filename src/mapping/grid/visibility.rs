@@ -66,13 +66,11 @@ pub struct Occlusion {
     covered: Vec<bool>,
 }
 
-/// The detections of one pose's scan with their side-lobe flags and occluders.
+/// The detections of one pose's scan with their occluders.
 #[derive(Debug, Clone, Default)]
 pub struct ScanEchoes {
     /// Per direction: detected bins (true = detection).
     pub det: Vec<Vec<bool>>,
-    /// Per direction: detection explained by a side lobe.
-    pub side: Vec<Vec<bool>>,
     /// Per direction: the occluder bin (None: nothing opaque detected).
     pub occluder: Vec<Option<usize>>,
 }
@@ -174,8 +172,9 @@ impl Occlusion {
         side
     }
 
-    /// The echoes of pose `p` from its detections `det` (per direction): side-lobe flags and
-    /// occluders, confirmed against the binary map `occupied` when given (module docs).
+    /// The echoes of pose `p` from its detections `det` (per direction): the occluders (the
+    /// side-lobe test, then the strongest echo or an earlier one confirmed against the
+    /// binary map `occupied` when given; module docs).
     pub fn echoes(
         &self,
         model: &ObservationModel,
@@ -215,11 +214,7 @@ impl Occlusion {
                 Some(confirmed.unwrap_or(strongest))
             })
             .collect();
-        ScanEchoes {
-            det,
-            side,
-            occluder,
-        }
+        ScanEchoes { det, occluder }
     }
 
     /// Ranges (m, ascending) at which the boresight ray of (pose `p`, direction `d`) enters an
@@ -364,7 +359,6 @@ mod tests {
     fn the_last_observed_bin_is_the_occluder_plus_the_guard() {
         let e = ScanEchoes {
             det: vec![vec![false; 50]; 2],
-            side: vec![vec![false; 50]; 2],
             occluder: vec![Some(20), None],
         };
         assert_eq!(e.last_observed(0, 3, 50), 23);

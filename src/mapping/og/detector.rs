@@ -69,6 +69,20 @@ impl Detector {
         }
     }
 
+    /// Detections of every direction of pose `p` (in parallel over directions, in
+    /// direction order).
+    pub fn detect_pose(&self, em: &crate::energy::EnergyMatrix, p: usize) -> Vec<Vec<bool>> {
+        use rayon::prelude::*;
+        (0..em.directions())
+            .into_par_iter()
+            .map(|d| {
+                let mut det = Vec::new();
+                self.detect(em.profile(p, d), &mut det);
+                det
+            })
+            .collect()
+    }
+
     /// Detections of one profile (true = detected), bins before `min_bin` never.
     pub fn detect(&self, prof: &[f64], out: &mut Vec<bool>) {
         let n = prof.len();

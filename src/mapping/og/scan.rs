@@ -15,8 +15,8 @@ use std::time::Instant;
 type ScanResult = (Vec<(u32, f32)>, u64, u64, u64);
 
 /// Side-lobe-aware increments of one scan (beam restricted to what it sees, detections,
-/// side-lobe flags, occluder bin `first` (`bins` when none), visibility) into `out`;
-/// returns (detections, detections withheld beyond the occluder).
+/// occluder bin `first` (`bins` when none), last observed bin `last`, visibility) into
+/// `out`; returns (detections, detections withheld: before `first` or after `last`).
 #[allow(clippy::too_many_arguments)]
 fn scan_og(
     beam: &Beam,
@@ -47,16 +47,11 @@ fn scan_og(
         .filter(|x| *x.1)
     {
         dets += 1;
-        if b > last {
-            // beyond the first opaque surface of this beam: not observed
-            withheld += 1;
-            continue;
-        }
-        if b < first {
-            // weaker than the occluder (or explained by a side lobe) and before it: leakage
-            // of a strong echo at another bearing (credited by that direction's own scan)
-            // or a weak surface the main lobe just cleared; either way not evidence of
-            // occupancy here
+        if b < first || b > last {
+            // before the occluder: weaker than it (or explained by a side lobe), leakage of
+            // a strong echo at another bearing (credited by that direction's own scan) or a
+            // weak surface the main lobe just cleared; beyond it plus the guard: behind the
+            // first opaque surface of this beam. Either way not evidence of occupancy here
             withheld += 1;
             continue;
         }
@@ -245,14 +240,7 @@ impl<'a> ScanContext<'a> {
     /// from the beliefs `bel` (`geom`: the pose's geometry, for `og`).
     fn scan_pose(&self, p: usize, geom: Option<&PoseGeometry>, bel: &[f32]) -> Vec<ScanResult> {
         let nd = self.model.directions();
-        let dets: Vec<Vec<bool>> = (0..nd)
-            .into_par_iter()
-            .map(|d| {
-                let mut det = Vec::new();
-                self.detector.detect(self.em.profile(p, d), &mut det);
-                det
-            })
-            .collect();
+        let dets = self.detector.detect_pose(self.em, p);
         match (geom, self.method) {
             (Some(g), Method::Og) => {
                 // mapped surfaces: more likely occupied than free and above the prior (a
