@@ -26,7 +26,9 @@ use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 fn main() {
     let cli = parse_args();
     if let Err(e) = run(cli) {
-        let msg = format!("{e:#}").replace('\n', " ");
+        // the top error only: the library's `Display` already includes its cause (an I/O
+        // error's OS message), which `{:#}` would print a second time
+        let msg = format!("{e}").replace('\n', " ");
         eprintln!("error: {msg}");
         std::process::exit(1);
     }

@@ -1,6 +1,13 @@
 //! Parquet/CSV table helpers over polars' eager API: atomic writes with file-level key-value
 //! metadata, streaming (batched, one row group per batch) writers, column extraction with
 //! errors that name the file and column.
+//!
+//! Every Parquet read goes through [`guarded`]: polars returns errors for most corrupt
+//! files but panics on some (bad page headers, dictionary indices out of range, columns
+//! whose lengths disagree). A panic inside the reader is caught there and becomes one
+//! `Error::Table` line naming the file; while a guarded read runs, the panic hook stays
+//! silent so the caught panic prints nothing. The frame read is then checked up front
+//! ([`check_frame`]: every column as long as the frame) before any column is indexed.
 
 use crate::error::{Error, Result};
 use crate::io::{ensure_parent, temp_path};
@@ -36,6 +43,7 @@ impl ParquetStream {
     /// Start writing `path`; metadata is attached at finish.
     pub fn create(path: &Path) -> Result<Self> {
         ensure_parent(path)?;
+        crate::io::clean_stale_temps(path);
         Ok(ParquetStream {
             path: path.to_path_buf(),
             tmp: temp_path(path),
@@ -53,7 +61,7 @@ impl ParquetStream {
     /// Append one batch (one row group).
     pub fn write(&mut self, df: &DataFrame) -> Result<()> {
         if self.writer.is_none() {
-            let file = File::create(&self.tmp).map_err(|e| Error::io(&self.tmp, e))?;
+            let file = File::create(&self.tmp).map_err(|e| Error::io(&self.path, e))?;
             let kv = if self.meta.is_empty() {
                 None
             } else {
@@ -123,34 +131,93 @@ fn open(path: &Path) -> Result<File> {
     File::open(path).map_err(|e| Error::io(path, e))
 }
 
-/// Read a Parquet file (optionally a row slice `(offset, len)`).
+/// Guarded reads in progress (the panic hook is silent while this is above 0).
+static GUARDED_READS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+static QUIET_HOOK: std::sync::Once = std::sync::Once::new();
+
+/// Run a polars read of `path`, turning its error or its panic into one error naming the
+/// file. The first call wraps the process's panic hook so that it prints nothing while a
+/// guarded read is in progress (on any thread: polars reads on its own pool); a panic
+/// elsewhere during that time still unwinds as before, only unprinted.
+pub fn guarded<T>(path: &Path, read: impl FnOnce() -> PolarsResult<T>) -> Result<T> {
+    use std::sync::atomic::Ordering;
+    QUIET_HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if GUARDED_READS.load(Ordering::SeqCst) == 0 {
+                previous(info)
+            }
+        }));
+    });
+    GUARDED_READS.fetch_add(1, Ordering::SeqCst);
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read));
+    GUARDED_READS.fetch_sub(1, Ordering::SeqCst);
+    match r {
+        Ok(Ok(v)) => Ok(v),
+        Ok(Err(e)) => Err(Error::table(path, e)),
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown failure".into());
+            Err(Error::table(
+                path,
+                format!("corrupt Parquet file (the reader failed: {})", what.replace('\n', " ")),
+            ))
+        }
+    }
+}
+
+/// Every column of a frame read from `path` is as long as the frame (a corrupt file can
+/// give columns of different lengths).
+pub fn check_frame(path: &Path, df: &DataFrame) -> Result<()> {
+    let h = df.height();
+    for c in df.columns() {
+        if c.len() != h {
+            return Err(Error::input(
+                path,
+                format!(
+                    "column `{}` has {} values but the table {h} rows (corrupt file?)",
+                    c.name(),
+                    c.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Read a Parquet file (optionally a row slice `(offset, len)`), guarded and checked.
 pub fn read_parquet(path: &Path, slice: Option<(usize, usize)>) -> Result<DataFrame> {
-    ParquetReader::new(open(path)?)
-        .with_slice(slice)
-        .finish()
-        .map_err(|e| Error::table(path, e))
+    let file = open(path)?;
+    let df = guarded(path, || ParquetReader::new(file).with_slice(slice).finish())?;
+    check_frame(path, &df)?;
+    Ok(df)
 }
 
 /// Number of rows of a Parquet file.
 pub fn parquet_rows(path: &Path) -> Result<usize> {
-    ParquetReader::new(open(path)?)
-        .num_rows()
-        .map_err(|e| Error::table(path, e))
+    let file = open(path)?;
+    guarded(path, || ParquetReader::new(file).num_rows())
 }
 
 /// File-level key-value metadata of a Parquet file.
 pub fn parquet_metadata(path: &Path) -> Result<Vec<(String, String)>> {
-    let mut r = ParquetReader::new(open(path)?);
-    let md = r.get_metadata().map_err(|e| Error::table(path, e))?;
-    Ok(md
-        .key_value_metadata
-        .as_ref()
-        .map(|kv| {
-            kv.iter()
-                .map(|k| (k.key.clone(), k.value.clone().unwrap_or_default()))
-                .collect()
-        })
-        .unwrap_or_default())
+    let file = open(path)?;
+    guarded(path, || {
+        let mut r = ParquetReader::new(file);
+        let md = r.get_metadata()?;
+        Ok(md
+            .key_value_metadata
+            .as_ref()
+            .map(|kv| {
+                kv.iter()
+                    .map(|k| (k.key.clone(), k.value.clone().unwrap_or_default()))
+                    .collect()
+            })
+            .unwrap_or_default())
+    })
 }
 
 /// A required f64 column without nulls or non-finite values.

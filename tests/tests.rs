@@ -7,6 +7,7 @@
 
 mod common;
 
+mod bad_inputs;
 mod calibration;
 mod cli;
 mod closed_loop;

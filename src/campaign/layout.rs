@@ -181,6 +181,69 @@ fn prop_str(f: &geojson::Feature, key: &str) -> Option<String> {
     f.property(key).and_then(|v| v.as_str()).map(str::to_string)
 }
 
+/// Largest |coordinate| of a layout, m: a building fits in 10 km; larger values are a
+/// unit mistake (millimetres, degrees of latitude turned metres) and would make grids of
+/// billions of cells.
+pub const MAX_COORD_M: f64 = 1e4;
+
+/// Every position of a (Multi)Polygon geometry has 2 or 3 finite numbers (x, y[, z]):
+/// checked on the GeoJSON value, before geo's conversion, which assumes it.
+fn check_positions(v: &geojson::GeometryValue, path: &Path, i: usize) -> Result<()> {
+    let rings: Vec<&Vec<geojson::Position>> = match v {
+        geojson::GeometryValue::Polygon { coordinates } => coordinates.iter().collect(),
+        geojson::GeometryValue::MultiPolygon { coordinates } => {
+            coordinates.iter().flatten().collect()
+        }
+        _ => return Ok(()),
+    };
+    for (r, ring) in rings.into_iter().enumerate() {
+        for (k, pos) in ring.iter().enumerate() {
+            if !(2..=3).contains(&pos.len()) {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "features[{i}].geometry.coordinates[{r}][{k}]: a position needs 2 numbers (x, y in m), got {}",
+                        pos.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A layout polygon is usable: finite coordinates within ±[`MAX_COORD_M`], no holes (an
+/// enclosed region is drawn as an obstacle feature), a simple ring (no self-intersection)
+/// and a non-zero area.
+fn check_polygon(poly: &Polygon<f64>, path: &Path, i: usize) -> Result<()> {
+    use geo::{Area, Validation};
+    let at = |msg: String| Error::input(path, format!("features[{i}].geometry: {msg}"));
+    if let Some(c) = poly
+        .exterior()
+        .0
+        .iter()
+        .chain(poly.interiors().iter().flat_map(|r| r.0.iter()))
+        .find(|c| !(c.x.abs() <= MAX_COORD_M && c.y.abs() <= MAX_COORD_M))
+    {
+        return Err(at(format!(
+            "coordinate ({}, {}) beyond ±{MAX_COORD_M} m (coordinates are metres)",
+            c.x, c.y
+        )));
+    }
+    if !poly.interiors().is_empty() {
+        return Err(at(
+            "polygon with a hole: holes are not supported (draw the enclosed region as an obstacle feature)".into(),
+        ));
+    }
+    if let Some(e) = poly.validation_errors().into_iter().next() {
+        return Err(at(format!("not a simple polygon ({e})")));
+    }
+    if !(poly.unsigned_area() > 1e-6) {
+        return Err(at("polygon of zero area".into()));
+    }
+    Ok(())
+}
+
 impl Layout {
     /// Read a layout GeoJSON file.
     pub fn load(path: &Path) -> Result<Layout> {
@@ -210,6 +273,7 @@ impl Layout {
                 .geometry
                 .as_ref()
                 .ok_or_else(|| Error::input(path, format!("features[{i}].geometry missing")))?;
+            check_positions(&geom.value, path, i)?;
             let mut poly: Polygon<f64> = Polygon::try_from(geom).map_err(|e| {
                 Error::input(
                     path,
@@ -233,6 +297,7 @@ impl Layout {
                     format!("features[{i}].geometry: non-finite coordinate"),
                 ));
             }
+            check_polygon(&poly, path, i)?;
             poly.exterior_mut(|r| r.make_ccw_winding());
             let material = prop_str(f, "material").unwrap_or_else(|| "default".into());
             match role.as_str() {

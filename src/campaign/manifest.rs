@@ -20,6 +20,30 @@ pub use crate::units::C0;
 /// Current manifest/energy schema version.
 pub const SCHEMA_VERSION: u32 = 1;
 
+/// Bounds on the sizes a manifest implies, checked before anything is allocated: each is
+/// well above any campaign of the method and well below what would exhaust a workstation.
+pub mod limits {
+    /// Frequency points per sweep: 100 001 is the largest sweep of current VNAs.
+    pub const MAX_POINTS: usize = 100_001;
+    /// IFFT length (points − 1) · oversample: 2^22 complex samples (64 MiB per buffer).
+    pub const MAX_NFFT: usize = 1 << 22;
+    /// IFFT oversampling: 65 samples per bin resolve a bin's shape far beyond need.
+    pub const MAX_OVERSAMPLE: usize = 65;
+    /// Directions per position: 3601 is a 0.1° step over a full turn.
+    pub const MAX_DIRECTIONS: usize = 3601;
+    /// Repeated sweeps per direction.
+    pub const MAX_PULSES: usize = 1000;
+    /// Poses of a campaign (also the largest position index a table may carry).
+    pub const MAX_POSITIONS: usize = 1_000_000;
+    /// Sweeps of a campaign (positions × directions × pulses).
+    pub const MAX_SWEEPS: usize = 100_000_000;
+    /// |x|, |y| of a pose, m (the layout's own bound, [`crate::campaign::layout::MAX_COORD_M`]).
+    pub const MAX_COORD_M: f64 = crate::campaign::layout::MAX_COORD_M;
+    /// Widest `{name:0W}` of a sweep-name template.
+    pub const MAX_PATTERN_WIDTH: usize = 20;
+}
+use limits::*;
+
 /// Swept frequency band of the VNA.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -64,6 +88,15 @@ impl Band {
             return Err(Error::param(
                 "band.points",
                 "need at least 8 frequency points",
+            ));
+        }
+        if self.points > MAX_POINTS {
+            return Err(Error::param(
+                "band.points",
+                format!(
+                    "{} points exceeds {MAX_POINTS} (the largest VNA sweep)",
+                    self.points
+                ),
             ));
         }
         Ok(())
@@ -157,9 +190,15 @@ impl Directions {
     pub fn width_deg(&self) -> f64 {
         (self.stop_deg - self.start_deg).max(self.step_deg)
     }
-    /// Number of directions.
+    /// Number of directions (checked manifests: the span is a whole number of steps, at
+    /// most [`limits::MAX_DIRECTIONS`]).
     pub fn count(&self) -> usize {
-        ((self.stop_deg - self.start_deg) / self.step_deg).round() as usize + 1
+        let n = ((self.stop_deg - self.start_deg) / self.step_deg).round();
+        if n.is_finite() && n >= 0.0 {
+            (n as usize).saturating_add(1)
+        } else {
+            1
+        }
     }
     /// Angle of direction `d` relative to the heading, degrees.
     pub fn angle_deg(&self, d: usize) -> f64 {
@@ -187,6 +226,29 @@ impl Directions {
             return Err(Error::param(
                 "directions",
                 "angles must lie in [-180, 180] degrees",
+            ));
+        }
+        let steps = (self.stop_deg - self.start_deg) / self.step_deg;
+        if steps + 1.0 > MAX_DIRECTIONS as f64 {
+            return Err(Error::param(
+                "directions.step_deg",
+                format!(
+                    "{} gives {:.0} directions, more than {MAX_DIRECTIONS} (a 0.1° step over a full turn)",
+                    self.step_deg,
+                    steps.floor() + 1.0
+                ),
+            ));
+        }
+        if (steps - steps.round()).abs() > 1e-6 {
+            let last = self.start_deg + steps.round() * self.step_deg;
+            return Err(Error::param(
+                "directions.step_deg",
+                format!(
+                    "{}° does not divide stop_deg − start_deg = {}° (the scan would end at {last}°, not at stop_deg = {}°)",
+                    self.step_deg,
+                    self.stop_deg - self.start_deg,
+                    self.stop_deg
+                ),
             ));
         }
         Ok(())
@@ -288,6 +350,15 @@ impl Processing {
                 "must be an odd number >= 3",
             ));
         }
+        if self.oversample > MAX_OVERSAMPLE {
+            return Err(Error::param(
+                "processing.oversample",
+                format!(
+                    "{} exceeds {MAX_OVERSAMPLE} (IFFT samples per bin)",
+                    self.oversample
+                ),
+            ));
+        }
         if !(self.gate_ns.is_finite() && self.gate_ns >= 0.0) {
             return Err(Error::param("processing.gate_ns", "must be >= 0"));
         }
@@ -296,6 +367,33 @@ impl Processing {
         }
         if !(self.noise_from_ns.is_finite() && self.noise_from_ns >= 0.0) {
             return Err(Error::param("processing.noise_from_ns", "must be >= 0"));
+        }
+        Ok(())
+    }
+
+    /// Validate against the band: the IFFT length (points − 1) · oversample is at most
+    /// [`limits::MAX_NFFT`], and `max_delay_ns` lies within the alias-free span
+    /// (points − 1)/B of the sweep (beyond it the delays wrap around).
+    pub fn check_with(&self, band: &Band) -> Result<()> {
+        self.check()?;
+        let nfft = (band.points - 1).saturating_mul(self.oversample);
+        if nfft > MAX_NFFT {
+            return Err(Error::param(
+                "processing.oversample",
+                format!(
+                    "(band.points − 1) × oversample = {nfft} exceeds the IFFT limit {MAX_NFFT}"
+                ),
+            ));
+        }
+        let span_ns = (band.points - 1) as f64 * 1e9 / band.bandwidth_hz();
+        if self.max_delay_ns > span_ns {
+            return Err(Error::param(
+                "processing.max_delay_ns",
+                format!(
+                    "{} ns beyond the sweep's alias-free span (band.points − 1)/B = {span_ns:.1} ns (band.points = {})",
+                    self.max_delay_ns, band.points
+                ),
+            ));
         }
         Ok(())
     }
@@ -438,12 +536,18 @@ impl Manifest {
         self.band.check()?;
         self.array.check()?;
         self.directions.check()?;
-        self.processing.check()?;
+        self.processing.check_with(&self.band)?;
         if !self.noise.floor_dbm.is_finite() || !self.noise.tx_power_dbm.is_finite() {
             return Err(Error::param("noise.floor_dbm", "must be finite"));
         }
         if self.pulses == 0 {
             return Err(Error::param("pulses", "must be >= 1"));
+        }
+        if self.pulses > MAX_PULSES {
+            return Err(Error::param(
+                "pulses",
+                format!("{} exceeds {MAX_PULSES} repeats per direction", self.pulses),
+            ));
         }
         if self.poses.is_empty() {
             return Err(Error::param(
@@ -451,11 +555,30 @@ impl Manifest {
                 "at least one [[poses]] entry is required",
             ));
         }
+        if self.poses.len() > MAX_POSITIONS {
+            return Err(Error::param(
+                "poses",
+                format!("{} poses exceeds {MAX_POSITIONS}", self.poses.len()),
+            ));
+        }
+        let sweeps = self.poses.len() * self.directions.count() * self.pulses;
+        if sweeps > MAX_SWEEPS {
+            return Err(Error::param(
+                "pulses",
+                format!("poses × directions × pulses = {sweeps} sweeps exceeds {MAX_SWEEPS}"),
+            ));
+        }
         for (i, p) in self.poses.iter().enumerate() {
             if !(p.x_m.is_finite() && p.y_m.is_finite() && p.heading_deg.is_finite()) {
                 return Err(Error::param(
                     format!("poses[{i}]"),
                     "x_m, y_m, heading_deg must be finite",
+                ));
+            }
+            if p.x_m.abs() > MAX_COORD_M || p.y_m.abs() > MAX_COORD_M {
+                return Err(Error::param(
+                    format!("poses[{i}]"),
+                    format!("({}, {}) m beyond ±{MAX_COORD_M} m", p.x_m, p.y_m),
                 ));
             }
         }
@@ -471,6 +594,15 @@ impl Manifest {
                             "touchstone sweeps need `pattern` or `files`",
                         ));
                     }
+                    if let Some(p) = &s.pattern {
+                        check_pattern(
+                            p,
+                            self.poses.len(),
+                            self.directions.count(),
+                            self.pulses,
+                        )?;
+                    }
+                    self.check_files(&s.files)?;
                 }
                 SweepFormat::Parquet => {
                     if s.path.is_none() {
@@ -486,6 +618,90 @@ impl Manifest {
     pub fn positions(&self) -> usize {
         self.poses.len()
     }
+
+    /// `[sweeps] files`: every index inside the campaign, no (position, direction, pulse)
+    /// listed twice and no file given for two sweeps.
+    fn check_files(&self, files: &[SweepFile]) -> Result<()> {
+        let (np, nd, nk) = (self.poses.len(), self.directions.count(), self.pulses);
+        let mut seen = std::collections::HashMap::new();
+        let mut paths = std::collections::HashMap::new();
+        for (i, f) in files.iter().enumerate() {
+            if f.position >= np || f.direction >= nd || f.pulse >= nk {
+                return Err(Error::param(
+                    format!("sweeps.files[{i}]"),
+                    format!("index (position {}, direction {}, pulse {}) outside the campaign ({np} positions, {nd} directions, {nk} pulses)", f.position, f.direction, f.pulse),
+                ));
+            }
+            if let Some(j) = seen.insert((f.position, f.direction, f.pulse), i) {
+                return Err(Error::param(
+                    format!("sweeps.files[{i}]"),
+                    format!(
+                        "position {}, direction {}, pulse {} already listed by sweeps.files[{j}]",
+                        f.position, f.direction, f.pulse
+                    ),
+                ));
+            }
+            if let Some(j) = paths.insert(f.path.clone(), i) {
+                return Err(Error::param(
+                    format!("sweeps.files[{i}]"),
+                    format!(
+                        "file {} already listed by sweeps.files[{j}] for another sweep",
+                        f.path.display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A sweep-name template names only `{position}`, `{direction}` and `{pulse}` (widths up
+/// to [`limits::MAX_PATTERN_WIDTH`]) and varies with every index that takes more than one
+/// value: a template without `{direction}` over 37 directions would read one file 37 times.
+pub fn check_pattern(pattern: &str, positions: usize, directions: usize, pulses: usize) -> Result<()> {
+    let field = "sweeps.pattern";
+    let mut names = Vec::new();
+    let mut rest = pattern;
+    while let Some(open) = rest.find('{') {
+        let after = &rest[open + 1..];
+        let Some(close) = after.find('}') else {
+            return Err(Error::param(field, format!("`{pattern}`: unclosed `{{`")));
+        };
+        let spec = &after[..close];
+        let (name, width) = spec.split_once(':').unwrap_or((spec, ""));
+        if !matches!(name, "position" | "direction" | "pulse") {
+            return Err(Error::param(
+                field,
+                format!("`{pattern}`: unknown placeholder `{{{spec}}}` (use {{position}}, {{direction}}, {{pulse}})"),
+            ));
+        }
+        if !width.is_empty() {
+            match width.parse::<usize>() {
+                Ok(w) if w <= MAX_PATTERN_WIDTH => {}
+                _ => {
+                    return Err(Error::param(
+                        field,
+                        format!("`{pattern}`: width `{width}` of `{{{name}}}` must be a number up to {MAX_PATTERN_WIDTH}"),
+                    ))
+                }
+            }
+        }
+        names.push(name);
+        rest = &after[close + 1..];
+    }
+    for (name, n, what) in [
+        ("position", positions, "poses"),
+        ("direction", directions, "directions"),
+        ("pulse", pulses, "pulses"),
+    ] {
+        if n > 1 && !names.contains(&name) {
+            return Err(Error::param(
+                field,
+                format!("`{pattern}` has no {{{name}}} but the campaign has {n} {what}: every sweep would read the same file"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl Campaign {
@@ -513,7 +729,29 @@ impl Campaign {
                 format!("field `layout`: file {} not found", layout.display()),
             ));
         }
+        c.check_poses_inside(&crate::campaign::layout::Layout::load(&layout)?)?;
         Ok(c)
+    }
+
+    /// Every pose lies strictly inside the layout's perimeter (refused otherwise: a pose on
+    /// or beyond a wall sees the walls from behind, and the energy, the maps and the fit
+    /// would all be of another room).
+    pub fn check_poses_inside(&self, layout: &crate::campaign::layout::Layout) -> Result<()> {
+        for (i, p) in self.manifest.poses.iter().enumerate() {
+            let at = geo::Coord { x: p.x_m, y: p.y_m };
+            if !layout.inside_perimeter(at) {
+                return Err(Error::input(
+                    &self.path,
+                    format!(
+                        "poses[{i}] at ({}, {}) m is not inside the perimeter of {}",
+                        p.x_m,
+                        p.y_m,
+                        self.layout_path().display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Folder of the manifest (paths inside are relative to it).
@@ -564,7 +802,13 @@ pub fn expand_pattern(pattern: &str, position: usize, direction: usize, pulse: u
         };
         let spec = &after[..close];
         let (name, width) = match spec.split_once(':') {
-            Some((n, w)) => (n, w.trim_start_matches('0').parse::<usize>().unwrap_or(0)),
+            Some((n, w)) => (
+                n,
+                w.trim_start_matches('0')
+                    .parse::<usize>()
+                    .unwrap_or(0)
+                    .min(MAX_PATTERN_WIDTH),
+            ),
             None => (spec, 0),
         };
         let value = match name {

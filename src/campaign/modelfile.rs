@@ -38,6 +38,43 @@ fn is_nan(v: &f64) -> bool {
     v.is_nan()
 }
 
+/// The distribution families a model file may name.
+pub const FAMILIES: [&str; 9] = [
+    "exponential",
+    "shifted_exponential",
+    "laplacian",
+    "gaussian",
+    "lognormal",
+    "gamma",
+    "rayleigh",
+    "poisson",
+    "constant",
+];
+
+/// The fit's diagnostics of a quantity, when present: a finite, ordered interval, a KS
+/// statistic and p-value in [0, 1].
+fn check_diagnostics(name: &str, q: &Quantity) -> Result<()> {
+    if let Some([lo, hi]) = q.interval {
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(Error::param(
+                format!("{name}.interval"),
+                format!("[{lo}, {hi}] must be finite with lo <= hi"),
+            ));
+        }
+    }
+    for (field, v) in [("ks", q.ks), ("ks_p", q.ks_p)] {
+        if let Some(v) = v {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::param(
+                    format!("{name}.{field}"),
+                    format!("{v} outside [0, 1]"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// One modelled quantity.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -47,8 +84,8 @@ pub struct Quantity {
     pub value: f64,
     /// Unit.
     pub unit: String,
-    /// Distribution family (`exponential`, `laplacian`, `gaussian`, `lognormal`, `gamma`,
-    /// `rayleigh`, `poisson`, `constant`).
+    /// Distribution family, one of [`FAMILIES`] (`exponential`, `shifted_exponential`,
+    /// `laplacian`, `gaussian`, `lognormal`, `gamma`, `rayleigh`, `poisson`, `constant`).
     pub family: String,
     /// 95 % bootstrap interval.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -182,7 +219,9 @@ impl ModelConfig {
         }
     }
 
-    /// Validate values and units; errors name the field.
+    /// Validate values, units and families; errors name the field. Besides being finite
+    /// and positive, every value must lie in the range the schema gives its quantity
+    /// (with its reason), and the family must be one of [`FAMILIES`].
     pub fn check(&self) -> Result<()> {
         if self.schema_version != 1 {
             return Err(Error::param(
@@ -197,6 +236,13 @@ impl ModelConfig {
                     format!("`{}` (expected `{unit}`)", v.unit),
                 ));
             }
+            if !FAMILIES.contains(&v.family.as_str()) {
+                return Err(Error::param(
+                    format!("{name}.family"),
+                    format!("unknown family `{}` (one of {})", v.family, FAMILIES.join(", ")),
+                ));
+            }
+            check_diagnostics(name, v)?;
             if let Some(reason) = &v.not_estimable {
                 if !v.value.is_nan() {
                     return Err(Error::param(
@@ -224,11 +270,49 @@ impl ModelConfig {
                     "must be finite and > 0",
                 ));
             }
+            if let Some((lo, hi, why)) = Self::bounds(name) {
+                if !(v.value >= lo && v.value <= hi) {
+                    return Err(Error::param(
+                        format!("{name}.value"),
+                        format!("{} {} outside [{lo:e}, {hi:e}] ({why})", v.value, v.unit),
+                    ));
+                }
+            }
         }
         if self.rays_per_cluster.value < 1.0 {
             return Err(Error::param("rays_per_cluster.value", "must be >= 1"));
         }
         Ok(())
+    }
+
+    /// The range a quantity's value must lie in, with the reason: far beyond any indoor
+    /// channel, and what keeps the generators' sizes and sums finite (rays are drawn per
+    /// cluster, clusters per perimeter spacing, energies scale with the RRCS).
+    fn bounds(name: &str) -> Option<(f64, f64, &'static str)> {
+        Some(match name {
+            "inter_cluster_rate" | "intra_cluster_rate" => {
+                (0.0, 100.0, "one arrival per 10 ps is far below the delay resolution")
+            }
+            "intra_cluster_aoa" => (0.0, 180.0, "an angle spread of at most half a turn"),
+            "perimeter_offset" => (0.0, 100.0, "clusters within 100 m of a wall"),
+            "perimeter_spacing" => (
+                0.01,
+                1e4,
+                "at least 1 cm between clusters: the number of clusters drawn is perimeter / spacing",
+            ),
+            "cluster_decay" | "ray_decay" | "diffuse.decay" => {
+                (0.0, 1e4, "a power decay within 10 µs")
+            }
+            "rays_per_cluster" => (1.0, 1000.0, "rays are drawn one by one for every cluster"),
+            "cluster_rrcs" => (
+                0.0,
+                1e6,
+                "above a 1 m² plate at normal incidence at 60 GHz, 5e5 m²; larger values overflow the energies",
+            ),
+            "diffuse.wall_rcs_per_m" => (0.0, 1e3, "a wall's diffuse return per metre"),
+            "diffuse.lambert_exponent" => (0.0, 100.0, "cos^n of the incidence angle"),
+            _ => return None,
+        })
     }
 
     /// The quantities marked not estimable, by name (`diffuse.` prefix for the dense

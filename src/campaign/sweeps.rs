@@ -56,6 +56,42 @@ pub struct SweepReader {
     source: Source,
 }
 
+/// The files a sweep-name template names just past the campaign's last direction (and
+/// pulse) must not exist: files recorded for more directions than `[directions]` gives
+/// mean the manifest's step or span is not the one measured (a 10° step over files of a
+/// 5° scan would label the first half of the scan as all of it).
+fn check_no_more_files(c: &Campaign, pattern: &str, nd: usize, nk: usize) -> Result<()> {
+    let dir = c.dir();
+    let d = &c.manifest.directions;
+    let base = dir.join(expand_pattern(pattern, 0, 0, 0));
+    let cases = [
+        (
+            dir.join(expand_pattern(pattern, 0, nd, 0)),
+            format!(
+                "[directions] gives {nd} directions ({}°..{}° step {}°)",
+                d.start_deg, d.stop_deg, d.step_deg
+            ),
+        ),
+        (
+            dir.join(expand_pattern(pattern, 0, 0, nk)),
+            format!("pulses = {nk}"),
+        ),
+    ];
+    for (path, said) in cases {
+        // a template without the placeholder names the first file again
+        if path != base && path.is_file() {
+            return Err(Error::input(
+                &c.path,
+                format!(
+                    "{said} but {} exists: the files hold more sweeps than the manifest says",
+                    path.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Check a frequency grid against the band.
 pub fn check_grid(path: &Path, freq_hz: &[f64], band: &Band) -> Result<()> {
     let tol = 1e-6 * band.step_hz();
@@ -121,6 +157,7 @@ impl SweepReader {
                             }
                         }
                     }
+                    check_no_more_files(c, pat, nd, nk)?;
                 } else {
                     for (i, f) in cfg.files.iter().enumerate() {
                         if f.position >= np || f.direction >= nd || f.pulse >= nk {
@@ -147,6 +184,11 @@ impl SweepReader {
                         format!("sweep file listed in {} not found", c.path.display()),
                     ));
                 }
+                // the band is checked on the first file now, before anything is computed
+                // from [band] (a wrong `points` would otherwise surface as a processing
+                // range problem)
+                let mut first = vec![Complex64::new(0.0, 0.0); m.band.points];
+                read_sweep(&paths[0], cfg.parameter, &m.band, &mut first)?;
                 Source::Touchstone(paths, cfg.parameter)
             }
             SweepFormat::Parquet => {
@@ -180,6 +222,14 @@ impl SweepReader {
     /// Number of positions.
     pub fn positions(&self) -> usize {
         self.positions
+    }
+
+    /// Every sweep file read (the Touchstone files, or the one Parquet table).
+    pub fn files(&self) -> Vec<&Path> {
+        match &self.source {
+            Source::Touchstone(paths, _) => paths.iter().map(PathBuf::as_path).collect(),
+            Source::Parquet(p) => vec![p.as_path()],
+        }
     }
 
     /// Positions read together by [`Self::read_positions`]: one for Touchstone (files are

@@ -262,7 +262,7 @@ pub struct ClusterArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Largest K tried per position.
-    #[arg(long, default_value_t = pradar::cluster::ClusterParams::default().k_max, value_parser = ranges::at_least_one, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = pradar::cluster::ClusterParams::default().k_max, value_parser = ranges::k_max, allow_negative_numbers = true)]
     pub k_max: usize,
     /// Seed of the k-means++ draws.
     #[arg(long, default_value_t = 1)]
@@ -288,7 +288,7 @@ pub struct FitArgs {
     #[arg(long)]
     pub table: PathBuf,
     /// Bootstrap resamples.
-    #[arg(long, default_value_t = 1000, value_parser = ranges::at_least_one, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1000, value_parser = ranges::bootstrap, allow_negative_numbers = true)]
     pub bootstrap: usize,
     /// Seed.
     #[arg(long, default_value_t = 1)]

@@ -21,17 +21,32 @@ fn checked(s: &str, ok: impl Fn(f64) -> bool, range: &str) -> Result<f64, String
     }
 }
 
-/// An integer ≥ 1 (`--k-max`: `ClusterParams` k_max; `--bootstrap`: resamples).
-pub fn at_least_one(s: &str) -> Result<usize, String> {
+/// An integer in `lo..=hi` (what the library's check of the same field accepts).
+fn whole_in(s: &str, lo: usize, hi: usize, why: &str) -> Result<usize, String> {
     let s = s.trim();
+    let bad = || format!("must be in [{lo}, {hi}] ({why})");
     match s.parse::<usize>() {
-        Ok(0) => Err("must be >= 1".into()),
-        Err(_) if s.starts_with('-') && s[1..].parse::<usize>().is_ok() => {
-            Err("must be >= 1".into())
-        }
-        Ok(v) => Ok(v),
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        Ok(_) => Err(bad()),
+        Err(_) if s.starts_with('-') && s[1..].parse::<usize>().is_ok() => Err(bad()),
         Err(e) => Err(format!("not a whole number ({e})")),
     }
+}
+
+/// `--k-max`: in [1, 64] (`ClusterParams` k_max, [`pradar::cluster::params::MAX_K`]).
+pub fn k_max(s: &str) -> Result<usize, String> {
+    whole_in(s, 1, pradar::cluster::params::MAX_K, "the search over K costs K^2.3")
+}
+
+/// `--bootstrap`: in [40, 100000] (`FitParams` bootstrap).
+pub fn bootstrap(s: &str) -> Result<usize, String> {
+    use pradar::fit::params::{MAX_BOOTSTRAP, MIN_BOOTSTRAP};
+    whole_in(
+        s,
+        MIN_BOOTSTRAP,
+        MAX_BOOTSTRAP,
+        "a 95 % interval needs a resample in each 2.5 % tail",
+    )
 }
 
 /// `--cell-m`: in [0.005, 10] m (`GridParams` cell_m).
@@ -99,8 +114,11 @@ mod tests {
 
     #[test]
     fn ranges_match_the_library_checks() {
-        assert!(at_least_one("0").is_err() && at_least_one("1").is_ok());
-        assert_eq!(at_least_one("-2").unwrap_err(), "must be >= 1");
+        assert!(k_max("0").is_err() && k_max("1").is_ok() && k_max("64").is_ok());
+        assert!(k_max("65").is_err() && k_max("100000").is_err());
+        assert!(k_max("-2").unwrap_err().starts_with("must be in [1, 64]"));
+        assert!(bootstrap("0").is_err() && bootstrap("1").is_err() && bootstrap("39").is_err());
+        assert!(bootstrap("40").is_ok() && bootstrap("100001").is_err());
         assert!(cell_m("0").is_err() && cell_m("0.005").is_ok() && cell_m("10.5").is_err());
         assert!(pfa("0").is_err() && pfa("0.5").is_ok() && pfa("1.5").is_err());
         assert!(open_unit("0").is_err() && open_unit("1").is_err() && open_unit("0.5").is_ok());

@@ -7,6 +7,15 @@ use crate::error::{Error, Result};
 use crate::table;
 use std::path::{Path, PathBuf};
 
+/// Where the summary of the clustered MPC table `path` goes: `<stem>_summary.parquet`.
+pub fn summary_path(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "clusters".into());
+    path.with_file_name(format!("{stem}_summary.parquet"))
+}
+
 /// Write the clustered MPC table (`path`) and the summary (`<stem>_summary.parquet`).
 pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
     let mut df = crate::mpc::mpc_frame(path, &c.mpcs)?;
@@ -19,11 +28,7 @@ pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
     ))
     .map_err(|e| Error::table(path, e))?;
     table::write_parquet(path, &df, vec![("schema_version".into(), "1".into())])?;
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "clusters".into());
-    let spath = path.with_file_name(format!("{stem}_summary.parquet"));
+    let spath = summary_path(path);
     let s = &c.summary;
     let f64s = |name: &str, g: fn(&super::ClusterSummary) -> f64| {
         table::col(name, s.iter().map(g).collect::<Vec<_>>())

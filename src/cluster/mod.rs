@@ -62,7 +62,7 @@ pub mod select;
 pub mod summary;
 
 pub use criteria::{calinski_harabasz, likelihood_criterion, silhouette};
-pub use io::write;
+pub use io::{summary_path, write};
 pub use kmeans::{kmeans_labels, pooled_within_sd, within_ss};
 pub use metrics::adjusted_rand_index;
 pub use params::{ClusterParams, ClusterValid, Criterion};

@@ -53,6 +53,10 @@ impl Criterion {
     }
 }
 
+/// Largest `k_max` accepted: a position holds a few tens of clusters, and the search over
+/// K costs about K^2.3.
+pub const MAX_K: usize = 64;
+
 /// Clustering parameters (unchecked; [`ParamGuard::check`] gives the [`ClusterValid`] the
 /// algorithms take).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -139,6 +143,15 @@ impl ParamGuard for ClusterParams {
             return Err(Error::param(
                 "k_max",
                 format!("must be >= 1 (--k-max), got {}", self.k_max),
+            ));
+        }
+        if self.k_max > MAX_K {
+            return Err(Error::param(
+                "k_max",
+                format!(
+                    "must be <= {MAX_K} (--k-max), got {} (a position holds a few tens of clusters; the time grows as K^2.3)",
+                    self.k_max
+                ),
             ));
         }
         if self.n_runs == 0 {

@@ -13,6 +13,13 @@ use crate::error::{Error, Result};
 use crate::table;
 use std::path::Path;
 
+/// Largest bin energy accepted: a passive channel's |S21| stays below 1, so a bin's energy
+/// (a sum of oversampled |h|² over one bin, per unit transmit power) stays near or below
+/// 1; 10^12 (120 dB above) leaves room for any calibration and refuses corrupt values
+/// that would dominate every statistic (one 10^300 bin turned a position's 138 MPCs
+/// into 1).
+pub const MAX_ENERGY: f64 = 1e12;
+
 /// Metadata of an energy table.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnergyMeta {
@@ -159,13 +166,16 @@ impl EnergyMatrix {
         let arel = table::f64_column(path, &df, "angle_rel_deg")?;
         let aglob = table::f64_column(path, &df, "angle_global_deg")?;
         let energy = table::f64_column(path, &df, "energy")?;
-        let np = *pos.iter().max().unwrap_or(&-1) as usize + 1;
-        let nd = *dir.iter().max().unwrap_or(&-1) as usize + 1;
-        let nb = *bin.iter().max().unwrap_or(&-1) as usize + 1;
         if pos.iter().chain(&dir).chain(&bin).any(|v| *v < 0) {
             return Err(Error::input(path, "negative position/direction/bin index"));
         }
-        if np * nd * nb != df.height() {
+        let np = *pos.iter().max().unwrap_or(&-1) as usize + 1;
+        let nd = *dir.iter().max().unwrap_or(&-1) as usize + 1;
+        let nb = *bin.iter().max().unwrap_or(&-1) as usize + 1;
+        // every index fits the table: the grid np·nd·nb is the row count (checked without
+        // overflow), so nothing larger than the file is allocated
+        let cells = np.checked_mul(nd).and_then(|v| v.checked_mul(nb));
+        if cells != Some(df.height()) {
             return Err(Error::input(
                 path,
                 format!(
@@ -188,6 +198,15 @@ impl EnergyMatrix {
             }
             if energy[i] < 0.0 {
                 return Err(Error::input(path, format!("row {i}: negative energy")));
+            }
+            if energy[i] > MAX_ENERGY {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "column `energy` row {i}: {:e} above {MAX_ENERGY:e} (a unit-amplitude echo gives about 1)",
+                        energy[i]
+                    ),
+                ));
             }
             data[idx] = energy[i];
             angles[d] = arel[i];

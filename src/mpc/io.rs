@@ -4,6 +4,7 @@
 //! `bin`, `component` read as NaN, 0, 0, discrete; `wall_unit_db`, `incidence_deg` are NaN
 //! for an MPC on no wall curve).
 
+use crate::campaign::manifest::limits::MAX_POSITIONS;
 use super::{Component, ExtractParams, Mpc, WallCell};
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
@@ -163,6 +164,15 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
         .map(|i| {
             if pos[i] < 0 {
                 return Err(Error::input(path, format!("row {i}: negative position")));
+            }
+            if pos[i] as u64 >= MAX_POSITIONS as u64 {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "column `position` row {i}: {} beyond the largest campaign ({MAX_POSITIONS} positions)",
+                        pos[i]
+                    ),
+                ));
             }
             let component = match &component {
                 None => Component::Discrete,

@@ -13,6 +13,12 @@
 //! MPC table's metadata, the K = K_max warning, writing the model file beside Table 1 and
 //! resolving `all` into the list of experiments.
 //!
+//! Every command first refuses to write over one of its own inputs
+//! ([`crate::io::refuse_overwrite`]: `energy --out` naming the manifest or a sweep file,
+//! `extract`/`cluster`/`fit` naming their input table, `fit --out x --table x`, `simulate`
+//! or `synth` writing into the folder of the manifest or the model file they read). `fit`
+//! writes Table 1 first and the model file last, so a failed table leaves no model.
+//!
 //! ```no_run
 //! use pradar::campaign::manifest::SweepFormat;
 //! use pradar::pipeline::commands::{self, Cluster, Energy, Extract, Fit, Simulate};
@@ -111,6 +117,21 @@ use std::path::{Path, PathBuf};
 /// Progress of a single-stage command: called with (done, total) after each step.
 pub type StepProgress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
+/// The files a campaign's analysis reads: the manifest and its layout.
+fn campaign_inputs(c: &Campaign) -> [(PathBuf, &'static str); 2] {
+    [
+        (c.path.clone(), "--campaign"),
+        (c.layout_path(), "layout (of --campaign)"),
+    ]
+}
+
+/// [`crate::io::refuse_overwrite`] over owned paths.
+fn refuse(outputs: &[(PathBuf, &str)], inputs: &[(PathBuf, &str)]) -> Result<()> {
+    let outs: Vec<(&Path, &str)> = outputs.iter().map(|(p, w)| (p.as_path(), *w)).collect();
+    let ins: Vec<(&Path, &str)> = inputs.iter().map(|(p, w)| (p.as_path(), *w)).collect();
+    crate::io::refuse_overwrite(&outs, &ins)
+}
+
 /// Load a manifest and apply an `--elements` override.
 fn load_campaign(path: &Path, elements: Option<usize>) -> Result<Campaign> {
     let mut c = Campaign::load(path)?;
@@ -154,6 +175,19 @@ impl fmt::Display for SimulateSummary {
 /// Run `pradar simulate` ([`crate::campaign::simulate::simulate`]).
 pub fn simulate(cmd: &Simulate, progress: StepProgress) -> Result<SimulateSummary> {
     let c = load_campaign(&cmd.campaign, cmd.elements)?;
+    let truth = cmd.out.join("truth");
+    let outputs: Vec<(PathBuf, &str)> = [
+        cmd.out.join("campaign.toml"),
+        cmd.out.join("layout.geojson"),
+        cmd.out.join("sweeps.parquet"),
+        truth.join("rays.parquet"),
+        truth.join("scatterers.csv"),
+        truth.join("clusters.csv"),
+    ]
+    .into_iter()
+    .map(|p| (p, "--out"))
+    .collect();
+    refuse(&outputs, &campaign_inputs(&c))?;
     let r = crate::campaign::simulate::simulate(&c, &cmd.out, cmd.format, progress)?;
     Ok(SimulateSummary(r))
 }
@@ -194,6 +228,16 @@ impl fmt::Display for EnergySummary {
 /// Run `pradar energy` ([`crate::energy::run`]).
 pub fn energy(cmd: &Energy, progress: StepProgress) -> Result<EnergySummary> {
     let c = Campaign::load(&cmd.campaign)?;
+    let reader = crate::campaign::sweeps::SweepReader::open(&c)?;
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.extend(
+        reader
+            .files()
+            .into_iter()
+            .map(|p| (p.to_path_buf(), "sweep file (of --campaign)")),
+    );
+    drop(reader);
+    refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
     let report = crate::energy::run(&c, &cmd.out, progress)?;
     Ok(EnergySummary {
         report,
@@ -253,6 +297,21 @@ impl fmt::Display for SynthSummary {
 /// Run `pradar synth` ([`crate::model::synth()`]).
 pub fn synth(cmd: &Synth, progress: StepProgress) -> Result<SynthSummary> {
     let c = load_campaign(&cmd.campaign, cmd.elements)?;
+    let truth = cmd
+        .params
+        .truth_dir
+        .clone()
+        .unwrap_or_else(|| crate::model::synth::default_truth_dir(&cmd.out));
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.push((cmd.model.clone(), "--model"));
+    refuse(
+        &[
+            (cmd.out.clone(), "--out"),
+            (truth.join("rays.parquet"), "--truth"),
+            (truth.join("model.toml"), "--truth"),
+        ],
+        &inputs,
+    )?;
     let m = ModelConfig::load(&cmd.model)?
         .require_estimable(&cmd.values)
         .map_err(|e| crate::error::Error::input(&cmd.model, e.to_string()))?;
@@ -355,7 +414,13 @@ impl fmt::Display for ExtractSummary {
 /// Run `pradar extract` ([`crate::mpc::extract`]), writing the table with its metadata.
 pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
     let c = Campaign::load(&cmd.campaign)?;
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.push((cmd.energy.clone(), "--energy"));
+    refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
     let em = EnergyMatrix::read(&cmd.energy)?;
+    // checked here, where the energy file's name is known, so a mismatch names it
+    crate::energy::check_campaign(&c, &em, &cmd.energy)?;
+    em.meta.check_noise(&cmd.energy)?;
     let (mpcs, diffuse) = crate::mpc::extract_labelled(&em, &c, &cmd.params.check()?)?;
     let mut meta = crate::mpc::table_metadata(&em, &c, &cmd.params);
     meta.push((
@@ -431,18 +496,22 @@ impl fmt::Display for ClusterSummary {
 /// carries no poses, and every MPC of a position shares its pose's heading.
 pub fn pose_headings(mpcs: &[Mpc]) -> Vec<f64> {
     let np = mpcs.iter().map(|x| x.position + 1).max().unwrap_or(0);
-    (0..np)
-        .map(|p| {
-            mpcs.iter()
-                .find(|x| x.position == p)
-                .map(|x| x.angle_global_deg - x.angle_rel_deg)
-                .unwrap_or(0.0)
-        })
-        .collect()
+    let mut headings: Vec<Option<f64>> = vec![None; np];
+    for x in mpcs {
+        headings[x.position].get_or_insert(x.angle_global_deg - x.angle_rel_deg);
+    }
+    headings.into_iter().map(|h| h.unwrap_or(0.0)).collect()
 }
 
 /// Run `pradar cluster` ([`crate::cluster::cluster`]) and write both tables.
 pub fn cluster(cmd: &Cluster) -> Result<ClusterSummary> {
+    refuse(
+        &[
+            (cmd.out.clone(), "--out"),
+            (crate::cluster::summary_path(&cmd.out), "--out (its summary)"),
+        ],
+        &[(cmd.mpcs.clone(), "--mpcs")],
+    )?;
     let m = crate::mpc::read_mpcs(&cmd.mpcs)?;
     let sector = crate::mpc::read_sector_deg(&cmd.mpcs)?.unwrap_or(180.0);
     let params = cmd.params.sector_deg(sector);
@@ -522,14 +591,28 @@ impl fmt::Display for FitSummary {
 /// error and writes nothing.
 pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     let c = Campaign::load(&cmd.campaign)?;
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.push((cmd.clusters.clone(), "--clusters"));
+    if let Some(dir) = &cmd.truth {
+        inputs.push((dir.join("rays.parquet"), "--truth"));
+    }
+    refuse(
+        &[
+            (cmd.table.clone(), "--table"),
+            (cmd.table.with_extension("csv"), "--table (its CSV)"),
+            (cmd.out.clone(), "--out"),
+        ],
+        &inputs,
+    )?;
     let params = cmd.params.check()?;
     let fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
     let truth = match &cmd.truth {
         Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),
         None => None,
     };
-    fit.model.save(&cmd.out)?;
+    // the table first, the model last: a model file on disk means the run completed
     crate::fit::channel::write_table1(&cmd.table, &fit, truth.as_ref())?;
+    fit.model.save(&cmd.out)?;
     Ok(FitSummary { fit, truth })
 }
 
