@@ -11,6 +11,7 @@ pub mod energy;
 pub mod error;
 pub mod export;
 pub mod fit;
+pub mod fuzz;
 pub mod io;
 pub mod mapping;
 pub mod model;

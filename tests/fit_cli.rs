@@ -293,6 +293,6 @@ fn zero_bootstrap_is_one_clear_line() {
     let man = write_campaign(&tmp.path().join("in"), &corridor());
     let cl = tmp.path().join("clusters.parquet");
     // refused while the flags are parsed (src/cli/ranges.rs), before any file is read
-    let want = "'--bootstrap <BOOTSTRAP>': must be >= 1";
+    let want = "'--bootstrap <BOOTSTRAP>': must be in [40, 100000]";
     fit_fails_with_one_line(tmp.path(), &cl, &man, &["--bootstrap", "0"], want);
 }

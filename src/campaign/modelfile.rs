@@ -415,9 +415,13 @@ impl ModelConfig {
 
     /// Read a model file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = crate::io::read_text(path)?;
+        Self::from_str(&crate::io::read_text(path)?, path)
+    }
+
+    /// Parse and check model-file text that notionally lives at `path`.
+    pub fn from_str(text: &str, path: &Path) -> Result<Self> {
         let m: ModelConfig =
-            toml::from_str(&text).map_err(|e| Error::input(path, one_line(&e.to_string())))?;
+            toml::from_str(text).map_err(|e| Error::input(path, one_line(&e.to_string())))?;
         m.check().map_err(|e| Error::input(path, e.to_string()))?;
         Ok(m)
     }

@@ -751,7 +751,8 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
         }
         if let Some(c) = t.strip_prefix('!') {
             let c = c.trim_start();
-            if c.len() >= 14 && c[..14].eq_ignore_ascii_case("port impedance") {
+            // `get`: byte 14 may fall inside a character of a non-ASCII comment
+            if c.get(..14).is_some_and(|h| h.eq_ignore_ascii_case("port impedance")) {
                 let vals = hfss_block(&c[14..], &mut lines);
                 p.hfss_z0.push(vals);
             }

@@ -151,6 +151,12 @@ pub fn fit_truth(truth_dir: &Path, c: &Campaign, p: &FitValid) -> Result<Channel
     fit_rays(&path, rays, c, p)
 }
 
+/// Read and check a clustered MPC table as `fit` does (before any fitting); returns its
+/// number of discrete rays. The fuzz harness's entry for the cluster table.
+pub fn read_clustered(path: &Path) -> Result<usize> {
+    Ok(read_rays(path, false)?.len())
+}
+
 /// The rays of a clustered MPC table (`truth = false`: grouped by `cluster_id`, all ≥ 0)
 /// or of a truth `rays.parquet` (`truth = true`: grouped by `truth_cluster`, else
 /// `cluster_id` in files written before it; rows with −1 are dropped).

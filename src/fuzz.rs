@@ -1,0 +1,443 @@
+//! In-process fuzzing of the parsers on stable Rust: a harness per file kind a user gives
+//! pradar, a seeded mutator over committed seed inputs, and the run loop shared by
+//! `examples/fuzz.rs` (`scripts/fuzz N`: N executions per parser) and the bounded run of
+//! the test suite (`tests/fuzz.rs`).
+//!
+//! Targets ([`Target`]): Touchstone (`parse_touchstone`, under each of the extensions
+//! `.s2p`, `.s1p`, `.s3p`, `.s4p`, `.ts` until one accepts: v1 takes its port count from
+//! the extension), manifest (`Campaign::from_str`,
+//! with a layout beside it), layout (`Layout::from_geojson`), model file
+//! (`ModelConfig::from_str`), and the energy, MPC and clustered-MPC Parquet readers
+//! (`EnergyMatrix::read`, `read_mpcs` + `read_sector_deg`, `read_clustered`; the bytes are
+//! written to a scratch file first, as the readers take paths). An execution passes when
+//! the parser returns, `Ok` or `Err`; a panic is a failure, caught with `catch_unwind`
+//! and reported with its message (the process's panic hook is silenced while fuzzing).
+//!
+//! Mutations ([`Mutator`]): bit flips, interesting bytes (0, 0xff, 0x7f, 0x80), random
+//! insertions, deletions, duplicated ranges, truncation, splices with another seed and,
+//! for the text formats, a number replaced by an extreme one (`1e308`, `-1`, `nan`,
+//! `70000`, `1e-7`, …) — the values that found the panics and unbounded allocations of
+//! issue 20. One to four mutations are stacked per input. Everything is drawn from a
+//! ChaCha8 stream of the run's seed: a run is reproducible, and a failing input is
+//! written to the crash folder under its hash; committed to `fuzz/regressions/<target>/`
+//! it is replayed by every test run.
+//!
+//! No coverage feedback (that needs a nightly compiler or an external engine): the
+//! mutations are structure-aware enough to reach the checks of each format from its
+//! seeds, and the run counts executions, `Ok`s and `Err`s so a harness that only ever hits
+//! the first check shows up as 0 `Ok`s.
+
+use crate::error::Result;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+
+/// A parser under fuzz.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    /// Touchstone v1/v2 files.
+    Touchstone,
+    /// `campaign.toml`.
+    Manifest,
+    /// Layout GeoJSON.
+    Layout,
+    /// Model file (`fitted_model.toml`).
+    Model,
+    /// Energy Parquet table.
+    Energy,
+    /// MPC Parquet table.
+    Mpc,
+    /// Clustered MPC Parquet table.
+    Cluster,
+}
+
+impl Target {
+    /// Every target.
+    pub const ALL: [Target; 7] = [
+        Target::Touchstone,
+        Target::Manifest,
+        Target::Layout,
+        Target::Model,
+        Target::Energy,
+        Target::Mpc,
+        Target::Cluster,
+    ];
+
+    /// Name (seed and regression folder name, command-line name).
+    pub fn name(self) -> &'static str {
+        match self {
+            Target::Touchstone => "touchstone",
+            Target::Manifest => "manifest",
+            Target::Layout => "layout",
+            Target::Model => "model",
+            Target::Energy => "energy",
+            Target::Mpc => "mpc",
+            Target::Cluster => "cluster",
+        }
+    }
+
+    /// The target called `name`.
+    pub fn parse(name: &str) -> Option<Target> {
+        Target::ALL.into_iter().find(|t| t.name() == name)
+    }
+
+    /// Whether the format is text (number-token mutations apply).
+    pub fn is_text(self) -> bool {
+        matches!(
+            self,
+            Target::Touchstone | Target::Manifest | Target::Layout | Target::Model
+        )
+    }
+
+    /// The folders of committed seed inputs, relative to the repository root.
+    pub fn seed_dirs(self) -> Vec<&'static str> {
+        match self {
+            Target::Touchstone => vec!["data/touchstone", "data/touchstone/zoo"],
+            Target::Manifest => vec!["fuzz/seeds/manifest"],
+            Target::Layout => vec!["data/corridor", "data/tests"],
+            Target::Model => vec!["fuzz/seeds/model"],
+            Target::Energy => vec!["fuzz/seeds/energy"],
+            Target::Mpc => vec!["fuzz/seeds/mpc"],
+            Target::Cluster => vec!["fuzz/seeds/cluster"],
+        }
+    }
+
+    /// File extensions of its seeds.
+    fn extensions(self) -> &'static [&'static str] {
+        match self {
+            Target::Touchstone => &["s1p", "s2p", "s3p", "s4p", "ts"],
+            Target::Manifest | Target::Model => &["toml"],
+            Target::Layout => &["geojson"],
+            Target::Energy | Target::Mpc | Target::Cluster => &["parquet"],
+        }
+    }
+}
+
+/// Read every seed of `target` under the repository `root` (and, when present, its
+/// regression inputs in `fuzz/regressions/<target>/`), sorted by path.
+pub fn load_seeds(root: &Path, target: Target) -> Vec<(PathBuf, Vec<u8>)> {
+    let regressions = regression_dir(root, target);
+    let mut dirs: Vec<PathBuf> = target.seed_dirs().iter().map(|d| root.join(d)).collect();
+    dirs.push(regressions.clone());
+    let mut out = Vec::new();
+    for d in dirs {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        let mut paths: Vec<PathBuf> = entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.is_file())
+            .filter(|p| {
+                *d == regressions
+                    || p.extension()
+                        .and_then(|e| e.to_str())
+                        .is_some_and(|e| target.extensions().contains(&e))
+            })
+            .collect();
+        paths.sort();
+        for p in paths {
+            if let Ok(b) = std::fs::read(&p) {
+                out.push((p, b));
+            }
+        }
+    }
+    out
+}
+
+/// Where the failing inputs of `target` are kept as regression fixtures.
+pub fn regression_dir(root: &Path, target: Target) -> PathBuf {
+    root.join("fuzz/regressions").join(target.name())
+}
+
+/// A scratch folder for one harness: the layout the manifest target needs, and the file
+/// the Parquet targets write their input to.
+pub struct Scratch {
+    dir: PathBuf,
+}
+
+impl Scratch {
+    /// Prepare `dir` (created; a corridor-like rectangle `layout.geojson` is written).
+    pub fn new(dir: &Path) -> Result<Scratch> {
+        std::fs::create_dir_all(dir).map_err(|e| crate::error::Error::io(dir, e))?;
+        let layout = r#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+            "properties": {"role": "perimeter"}, "geometry": {"type": "Polygon",
+            "coordinates": [[[-1, -4], [11, -4], [11, 2], [-1, 2], [-1, -4]]]}}]}"#;
+        crate::io::write_bytes(&dir.join("layout.geojson"), layout.as_bytes())?;
+        Ok(Scratch {
+            dir: dir.to_path_buf(),
+        })
+    }
+}
+
+/// The outcome of one execution.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// The parser accepted the input.
+    Ok,
+    /// The parser refused it with an error (the message).
+    Err(String),
+    /// The parser panicked (the message).
+    Panic(String),
+}
+
+/// Run the parser of `target` on `bytes` (text formats decoded as the CLI decodes them).
+pub fn execute(target: Target, bytes: &[u8], scratch: &Scratch) -> Outcome {
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| parse(target, bytes, scratch)));
+    match r {
+        Ok(Ok(())) => Outcome::Ok,
+        Ok(Err(e)) => Outcome::Err(e.to_string()),
+        Err(p) => Outcome::Panic(
+            p.downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "non-string panic".into()),
+        ),
+    }
+}
+
+fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
+    let text = || String::from_utf8_lossy(bytes).into_owned();
+    match target {
+        Target::Touchstone => {
+            // a v1 file's port count comes from its extension: every one is tried
+            let decoded = crate::campaign::touchstone::decode(bytes);
+            let mut last = Ok(());
+            for ext in ["s2p", "s1p", "s3p", "s4p", "ts"] {
+                let p = scratch.dir.join(format!("fuzz.{ext}"));
+                last = crate::campaign::touchstone::parse_touchstone(&decoded, &p).map(|_| ());
+                if last.is_ok() {
+                    break;
+                }
+            }
+            last
+        }
+        Target::Manifest => {
+            let p = scratch.dir.join("campaign.toml");
+            crate::campaign::Campaign::from_str(&text(), &p).map(|_| ())
+        }
+        Target::Layout => {
+            let p = scratch.dir.join("fuzz.geojson");
+            crate::campaign::layout::Layout::from_geojson(&text(), &p).map(|_| ())
+        }
+        Target::Model => {
+            let p = scratch.dir.join("model.toml");
+            crate::campaign::modelfile::ModelConfig::from_str(&text(), &p).map(|_| ())
+        }
+        Target::Energy | Target::Mpc | Target::Cluster => {
+            let p = scratch.dir.join(format!("fuzz_{}.parquet", target.name()));
+            std::fs::write(&p, bytes).map_err(|e| crate::error::Error::io(&p, e))?;
+            match target {
+                Target::Energy => crate::energy::EnergyMatrix::read(&p).map(|_| ()),
+                Target::Mpc => {
+                    crate::mpc::read_sector_deg(&p)?;
+                    crate::mpc::read_mpcs(&p).map(|_| ())
+                }
+                _ => crate::fit::channel::read_clustered(&p).map(|_| ()),
+            }
+        }
+    }
+}
+
+/// Extreme numbers the text mutations put in place of a number.
+const EXTREMES: [&str; 16] = [
+    "0", "-1", "1", "1e308", "-1e308", "1e-7", "nan", "inf", "-0", "70000", "2e8",
+    "999999999", "1e12", "18446744073709551615", "4294967297", "0.5",
+];
+
+/// The seeded mutator.
+pub struct Mutator {
+    rng: ChaCha8Rng,
+}
+
+impl Mutator {
+    /// A mutator drawing from `seed`.
+    pub fn new(seed: u64) -> Mutator {
+        Mutator {
+            rng: ChaCha8Rng::seed_from_u64(seed),
+        }
+    }
+
+    /// A new input: one to four mutations of a seed drawn from `seeds`.
+    pub fn next(&mut self, seeds: &[Vec<u8>], text: bool) -> Vec<u8> {
+        let mut b = seeds[self.rng.gen_range(0..seeds.len())].clone();
+        let n = self.rng.gen_range(1..=4);
+        for _ in 0..n {
+            self.mutate(&mut b, seeds, text);
+        }
+        b
+    }
+
+    fn mutate(&mut self, b: &mut Vec<u8>, seeds: &[Vec<u8>], text: bool) {
+        let r = &mut self.rng;
+        if b.is_empty() {
+            b.push(r.gen());
+            return;
+        }
+        let ops = if text { 9 } else { 8 };
+        let len = b.len();
+        match r.gen_range(0..ops) {
+            0 => {
+                let i = r.gen_range(0..len);
+                b[i] ^= 1 << r.gen_range(0..8);
+            }
+            1 => {
+                let i = r.gen_range(0..len);
+                b[i] = [0u8, 0xff, 0x7f, 0x80, b'0', b'9', b'-', b'.'][r.gen_range(0..8)];
+            }
+            2 => {
+                let i = r.gen_range(0..=len);
+                let k = r.gen_range(1..=8);
+                let ins: Vec<u8> = (0..k).map(|_| r.gen()).collect();
+                b.splice(i..i, ins);
+            }
+            3 => {
+                let i = r.gen_range(0..len);
+                let k = r.gen_range(1..=(len - i).min(64));
+                b.drain(i..i + k);
+            }
+            4 => {
+                let i = r.gen_range(0..len);
+                let k = r.gen_range(1..=(len - i).min(64));
+                let dup: Vec<u8> = b[i..i + k].to_vec();
+                let at = r.gen_range(0..=len);
+                b.splice(at..at, dup);
+            }
+            5 => {
+                let at = r.gen_range(0..len);
+                b.truncate(at.max(1));
+            }
+            6 => {
+                let other = &seeds[r.gen_range(0..seeds.len())];
+                if !other.is_empty() {
+                    let i = r.gen_range(0..len);
+                    let j = r.gen_range(0..other.len());
+                    let k = r.gen_range(1..=(other.len() - j).min(256));
+                    let end = (i + k).min(len);
+                    b.splice(i..end, other[j..j + k].iter().copied());
+                }
+            }
+            7 => {
+                // a 4- or 8-byte little-endian integer field overwritten (Parquet lengths)
+                let w = if r.gen() { 4 } else { 8 };
+                if len >= w {
+                    let i = r.gen_range(0..=len - w);
+                    let v: u64 = [0, 1, u32::MAX as u64, u64::MAX, 1 << 31, r.gen()][r.gen_range(0..6)];
+                    b[i..i + w].copy_from_slice(&v.to_le_bytes()[..w]);
+                }
+            }
+            _ => {
+                // a number token replaced by an extreme value
+                let starts: Vec<usize> = (0..len)
+                    .filter(|&i| b[i].is_ascii_digit() && (i == 0 || !b[i - 1].is_ascii_alphanumeric()))
+                    .collect();
+                if starts.is_empty() {
+                    return;
+                }
+                let i = starts[r.gen_range(0..starts.len())];
+                let mut j = i;
+                while j < len && (b[j].is_ascii_digit() || b"._eE+-".contains(&b[j])) {
+                    j += 1;
+                }
+                let v = EXTREMES[r.gen_range(0..EXTREMES.len())];
+                b.splice(i..j, v.bytes());
+            }
+        }
+    }
+}
+
+/// Counts of a fuzz run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Stats {
+    /// Executions.
+    pub executions: u64,
+    /// Inputs accepted.
+    pub ok: u64,
+    /// Inputs refused with an error.
+    pub errors: u64,
+    /// Panics (each input saved to the crash folder).
+    pub panics: u64,
+    /// The first panic messages (at most 5).
+    pub panic_messages: Vec<String>,
+}
+
+/// Silence the panic hook (the harness reports panics itself); returns the previous hook.
+pub fn silence_panics() {
+    std::panic::set_hook(Box::new(|_| {}));
+}
+
+/// Run `target` on every seed as is, then on `iterations` mutated inputs drawn with
+/// `seed`; a panicking input is written to `crashes` (when given) as `<hash>.bin`.
+/// `progress` is called every 10 000 executions with the counts so far.
+pub fn run(
+    target: Target,
+    seeds: &[Vec<u8>],
+    iterations: u64,
+    seed: u64,
+    scratch: &Scratch,
+    crashes: Option<&Path>,
+    progress: &dyn Fn(&Stats),
+) -> Stats {
+    let mut stats = Stats::default();
+    let mut m = Mutator::new(seed ^ (target as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    let record = |stats: &mut Stats, input: &[u8], o: Outcome| {
+        stats.executions += 1;
+        match o {
+            Outcome::Ok => stats.ok += 1,
+            Outcome::Err(_) => stats.errors += 1,
+            Outcome::Panic(msg) => {
+                stats.panics += 1;
+                if stats.panic_messages.len() < 5 {
+                    stats.panic_messages.push(msg);
+                }
+                if let Some(dir) = crashes {
+                    use std::hash::{Hash, Hasher};
+                    let mut h = std::collections::hash_map::DefaultHasher::new();
+                    input.hash(&mut h);
+                    let _ = std::fs::create_dir_all(dir);
+                    let _ = std::fs::write(dir.join(format!("{:016x}.bin", h.finish())), input);
+                }
+            }
+        }
+        if stats.executions % 10_000 == 0 {
+            progress(stats);
+        }
+    };
+    for s in seeds {
+        let o = execute(target, s, scratch);
+        record(&mut stats, s, o);
+    }
+    if seeds.is_empty() {
+        return stats;
+    }
+    for _ in 0..iterations {
+        let input = m.next(seeds, target.is_text());
+        let o = execute(target, &input, scratch);
+        record(&mut stats, &input, o);
+    }
+    stats
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mutator_is_deterministic_and_changes_its_input() {
+        let seeds = vec![b"[band]\npoints = 801\n".to_vec()];
+        let a: Vec<Vec<u8>> = {
+            let mut m = Mutator::new(3);
+            (0..50).map(|_| m.next(&seeds, true)).collect()
+        };
+        let mut m = Mutator::new(3);
+        let b: Vec<Vec<u8>> = (0..50).map(|_| m.next(&seeds, true)).collect();
+        assert_eq!(a, b);
+        let changed = a.iter().filter(|x| **x != seeds[0]).count();
+        assert!(changed >= 45, "{changed} of 50 mutated");
+        // the number mutation reaches the extreme values
+        assert!(a.iter().any(|x| {
+            let s = String::from_utf8_lossy(x);
+            EXTREMES.iter().any(|e| s.contains(&format!("points = {e}\n")) && *e != "801")
+        }));
+    }
+}
