@@ -15,10 +15,18 @@ fn main() {
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
-            "--iterations" => iterations = args.next().and_then(|v| v.parse().ok()).expect("--iterations N"),
+            "--iterations" => {
+                iterations = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--iterations N")
+            }
             "--seed" => seed = args.next().and_then(|v| v.parse().ok()).expect("--seed S"),
             name => targets.push(Target::parse(name).unwrap_or_else(|| {
-                eprintln!("unknown target {name} (one of {:?})", Target::ALL.map(|t| t.name()));
+                eprintln!(
+                    "unknown target {name} (one of {:?})",
+                    Target::ALL.map(|t| t.name())
+                );
                 std::process::exit(2)
             })),
         }
@@ -35,11 +43,24 @@ fn main() {
         let seeds: Vec<Vec<u8>> = load_seeds(&root, t).into_iter().map(|(_, b)| b).collect();
         let crashes = root.join("fuzz/crashes").join(t.name());
         let start = std::time::Instant::now();
-        let s = run(t, &seeds, iterations, seed, &scratch, Some(&crashes), &|s| {
-            if s.executions % 100_000 == 0 {
-                eprintln!("  {} {} executions, {} panics", t.name(), s.executions, s.panics);
-            }
-        });
+        let s = run(
+            t,
+            &seeds,
+            iterations,
+            seed,
+            &scratch,
+            Some(&crashes),
+            &|s| {
+                if s.executions.is_multiple_of(100_000) {
+                    eprintln!(
+                        "  {} {} executions, {} panics",
+                        t.name(),
+                        s.executions,
+                        s.panics
+                    );
+                }
+            },
+        );
         println!(
             "{:<11} {} seeds, {} executions ({} accepted, {} refused), {} panics, {:.0} s",
             t.name(),

@@ -100,7 +100,9 @@ pub fn refuse_overwrite(outputs: &[(&Path, &str)], inputs: &[(&Path, &str)]) -> 
         if let Some((_, other)) = seen.iter().find(|(c, _)| *c == id) {
             return Err(Error::input(
                 out,
-                format!("given both as {other} and as {out_what}; the outputs must be different files"),
+                format!(
+                    "given both as {other} and as {out_what}; the outputs must be different files"
+                ),
             ));
         }
         seen.push((id, out_what));
@@ -170,15 +172,24 @@ mod tests {
         let e = refuse_overwrite(&[(&dotted, "--out")], &[(&input, "--campaign")])
             .unwrap_err()
             .to_string();
-        assert!(e.contains("is also the input --campaign") && e.contains("--out"), "{e}");
+        assert!(
+            e.contains("is also the input --campaign") && e.contains("--out"),
+            "{e}"
+        );
         // a new file beside it is fine, and so is a missing input
         let other = dir.path().join("energy.parquet");
         refuse_overwrite(&[(&other, "--out")], &[(&input, "--campaign")]).unwrap();
         refuse_overwrite(&[(&input, "--out")], &[(&other, "--energy")]).unwrap();
         // two outputs that are one file (not existing yet)
-        let e = refuse_overwrite(&[(&other, "--out"), (&sub.join("../energy.parquet"), "--table")], &[])
-            .unwrap_err()
-            .to_string();
+        let e = refuse_overwrite(
+            &[
+                (&other, "--out"),
+                (&sub.join("../energy.parquet"), "--table"),
+            ],
+            &[],
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("given both as --out and as --table"), "{e}");
         assert_eq!(fs::read_to_string(&input).unwrap(), "x");
     }

@@ -163,7 +163,10 @@ pub fn guarded<T>(path: &Path, read: impl FnOnce() -> PolarsResult<T>) -> Result
                 .unwrap_or_else(|| "unknown failure".into());
             Err(Error::table(
                 path,
-                format!("corrupt Parquet file (the reader failed: {})", what.replace('\n', " ")),
+                format!(
+                    "corrupt Parquet file (the reader failed: {})",
+                    what.replace('\n', " ")
+                ),
             ))
         }
     }

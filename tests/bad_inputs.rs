@@ -238,83 +238,492 @@ fn cases() -> Vec<Case> {
     const PAT: &str = "sweeps/p{position:03}_d{direction:02}_k{pulse:02}.s2p";
     vec![
         // ---- an output naming an input of the same run
-        case("energy --out = its manifest", &["energy", "--campaign", M, "--out", M], &[M, "input --campaign", "--out"], nothing),
-        case("energy --out = a sweep file", &["energy", "--campaign", M, "--out", "sim/sweeps/p000_d00_k00.s2p"], &["p000_d00_k00.s2p", "sweep file"], nothing),
-        case("energy --out = its layout", &["energy", "--campaign", M, "--out", "sim/layout.geojson"], &["sim/layout.geojson", "layout"], nothing),
-        case("extract --out = its energy", &["extract", "--energy", "e.parquet", "--campaign", M, "--out", "sim/../e.parquet"], &["e.parquet", "input --energy"], nothing),
-        case("cluster --out = its MPCs", &["cluster", "--mpcs", "m.parquet", "--out", "./m.parquet"], &["m.parquet", "input --mpcs"], nothing),
-        case("cluster summary = its MPCs", &["cluster", "--mpcs", "c_summary.parquet", "--out", "c.parquet"], &["c_summary.parquet", "--out (its summary)"], nothing),
-        case("fit --out = its clusters", &["fit", "--clusters", "c.parquet", "--campaign", M, "--out", "c.parquet", "--table", "t2.md"], &["c.parquet", "input --clusters"], nothing),
-        case("fit --out = --table", &["fit", "--clusters", "c.parquet", "--campaign", M, "--out", "x.md", "--table", "x.md"], &["x.md", "both as --table and as --out"], nothing),
-        case("fit --table = its manifest", &["fit", "--clusters", "c.parquet", "--campaign", M, "--out", "y.toml", "--table", M], &[M, "input --campaign"], nothing),
-        case("simulate into its own folder", &["simulate", "--campaign", "in/campaign.toml", "--out", "in"], &["in/campaign.toml", "input --campaign"], nothing),
-        case("synth --out = its model", &["synth", "--model", "model.toml", "--campaign", M, "--out", "model.toml"], &["model.toml", "input --model"], nothing),
-        case("synth --truth holds its model", &["synth", "--model", "model.toml", "--campaign", M, "--out", "s.parquet", "--truth", "."], &["model.toml", "input --model", "--truth"], nothing),
+        case(
+            "energy --out = its manifest",
+            &["energy", "--campaign", M, "--out", M],
+            &[M, "input --campaign", "--out"],
+            nothing,
+        ),
+        case(
+            "energy --out = a sweep file",
+            &[
+                "energy",
+                "--campaign",
+                M,
+                "--out",
+                "sim/sweeps/p000_d00_k00.s2p",
+            ],
+            &["p000_d00_k00.s2p", "sweep file"],
+            nothing,
+        ),
+        case(
+            "energy --out = its layout",
+            &["energy", "--campaign", M, "--out", "sim/layout.geojson"],
+            &["sim/layout.geojson", "layout"],
+            nothing,
+        ),
+        case(
+            "extract --out = its energy",
+            &[
+                "extract",
+                "--energy",
+                "e.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "sim/../e.parquet",
+            ],
+            &["e.parquet", "input --energy"],
+            nothing,
+        ),
+        case(
+            "cluster --out = its MPCs",
+            &["cluster", "--mpcs", "m.parquet", "--out", "./m.parquet"],
+            &["m.parquet", "input --mpcs"],
+            nothing,
+        ),
+        case(
+            "cluster summary = its MPCs",
+            &[
+                "cluster",
+                "--mpcs",
+                "c_summary.parquet",
+                "--out",
+                "c.parquet",
+            ],
+            &["c_summary.parquet", "--out (its summary)"],
+            nothing,
+        ),
+        case(
+            "fit --out = its clusters",
+            &[
+                "fit",
+                "--clusters",
+                "c.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "c.parquet",
+                "--table",
+                "t2.md",
+            ],
+            &["c.parquet", "input --clusters"],
+            nothing,
+        ),
+        case(
+            "fit --out = --table",
+            &[
+                "fit",
+                "--clusters",
+                "c.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "x.md",
+                "--table",
+                "x.md",
+            ],
+            &["x.md", "both as --table and as --out"],
+            nothing,
+        ),
+        case(
+            "fit --table = its manifest",
+            &[
+                "fit",
+                "--clusters",
+                "c.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "y.toml",
+                "--table",
+                M,
+            ],
+            &[M, "input --campaign"],
+            nothing,
+        ),
+        case(
+            "simulate into its own folder",
+            &["simulate", "--campaign", "in/campaign.toml", "--out", "in"],
+            &["in/campaign.toml", "input --campaign"],
+            nothing,
+        ),
+        case(
+            "synth --out = its model",
+            &[
+                "synth",
+                "--model",
+                "model.toml",
+                "--campaign",
+                M,
+                "--out",
+                "model.toml",
+            ],
+            &["model.toml", "input --model"],
+            nothing,
+        ),
+        case(
+            "synth --truth holds its model",
+            &[
+                "synth",
+                "--model",
+                "model.toml",
+                "--campaign",
+                M,
+                "--out",
+                "s.parquet",
+                "--truth",
+                ".",
+            ],
+            &["model.toml", "input --model", "--truth"],
+            nothing,
+        ),
         // ---- the manifest against the files
-        case("step 10° over 5° files", ENERGY, &[M, "[directions] gives 19 directions", "p000_d19_k00.s2p"], |d| toml_set(d, M, "directions.step_deg", 10.0)),
-        case("step not dividing the span", ENERGY, &[M, "directions.step_deg", "92"], |d| toml_set(d, M, "directions.step_deg", 7.0)),
-        case("pattern without placeholders", ENERGY, &[M, "sweeps.pattern", "{position}"], |d| edit(d, M, PAT, "sweeps/p000_d00_k00.s2p")),
-        case("pattern without {direction}", ENERGY, &[M, "sweeps.pattern", "{direction}"], |d| edit(d, M, PAT, "sweeps/p{position:03}_d00_k{pulse:02}.s2p")),
-        case("pattern width 70000", ENERGY, &[M, "sweeps.pattern", "70000"], |d| edit(d, M, "{position:03}", "{position:70000}")),
-        case("pattern unknown placeholder", ENERGY, &[M, "sweeps.pattern", "{pos}"], |d| edit(d, M, "{position:03}", "{pos}")),
-        case("duplicate files entries", ENERGY, &[M, "sweeps.files[1]", "sweeps.files[0]"], |d| {
-            edit(d, M, &format!("pattern = \"{PAT}\""), "files = [{ position = 0, direction = 0, path = \"sweeps/p000_d00_k00.s2p\" }, { position = 0, direction = 0, path = \"sweeps/p000_d01_k00.s2p\" }]")
-        }),
-        case("one file for two sweeps", ENERGY, &[M, "sweeps.files[1]", "already listed"], |d| {
-            edit(d, M, &format!("pattern = \"{PAT}\""), "files = [{ position = 0, direction = 0, path = \"sweeps/p000_d00_k00.s2p\" }, { position = 0, direction = 1, path = \"sweeps/p000_d00_k00.s2p\" }]")
-        }),
-        case("max_delay_ns 1e308", ENERGY, &[M, "processing.max_delay_ns"], |d| toml_set(d, M, "processing.max_delay_ns", 1e308)),
-        case("band.points 401 over 801-point files", ENERGY, &[M, "band.points = 401"], |d| toml_set(d, M, "band.points", 401)),
-        case("band.points 1601 over 801-point files", ENERGY, &["p000_d00_k00.s2p", "801 points", "[band] (1601 points"], |d| toml_set(d, M, "band.points", 1601)),
-        case("band.stop_hz off the files' grid", ENERGY, &["p000_d00_k00.s2p", "[band]"], |d| toml_set(d, M, "band.stop_hz", 64.0e9)),
-        case("pose outside the perimeter", ENERGY, &[M, "poses[1]", "not inside the perimeter"], |d| edit(d, M, "x_m = 0.905", "x_m = 20.0")),
+        case(
+            "step 10° over 5° files",
+            ENERGY,
+            &[M, "[directions] gives 19 directions", "p000_d19_k00.s2p"],
+            |d| toml_set(d, M, "directions.step_deg", 10.0),
+        ),
+        case(
+            "step not dividing the span",
+            ENERGY,
+            &[M, "directions.step_deg", "92"],
+            |d| toml_set(d, M, "directions.step_deg", 7.0),
+        ),
+        case(
+            "pattern without placeholders",
+            ENERGY,
+            &[M, "sweeps.pattern", "{position}"],
+            |d| edit(d, M, PAT, "sweeps/p000_d00_k00.s2p"),
+        ),
+        case(
+            "pattern without {direction}",
+            ENERGY,
+            &[M, "sweeps.pattern", "{direction}"],
+            |d| edit(d, M, PAT, "sweeps/p{position:03}_d00_k{pulse:02}.s2p"),
+        ),
+        case(
+            "pattern width 70000",
+            ENERGY,
+            &[M, "sweeps.pattern", "70000"],
+            |d| edit(d, M, "{position:03}", "{position:70000}"),
+        ),
+        case(
+            "pattern unknown placeholder",
+            ENERGY,
+            &[M, "sweeps.pattern", "{pos}"],
+            |d| edit(d, M, "{position:03}", "{pos}"),
+        ),
+        case(
+            "duplicate files entries",
+            ENERGY,
+            &[M, "sweeps.files[1]", "sweeps.files[0]"],
+            |d| {
+                edit(d, M, &format!("pattern = \"{PAT}\""), "files = [{ position = 0, direction = 0, path = \"sweeps/p000_d00_k00.s2p\" }, { position = 0, direction = 0, path = \"sweeps/p000_d01_k00.s2p\" }]")
+            },
+        ),
+        case(
+            "one file for two sweeps",
+            ENERGY,
+            &[M, "sweeps.files[1]", "already listed"],
+            |d| {
+                edit(d, M, &format!("pattern = \"{PAT}\""), "files = [{ position = 0, direction = 0, path = \"sweeps/p000_d00_k00.s2p\" }, { position = 0, direction = 1, path = \"sweeps/p000_d00_k00.s2p\" }]")
+            },
+        ),
+        case(
+            "max_delay_ns 1e308",
+            ENERGY,
+            &[M, "processing.max_delay_ns"],
+            |d| toml_set(d, M, "processing.max_delay_ns", 1e308),
+        ),
+        case(
+            "band.points 401 over 801-point files",
+            ENERGY,
+            &[M, "band.points = 401"],
+            |d| toml_set(d, M, "band.points", 401),
+        ),
+        case(
+            "band.points 1601 over 801-point files",
+            ENERGY,
+            &["p000_d00_k00.s2p", "801 points", "[band] (1601 points"],
+            |d| toml_set(d, M, "band.points", 1601),
+        ),
+        case(
+            "band.stop_hz off the files' grid",
+            ENERGY,
+            &["p000_d00_k00.s2p", "[band]"],
+            |d| toml_set(d, M, "band.stop_hz", 64.0e9),
+        ),
+        case(
+            "pose outside the perimeter",
+            ENERGY,
+            &[M, "poses[1]", "not inside the perimeter"],
+            |d| edit(d, M, "x_m = 0.905", "x_m = 20.0"),
+        ),
         // ---- sizes bounded before allocation
-        case("band.points 2e8", ENERGY, &[M, "band.points", "100001"], |d| toml_set(d, M, "band.points", 200_000_000)),
-        case("step_deg 1e-7", ENERGY, &[M, "directions.step_deg", "3601"], |d| toml_set(d, M, "directions.step_deg", 1e-7)),
-        case("pulses 1e12", ENERGY, &[M, "pulses", "1000"], |d| toml_set(d, M, "pulses", 1_000_000_000_000i64)),
-        case("oversample 999999999", ENERGY, &[M, "processing.oversample", "65"], |d| toml_set(d, M, "processing.oversample", 999_999_999)),
-        case("pose at 1e7 m", ENERGY, &[M, "poses[0]", "10000"], |d| edit(d, M, "x_m = 0.5", "x_m = 1e7")),
-        case("k-max 100000", &["cluster", "--mpcs", "m.parquet", "--out", "c2.parquet", "--k-max", "100000"], &["--k-max", "[1, 64]"], nothing),
-        case("MPC position 1e9", CLUSTER, &["m.parquet", "column `position`", "1000000000"], |d| parquet_edit(d, "m.parquet", |df| set_cell(df, "position", 0, 1e9))),
-        case("energy index 1e9", EXTRACT, &["e.parquet", "rows but"], |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "bin", 5, 1e9))),
-        case("one 1e300 energy bin", EXTRACT, &["e.parquet", "column `energy`", "1e300"], |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "energy", 7, 1e300))),
-        // ---- layout geometry
-        case("self-intersecting perimeter", ENERGY, &["sim/layout.geojson", "features[0]", "not a simple polygon"], |d| layout(d, "[[[-1,-1],[10,1],[10,-1],[-1,1],[-1,-1]]]")),
-        case("zero-area perimeter", ENERGY, &["sim/layout.geojson", "features[0]"], |d| layout(d, "[[[-1,-1],[4,-1],[10,-1],[-1,-1]]]")),
-        case("perimeter with a hole", ENERGY, &["sim/layout.geojson", "features[0]", "hole"], |d| layout(d, "[[[-2,-2],[11,-2],[11,2],[-2,2],[-2,-2]],[[4,0],[5,0],[5,0.5],[4,0.5],[4,0]]]")),
-        case("one-coordinate position", ENERGY, &["sim/layout.geojson", "coordinates[0][1]", "2 numbers"], |d| layout(d, "[[[-2,-2],[11],[11,2],[-2,2],[-2,-2]]]")),
-        case("vertex at 1e7 m", ENERGY, &["sim/layout.geojson", "features[0]", "beyond"], |d| layout(d, "[[[-2,-2],[1e7,-2],[1e7,2],[-2,2],[-2,-2]]]")),
-        case("layout not GeoJSON", ENERGY, &["sim/layout.geojson", "not valid GeoJSON"], |d| std::fs::write(d.join("sim/layout.geojson"), "{ nope").unwrap()),
-        // ---- model files
-        case("misspelt family", SYNTH, &["model.toml", "family", "weibul"], |d| edit(d, "model.toml", "family = \"poisson\"", "family = \"weibul\"")),
-        case("cluster_rrcs 1e308", SYNTH, &["model.toml", "cluster_rrcs.value"], |d| toml_set(d, "model.toml", "cluster_rrcs.value", 1e308)),
-        case("rays_per_cluster 1e9", SYNTH, &["model.toml", "rays_per_cluster.value"], |d| toml_set(d, "model.toml", "rays_per_cluster.value", 1e9)),
-        case("rays_per_cluster 1e308", SYNTH, &["model.toml", "rays_per_cluster.value"], |d| toml_set(d, "model.toml", "rays_per_cluster.value", 1e308)),
-        case("perimeter_spacing 1e-9 m", SYNTH, &["model.toml", "perimeter_spacing.value"], |d| toml_set(d, "model.toml", "perimeter_spacing.value", 1e-9)),
-        case("NaN value", SYNTH, &["model.toml", "ray_decay.value"], |d| toml_set(d, "model.toml", "ray_decay.value", f64::NAN)),
-        case("ks_p 2", SYNTH, &["model.toml", "ray_decay.ks_p"], |d| toml_set(d, "model.toml", "ray_decay.ks_p", 2.0)),
-        case("model not TOML", SYNTH, &["model.toml"], |d| std::fs::write(d.join("model.toml"), "value = [").unwrap()),
-        // ---- flags
-        case("bootstrap 0", &["fit", "--clusters", "c.parquet", "--campaign", M, "--out", "o.toml", "--table", "o.md", "--bootstrap", "0"], &["--bootstrap", "[40, 100000]"], nothing),
-        case("bootstrap 1", &["fit", "--clusters", "c.parquet", "--campaign", M, "--out", "o.toml", "--table", "o.md", "--bootstrap", "1"], &["--bootstrap", "[40, 100000]"], nothing),
-        // ---- corrupt Parquet
-        case("truncated energy table", EXTRACT, &["e.parquet"], |d| corrupt(d, "e.parquet", -100, None)),
-        case("energy footer zeroed", EXTRACT, &["e.parquet"], |d| corrupt(d, "e.parquet", -12, Some(&[0; 8]))),
-        case("MPC table magic broken", CLUSTER, &["m.parquet"], |d| corrupt(d, "m.parquet", -4, Some(b"XXXX"))),
-        case("clusters table truncated", FIT, &["c.parquet"], |d| corrupt(d, "c.parquet", 4000, None)),
-        case("MPC table empty file", CLUSTER, &["m.parquet"], |d| std::fs::write(d.join("m.parquet"), b"").unwrap()),
-        case("energy table is a TOML file", &["extract", "--energy", M, "--campaign", M, "--out", "m2.parquet"], &[M], nothing),
-        // ---- messages naming the user's file
-        case("energy of another campaign", EXTRACT, &["e.parquet", "campaign sim/campaign.toml has"], |d| edit(d, M, "heading_deg = 0.0", "heading_deg = 10.0")),
-        case("energy table without a noise level", EXTRACT, &["e.parquet", "metadata `n0`"], |d| {
-            let p = d.join("e.parquet");
-            let mut meta = pradar::table::parquet_metadata(&p).unwrap();
-            meta.iter_mut().filter(|(k, _)| k == "n0").for_each(|(_, v)| *v = "0".into());
-            let df = pradar::table::read_parquet(&p, None).unwrap();
-            pradar::table::write_parquet(&p, &df, meta).unwrap();
+        case(
+            "band.points 2e8",
+            ENERGY,
+            &[M, "band.points", "100001"],
+            |d| toml_set(d, M, "band.points", 200_000_000),
+        ),
+        case(
+            "step_deg 1e-7",
+            ENERGY,
+            &[M, "directions.step_deg", "3601"],
+            |d| toml_set(d, M, "directions.step_deg", 1e-7),
+        ),
+        case("pulses 1e12", ENERGY, &[M, "pulses", "1000"], |d| {
+            toml_set(d, M, "pulses", 1_000_000_000_000i64)
         }),
-        case("output folder missing", &["extract", "--energy", "e.parquet", "--campaign", M, "--out", "/proc/none/m.parquet"], &["/proc/none"], nothing),
-        case("missing manifest", &["energy", "--campaign", "nowhere.toml", "--out", "e2.parquet"], &["nowhere.toml"], nothing),
+        case(
+            "oversample 999999999",
+            ENERGY,
+            &[M, "processing.oversample", "65"],
+            |d| toml_set(d, M, "processing.oversample", 999_999_999),
+        ),
+        case("pose at 1e7 m", ENERGY, &[M, "poses[0]", "10000"], |d| {
+            edit(d, M, "x_m = 0.5", "x_m = 1e7")
+        }),
+        case(
+            "k-max 100000",
+            &[
+                "cluster",
+                "--mpcs",
+                "m.parquet",
+                "--out",
+                "c2.parquet",
+                "--k-max",
+                "100000",
+            ],
+            &["--k-max", "[1, 64]"],
+            nothing,
+        ),
+        case(
+            "MPC position 1e9",
+            CLUSTER,
+            &["m.parquet", "column `position`", "1000000000"],
+            |d| parquet_edit(d, "m.parquet", |df| set_cell(df, "position", 0, 1e9)),
+        ),
+        case(
+            "energy index 1e9",
+            EXTRACT,
+            &["e.parquet", "rows but"],
+            |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "bin", 5, 1e9)),
+        ),
+        case(
+            "one 1e300 energy bin",
+            EXTRACT,
+            &["e.parquet", "column `energy`", "1e300"],
+            |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "energy", 7, 1e300)),
+        ),
+        // ---- layout geometry
+        case(
+            "self-intersecting perimeter",
+            ENERGY,
+            &["sim/layout.geojson", "features[0]", "not a simple polygon"],
+            |d| layout(d, "[[[-1,-1],[10,1],[10,-1],[-1,1],[-1,-1]]]"),
+        ),
+        case(
+            "zero-area perimeter",
+            ENERGY,
+            &["sim/layout.geojson", "features[0]"],
+            |d| layout(d, "[[[-1,-1],[4,-1],[10,-1],[-1,-1]]]"),
+        ),
+        case(
+            "perimeter with a hole",
+            ENERGY,
+            &["sim/layout.geojson", "features[0]", "hole"],
+            |d| {
+                layout(
+                    d,
+                    "[[[-2,-2],[11,-2],[11,2],[-2,2],[-2,-2]],[[4,0],[5,0],[5,0.5],[4,0.5],[4,0]]]",
+                )
+            },
+        ),
+        case(
+            "one-coordinate position",
+            ENERGY,
+            &["sim/layout.geojson", "coordinates[0][1]", "2 numbers"],
+            |d| layout(d, "[[[-2,-2],[11],[11,2],[-2,2],[-2,-2]]]"),
+        ),
+        case(
+            "vertex at 1e7 m",
+            ENERGY,
+            &["sim/layout.geojson", "features[0]", "beyond"],
+            |d| layout(d, "[[[-2,-2],[1e7,-2],[1e7,2],[-2,2],[-2,-2]]]"),
+        ),
+        case(
+            "layout not GeoJSON",
+            ENERGY,
+            &["sim/layout.geojson", "not valid GeoJSON"],
+            |d| std::fs::write(d.join("sim/layout.geojson"), "{ nope").unwrap(),
+        ),
+        // ---- model files
+        case(
+            "misspelt family",
+            SYNTH,
+            &["model.toml", "family", "weibul"],
+            |d| {
+                edit(
+                    d,
+                    "model.toml",
+                    "family = \"poisson\"",
+                    "family = \"weibul\"",
+                )
+            },
+        ),
+        case(
+            "cluster_rrcs 1e308",
+            SYNTH,
+            &["model.toml", "cluster_rrcs.value"],
+            |d| toml_set(d, "model.toml", "cluster_rrcs.value", 1e308),
+        ),
+        case(
+            "rays_per_cluster 1e9",
+            SYNTH,
+            &["model.toml", "rays_per_cluster.value"],
+            |d| toml_set(d, "model.toml", "rays_per_cluster.value", 1e9),
+        ),
+        case(
+            "rays_per_cluster 1e308",
+            SYNTH,
+            &["model.toml", "rays_per_cluster.value"],
+            |d| toml_set(d, "model.toml", "rays_per_cluster.value", 1e308),
+        ),
+        case(
+            "perimeter_spacing 1e-9 m",
+            SYNTH,
+            &["model.toml", "perimeter_spacing.value"],
+            |d| toml_set(d, "model.toml", "perimeter_spacing.value", 1e-9),
+        ),
+        case(
+            "NaN value",
+            SYNTH,
+            &["model.toml", "ray_decay.value"],
+            |d| toml_set(d, "model.toml", "ray_decay.value", f64::NAN),
+        ),
+        case("ks_p 2", SYNTH, &["model.toml", "ray_decay.ks_p"], |d| {
+            toml_set(d, "model.toml", "ray_decay.ks_p", 2.0)
+        }),
+        case("model not TOML", SYNTH, &["model.toml"], |d| {
+            std::fs::write(d.join("model.toml"), "value = [").unwrap()
+        }),
+        // ---- flags
+        case(
+            "bootstrap 0",
+            &[
+                "fit",
+                "--clusters",
+                "c.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "o.toml",
+                "--table",
+                "o.md",
+                "--bootstrap",
+                "0",
+            ],
+            &["--bootstrap", "[40, 100000]"],
+            nothing,
+        ),
+        case(
+            "bootstrap 1",
+            &[
+                "fit",
+                "--clusters",
+                "c.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "o.toml",
+                "--table",
+                "o.md",
+                "--bootstrap",
+                "1",
+            ],
+            &["--bootstrap", "[40, 100000]"],
+            nothing,
+        ),
+        // ---- corrupt Parquet
+        case("truncated energy table", EXTRACT, &["e.parquet"], |d| {
+            corrupt(d, "e.parquet", -100, None)
+        }),
+        case("energy footer zeroed", EXTRACT, &["e.parquet"], |d| {
+            corrupt(d, "e.parquet", -12, Some(&[0; 8]))
+        }),
+        case("MPC table magic broken", CLUSTER, &["m.parquet"], |d| {
+            corrupt(d, "m.parquet", -4, Some(b"XXXX"))
+        }),
+        case("clusters table truncated", FIT, &["c.parquet"], |d| {
+            corrupt(d, "c.parquet", 4000, None)
+        }),
+        case("MPC table empty file", CLUSTER, &["m.parquet"], |d| {
+            std::fs::write(d.join("m.parquet"), b"").unwrap()
+        }),
+        case(
+            "energy table is a TOML file",
+            &[
+                "extract",
+                "--energy",
+                M,
+                "--campaign",
+                M,
+                "--out",
+                "m2.parquet",
+            ],
+            &[M],
+            nothing,
+        ),
+        // ---- messages naming the user's file
+        case(
+            "energy of another campaign",
+            EXTRACT,
+            &["e.parquet", "campaign sim/campaign.toml has"],
+            |d| edit(d, M, "heading_deg = 0.0", "heading_deg = 10.0"),
+        ),
+        case(
+            "energy table without a noise level",
+            EXTRACT,
+            &["e.parquet", "metadata `n0`"],
+            |d| {
+                let p = d.join("e.parquet");
+                let mut meta = pradar::table::parquet_metadata(&p).unwrap();
+                meta.iter_mut()
+                    .filter(|(k, _)| k == "n0")
+                    .for_each(|(_, v)| *v = "0".into());
+                let df = pradar::table::read_parquet(&p, None).unwrap();
+                pradar::table::write_parquet(&p, &df, meta).unwrap();
+            },
+        ),
+        case(
+            "output folder missing",
+            &[
+                "extract",
+                "--energy",
+                "e.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "/proc/none/m.parquet",
+            ],
+            &["/proc/none"],
+            nothing,
+        ),
+        case(
+            "missing manifest",
+            &[
+                "energy",
+                "--campaign",
+                "nowhere.toml",
+                "--out",
+                "e2.parquet",
+            ],
+            &["nowhere.toml"],
+            nothing,
+        ),
     ]
 }
 

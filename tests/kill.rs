@@ -25,7 +25,8 @@ fn contents(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
                 }
                 if p.extension().is_some_and(|e| e == "json") {
                     let text = String::from_utf8_lossy(&b);
-                    let kept: Vec<&str> = text.lines().filter(|l| !l.contains("seconds\":")).collect();
+                    let kept: Vec<&str> =
+                        text.lines().filter(|l| !l.contains("seconds\":")).collect();
                     b = kept.join("\n").into_bytes();
                 }
                 out.insert(p.strip_prefix(root).unwrap().to_path_buf(), b);
@@ -116,7 +117,10 @@ fn kill_and_rerun(
         let differ: Vec<_> = (now.keys().chain(reference.keys()))
             .filter(|p| now.get(*p) != reference.get(*p))
             .collect();
-        assert!(differ.is_empty(), "kill {k} after {delay:?}: {differ:?} differ");
+        assert!(
+            differ.is_empty(),
+            "kill {k} after {delay:?}: {differ:?} differ"
+        );
     }
 }
 

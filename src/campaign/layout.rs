@@ -238,7 +238,8 @@ fn check_polygon(poly: &Polygon<f64>, path: &Path, i: usize) -> Result<()> {
     if let Some(e) = poly.validation_errors().into_iter().next() {
         return Err(at(format!("not a simple polygon ({e})")));
     }
-    if !(poly.unsigned_area() > 1e-6) {
+    let area = poly.unsigned_area();
+    if area.is_nan() || area <= 1e-6 {
         return Err(at("polygon of zero area".into()));
     }
     Ok(())

@@ -595,12 +595,7 @@ impl Manifest {
                         ));
                     }
                     if let Some(p) = &s.pattern {
-                        check_pattern(
-                            p,
-                            self.poses.len(),
-                            self.directions.count(),
-                            self.pulses,
-                        )?;
+                        check_pattern(p, self.poses.len(), self.directions.count(), self.pulses)?;
                     }
                     self.check_files(&s.files)?;
                 }
@@ -658,7 +653,12 @@ impl Manifest {
 /// A sweep-name template names only `{position}`, `{direction}` and `{pulse}` (widths up
 /// to [`limits::MAX_PATTERN_WIDTH`]) and varies with every index that takes more than one
 /// value: a template without `{direction}` over 37 directions would read one file 37 times.
-pub fn check_pattern(pattern: &str, positions: usize, directions: usize, pulses: usize) -> Result<()> {
+pub fn check_pattern(
+    pattern: &str,
+    positions: usize,
+    directions: usize,
+    pulses: usize,
+) -> Result<()> {
     let field = "sweeps.pattern";
     let mut names = Vec::new();
     let mut rest = pattern;

@@ -239,7 +239,11 @@ impl ModelConfig {
             if !FAMILIES.contains(&v.family.as_str()) {
                 return Err(Error::param(
                     format!("{name}.family"),
-                    format!("unknown family `{}` (one of {})", v.family, FAMILIES.join(", ")),
+                    format!(
+                        "unknown family `{}` (one of {})",
+                        v.family,
+                        FAMILIES.join(", ")
+                    ),
                 ));
             }
             check_diagnostics(name, v)?;

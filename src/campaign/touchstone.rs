@@ -752,7 +752,9 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
         if let Some(c) = t.strip_prefix('!') {
             let c = c.trim_start();
             // `get`: byte 14 may fall inside a character of a non-ASCII comment
-            if c.get(..14).is_some_and(|h| h.eq_ignore_ascii_case("port impedance")) {
+            if c.get(..14)
+                .is_some_and(|h| h.eq_ignore_ascii_case("port impedance"))
+            {
                 let vals = hfss_block(&c[14..], &mut lines);
                 p.hfss_z0.push(vals);
             }

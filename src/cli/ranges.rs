@@ -35,7 +35,12 @@ fn whole_in(s: &str, lo: usize, hi: usize, why: &str) -> Result<usize, String> {
 
 /// `--k-max`: in [1, 64] (`ClusterParams` k_max, [`pradar::cluster::params::MAX_K`]).
 pub fn k_max(s: &str) -> Result<usize, String> {
-    whole_in(s, 1, pradar::cluster::params::MAX_K, "the search over K costs K^2.3")
+    whole_in(
+        s,
+        1,
+        pradar::cluster::params::MAX_K,
+        "the search over K costs K^2.3",
+    )
 }
 
 /// `--bootstrap`: in [40, 100000] (`FitParams` bootstrap).

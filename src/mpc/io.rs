@@ -4,8 +4,8 @@
 //! `bin`, `component` read as NaN, 0, 0, discrete; `wall_unit_db`, `incidence_deg` are NaN
 //! for an MPC on no wall curve).
 
-use crate::campaign::manifest::limits::MAX_POSITIONS;
 use super::{Component, ExtractParams, Mpc, WallCell};
+use crate::campaign::manifest::limits::MAX_POSITIONS;
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};

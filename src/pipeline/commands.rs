@@ -508,7 +508,10 @@ pub fn cluster(cmd: &Cluster) -> Result<ClusterSummary> {
     refuse(
         &[
             (cmd.out.clone(), "--out"),
-            (crate::cluster::summary_path(&cmd.out), "--out (its summary)"),
+            (
+                crate::cluster::summary_path(&cmd.out),
+                "--out (its summary)",
+            ),
         ],
         &[(cmd.mpcs.clone(), "--mpcs")],
     )?;
