@@ -22,6 +22,11 @@
 //! written to the crash folder under its hash; committed to `fuzz/regressions/<target>/`
 //! it is replayed by every test run.
 //!
+//! A Parquet input can also make polars *abort* (an allocation of billions of bytes sized
+//! from a corrupt footer, which no `catch_unwind` catches). The driver therefore runs each
+//! target in a child process and, when the child dies, saves the input it was running
+//! (the scratch file), counts an abort and resumes the same stream after it ([`Drive`]).
+//!
 //! No coverage feedback (that needs a nightly compiler or an external engine): the
 //! mutations are structure-aware enough to reach the checks of each format from its
 //! seeds, and the run counts executions, `Ok`s and `Err`s so a harness that only ever hits
@@ -227,7 +232,7 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
             crate::campaign::modelfile::ModelConfig::from_str(&text(), &p).map(|_| ())
         }
         Target::Energy | Target::Mpc | Target::Cluster => {
-            let p = scratch.dir.join(format!("fuzz_{}.parquet", target.name()));
+            let p = parquet_input(&scratch.dir, target);
             std::fs::write(&p, bytes).map_err(|e| crate::error::Error::io(&p, e))?;
             match target {
                 Target::Energy => crate::energy::EnergyMatrix::read(&p).map(|_| ()),
@@ -385,9 +390,20 @@ pub fn silence_panics() {
     std::panic::set_hook(Box::new(|_| {}));
 }
 
+/// How a fuzz run is driven: skip the first `skip` executions (their inputs are drawn
+/// but not run: a run resumed after an abort continues the same stream), `mark` called
+/// with each execution's index before it runs, `progress` every 1000 executions.
+pub struct Drive<'a> {
+    /// Executions to skip.
+    pub skip: u64,
+    /// Called with the index of each execution before it runs.
+    pub mark: &'a dyn Fn(u64),
+    /// Called every 1000 executions with the counts so far.
+    pub progress: &'a dyn Fn(&Stats),
+}
+
 /// Run `target` on every seed as is, then on `iterations` mutated inputs drawn with
 /// `seed`; a panicking input is written to `crashes` (when given) as `<hash>.bin`.
-/// `progress` is called every 10 000 executions with the counts so far.
 pub fn run(
     target: Target,
     seeds: &[Vec<u8>],
@@ -395,11 +411,19 @@ pub fn run(
     seed: u64,
     scratch: &Scratch,
     crashes: Option<&Path>,
-    progress: &dyn Fn(&Stats),
+    drive: &Drive,
 ) -> Stats {
     let mut stats = Stats::default();
     let mut m = Mutator::new(seed ^ (target as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-    let record = |stats: &mut Stats, input: &[u8], o: Outcome| {
+    let mut index = 0u64;
+    let mut exec = |stats: &mut Stats, input: &[u8]| {
+        let i = index;
+        index += 1;
+        if i < drive.skip {
+            return;
+        }
+        (drive.mark)(i);
+        let o = execute(target, input, scratch);
         stats.executions += 1;
         match o {
             Outcome::Ok => stats.ok += 1,
@@ -410,31 +434,42 @@ pub fn run(
                     stats.panic_messages.push(msg);
                 }
                 if let Some(dir) = crashes {
-                    use std::hash::{Hash, Hasher};
-                    let mut h = std::collections::hash_map::DefaultHasher::new();
-                    input.hash(&mut h);
-                    let _ = std::fs::create_dir_all(dir);
-                    let _ = std::fs::write(dir.join(format!("{:016x}.bin", h.finish())), input);
+                    save_crash(dir, input);
                 }
             }
         }
-        if stats.executions.is_multiple_of(10_000) {
-            progress(stats);
+        if stats.executions.is_multiple_of(1000) {
+            (drive.progress)(stats);
         }
     };
     for s in seeds {
-        let o = execute(target, s, scratch);
-        record(&mut stats, s, o);
+        exec(&mut stats, s);
     }
     if seeds.is_empty() {
         return stats;
     }
     for _ in 0..iterations {
         let input = m.next(seeds, target.is_text());
-        let o = execute(target, &input, scratch);
-        record(&mut stats, &input, o);
+        exec(&mut stats, &input);
     }
     stats
+}
+
+/// Save a failing input to `dir` as `<hash>.bin`; returns its path.
+pub fn save_crash(dir: &Path, input: &[u8]) -> PathBuf {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    input.hash(&mut h);
+    let _ = std::fs::create_dir_all(dir);
+    let p = dir.join(format!("{:016x}.bin", h.finish()));
+    let _ = std::fs::write(&p, input);
+    p
+}
+
+/// The scratch file a Parquet target's current input is written to (after an abort it
+/// holds the input that caused it).
+pub fn parquet_input(scratch_dir: &Path, target: Target) -> PathBuf {
+    scratch_dir.join(format!("fuzz_{}.parquet", target.name()))
 }
 
 #[cfg(test)]

@@ -191,8 +191,65 @@ pub fn check_frame(path: &Path, df: &DataFrame) -> Result<()> {
     Ok(())
 }
 
-/// Read a Parquet file (optionally a row slice `(offset, len)`), guarded and checked.
+/// Largest ratio of a page's uncompressed to compressed size accepted (zstd and LZ4 reach
+/// a few hundred on constant data; a corrupt header claims billions).
+const MAX_PAGE_EXPANSION: usize = 4096;
+
+/// Walk every page header of a Parquet file (memory-mapped: nothing is decoded or copied)
+/// and refuse counts the decoder would trust for its allocations: a data page's
+/// `num_values` above its row group's row count (a negative count reads as about 2^64 and
+/// made polars abort on a 2^61-byte allocation), or an uncompressed size more than
+/// [`MAX_PAGE_EXPANSION`] times the compressed one. Such an allocation failure aborts
+/// the process, which [`guarded`] cannot catch; this check runs before it.
+pub fn check_pages(path: &Path) -> Result<()> {
+    use polars_parquet::parquet::page::CompressedPage;
+    use polars_parquet::parquet::read::{get_page_iterator, read_metadata};
+    use std::io::Cursor;
+    let file = open(path)?;
+    // SAFETY: a read-only map of a file this run only reads; a file truncated by another
+    // process meanwhile is outside what any reader can defend against.
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+    let size = map.len();
+    let buf = polars_buffer::Buffer::from_owner(map);
+    let bad = |msg: String| Error::table(path, format!("corrupt Parquet file ({msg})"));
+    let md = guarded(path, || {
+        read_metadata(&mut Cursor::new(buf.clone())).map_err(PolarsError::from)
+    })?;
+    for (g, rg) in md.row_groups.iter().enumerate() {
+        let rows = rg.num_rows();
+        for (c, col) in rg.parquet_columns().iter().enumerate() {
+            let pages = guarded(path, || {
+                get_page_iterator(col, Cursor::new(buf.clone()), Vec::new(), size)
+                    .map_err(PolarsError::from)
+            })?;
+            for page in pages {
+                let page = page.map_err(|e| Error::table(path, PolarsError::from(e)))?;
+                // (a dictionary page's sizes are not exposed by polars-parquet: unchecked)
+                let CompressedPage::Data(p) = &page else {
+                    continue;
+                };
+                let (n, compressed, uncompressed) =
+                    (p.num_values(), p.compressed_size(), p.uncompressed_size());
+                if n > rows {
+                    return Err(bad(format!(
+                        "row group {g} column {c}: a page of {n} values in a group of {rows} rows"
+                    )));
+                }
+                if uncompressed > compressed.max(1).saturating_mul(MAX_PAGE_EXPANSION) {
+                    return Err(bad(format!(
+                        "row group {g} column {c}: a page of {compressed} bytes claims {uncompressed} uncompressed"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Read a Parquet file (optionally a row slice `(offset, len)`), guarded and checked
+/// ([`check_pages`] first).
 pub fn read_parquet(path: &Path, slice: Option<(usize, usize)>) -> Result<DataFrame> {
+    check_pages(path)?;
     let file = open(path)?;
     let df = guarded(path, || ParquetReader::new(file).with_slice(slice).finish())?;
     check_frame(path, &df)?;

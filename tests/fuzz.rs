@@ -5,7 +5,7 @@
 //! be errors naming the scratch file.
 
 use crate::common::root;
-use pradar::fuzz::{execute, load_seeds, regression_dir, run, Outcome, Scratch, Target};
+use pradar::fuzz::{execute, load_seeds, regression_dir, run, Drive, Outcome, Scratch, Target};
 
 #[test]
 fn every_parser_survives_its_seeds_regressions_and_2000_mutations() {
@@ -23,7 +23,12 @@ fn every_parser_survives_its_seeds_regressions_and_2000_mutations() {
             }
         }
         let inputs: Vec<Vec<u8>> = seeds.into_iter().map(|(_, b)| b).collect();
-        let s = run(t, &inputs, 2000, 7, &scratch, None, &|_| {});
+        let drive = Drive {
+            skip: 0,
+            mark: &|_| {},
+            progress: &|_| {},
+        };
+        let s = run(t, &inputs, 2000, 7, &scratch, None, &drive);
         assert_eq!(s.panics, 0, "{}: {:?}", t.name(), s.panic_messages);
         assert_eq!(s.executions, 2000 + inputs.len() as u64);
         assert!(s.errors > 0, "{}: no mutation was refused", t.name());

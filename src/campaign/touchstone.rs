@@ -217,8 +217,16 @@ pub fn decode(bytes: &[u8]) -> Cow<'_, str> {
 pub fn ports_from_name(path: &Path) -> Option<usize> {
     let ext = path.extension()?.to_str()?.to_ascii_lowercase();
     let digits = ext.strip_prefix('s')?.strip_suffix('p')?;
-    digits.parse().ok().filter(|&n| n >= 1)
+    digits
+        .parse()
+        .ok()
+        .filter(|&n| (1..=MAX_PORTS).contains(&n))
 }
+
+/// Most ports of a Touchstone network: a point holds 2·n² numbers, so the port count
+/// bounds every buffer the reader sizes from it (a corrupt `[Number of Ports]` asked for
+/// 3·10^17 bytes).
+pub const MAX_PORTS: usize = 1000;
 
 fn unit_scale(tok: &str) -> Option<f64> {
     match tok.to_ascii_lowercase().as_str() {
@@ -384,6 +392,9 @@ impl<'a> Parser<'a> {
         }
         if n == 0 {
             return Err(self.err(lineno, "[Number of Ports] must be at least 1"));
+        }
+        if n > MAX_PORTS {
+            return Err(self.err(lineno, format!("[Number of Ports] {n} exceeds {MAX_PORTS}")));
         }
         self.ports = Some(n);
         Ok(())
