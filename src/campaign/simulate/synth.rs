@@ -27,6 +27,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// The frequency grid of one sweep and the pattern's knot segments on it.
 struct Grid {
@@ -184,7 +185,7 @@ fn noise_seed(seed: u64, p: usize, d: usize, k: usize) -> u64 {
 /// Everything the sweeps of a campaign share: pattern tables, coupling, noise level.
 pub(super) struct SweepSynth<'a> {
     m: &'a Manifest,
-    tables: Vec<PatternTable>,
+    tables: Vec<Arc<PatternTable>>,
     angles_deg: Vec<f64>,
     coupling: Vec<Complex64>,
     sigma: f64,
@@ -196,7 +197,7 @@ impl<'a> SweepSynth<'a> {
     pub(super) fn new(
         m: &'a Manifest,
         scene: &SceneConfig,
-        tables: Vec<PatternTable>,
+        tables: Vec<Arc<PatternTable>>,
         angles_deg: Vec<f64>,
     ) -> SweepSynth<'a> {
         let sigma2 = m.noise.s21_variance();
