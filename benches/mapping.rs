@@ -149,6 +149,7 @@ fn floor_energy(c: &Campaign) -> EnergyMatrix {
         angles_rel_deg: m.directions.angles_deg(),
         headings_deg: m.poses.iter().map(|p| p.heading_deg).collect(),
         bins: nb,
+        first: 0,
         data,
     }
 }

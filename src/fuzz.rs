@@ -8,7 +8,7 @@
 //! the extension), manifest (`Campaign::from_str`,
 //! with a layout beside it), layout (`Layout::from_geojson`), model file
 //! (`ModelConfig::from_str`), and the energy, MPC and clustered-MPC Parquet readers
-//! (`EnergyMatrix::read`, `read_mpcs` + `read_sector_deg`, `read_clustered`; the bytes are
+//! (`EnergyMatrix::read` and `EnergyTable::open` + `load`, `read_mpcs` + `read_sector_deg`, `read_clustered`; the bytes are
 //! written to a scratch file first, as the readers take paths). An execution passes when
 //! the parser returns, `Ok` or `Err`; a panic is a failure, caught with `catch_unwind`
 //! and reported with its message (the process's panic hook is silenced while fuzzing).
@@ -235,7 +235,17 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
             let p = parquet_input(&scratch.dir, target);
             std::fs::write(&p, bytes).map_err(|e| crate::error::Error::io(&p, e))?;
             match target {
-                Target::Energy => crate::energy::EnergyMatrix::read(&p).map(|_| ()),
+                Target::Energy => {
+                    // both readers: the whole table, and the streaming one over every
+                    // position (what `extract` and `map` use)
+                    let whole = crate::energy::EnergyMatrix::read(&p).map(|_| ());
+                    let streamed = crate::energy::EnergyTable::open(&p).and_then(|t| {
+                        use crate::energy::EnergySource;
+                        let np = t.header().positions;
+                        (0..np).try_for_each(|q| t.load(q, q + 1).map(|_| ()))
+                    });
+                    whole.and(streamed)
+                }
                 Target::Mpc => {
                     crate::mpc::read_sector_deg(&p)?;
                     crate::mpc::read_mpcs(&p).map(|_| ())

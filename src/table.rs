@@ -9,6 +9,8 @@
 //! silent so the caught panic prints nothing. The frame read is then checked up front
 //! ([`check_frame`]: every column as long as the frame) before any column is indexed.
 
+mod footer;
+
 use crate::error::{Error, Result};
 use crate::io::{ensure_parent, temp_path};
 use polars::prelude::*;
@@ -29,18 +31,33 @@ pub fn frame(path: &Path, cols: Vec<Column>) -> Result<DataFrame> {
     DataFrame::new(h, cols).map_err(|e| Error::table(path, e))
 }
 
-/// A streaming Parquet writer: batches become row groups; the file appears (renamed from a
-/// temp file) only on [`ParquetStream::finish`].
+/// A streaming Parquet writer: every frame written becomes row groups (one per chunk) as
+/// it comes; the file-level key-value metadata may be set at any time before
+/// [`ParquetStream::finish`], which writes the footer and renames the temp file into place.
+///
+/// Written over polars-parquet's `FileWriter` rather than polars' `BatchedWriter`, whose
+/// metadata is fixed when the first batch is written: a stage that learns its metadata
+/// only at the end (the energy stage's N0) can then stream its rows. The bytes are those
+/// of polars' writer (same encodings, statistics, Snappy pages, the Arrow schema first in
+/// the metadata).
 pub struct ParquetStream {
     path: PathBuf,
     tmp: PathBuf,
-    writer: Option<polars::io::parquet::write::BatchedWriter<File>>,
+    writer: Option<StreamWriter>,
     meta: Vec<(String, String)>,
     done: bool,
 }
 
+/// The open file of a [`ParquetStream`].
+struct StreamWriter {
+    file: polars_parquet::write::FileWriter<std::io::BufWriter<File>>,
+    encodings: polars_buffer::Buffer<Vec<polars_parquet::write::Encoding>>,
+    fields: Vec<polars_parquet::write::ParquetType>,
+    options: polars_parquet::write::WriteOptions,
+}
+
 impl ParquetStream {
-    /// Start writing `path`; metadata is attached at finish.
+    /// Start writing `path`.
     pub fn create(path: &Path) -> Result<Self> {
         ensure_parent(path)?;
         crate::io::clean_stale_temps(path);
@@ -53,37 +70,55 @@ impl ParquetStream {
         })
     }
 
-    /// Set the file-level key-value metadata (before the first batch).
+    /// Set the file-level key-value metadata (any time before [`ParquetStream::finish`]).
     pub fn set_metadata(&mut self, kv: Vec<(String, String)>) {
         self.meta = kv;
     }
 
-    /// Append one batch (one row group).
+    /// Append one frame (one row group per chunk of the frame).
     pub fn write(&mut self, df: &DataFrame) -> Result<()> {
+        use polars_parquet::write as pw;
+        let path = self.path.clone();
+        let terr = |e: PolarsError| Error::table(&path, e);
         if self.writer.is_none() {
             let file = File::create(&self.tmp).map_err(|e| Error::io(&self.path, e))?;
-            let kv = if self.meta.is_empty() {
-                None
-            } else {
-                Some(KeyValueMetadata::from_static(self.meta.clone()))
+            let schema = df.schema().to_arrow(CompatLevel::newest());
+            let encodings = schema
+                .iter_values()
+                .map(|f| pw::get_dtype_encoding(&f.dtype))
+                .collect();
+            let options = pw::WriteOptions {
+                statistics: pw::StatisticsOptions::default(),
+                compression: pw::CompressionOptions::Snappy,
+                version: pw::Version::V1,
+                data_page_size: None,
             };
-            let w = ParquetWriter::new(file)
-                .with_key_value_metadata(kv)
-                .with_compression(ParquetCompression::Snappy)
-                .batched(df.schema())
-                .map_err(|e| Error::table(&self.path, e))?;
-            self.writer = Some(w);
+            let file = pw::FileWriter::try_new(std::io::BufWriter::new(file), schema, options)
+                .map_err(terr)?;
+            let fields = file.parquet_schema().fields().to_vec();
+            self.writer = Some(StreamWriter {
+                file,
+                encodings,
+                fields,
+                options,
+            });
         }
-        self.writer
-            .as_mut()
-            .expect("writer")
-            .write_batch(df)
-            .map_err(|e| Error::table(&self.path, e))
+        let w = self.writer.as_mut().expect("writer");
+        for batch in df.iter_chunks(CompatLevel::newest(), false) {
+            let rows = batch.len();
+            if rows == 0 {
+                continue;
+            }
+            let rg = pw::row_group_iter(batch, w.encodings.clone(), w.fields.clone(), w.options);
+            w.file.write(rows as u64, rg).map_err(terr)?;
+        }
+        Ok(())
     }
 
-    /// Finish the file and rename it into place. `empty_schema` is used when no batch was
-    /// written (the file then has the schema and zero rows).
+    /// Finish the file and rename it into place. `empty` is written when no frame was
+    /// (the file then has the schema and zero rows).
     pub fn finish(mut self, empty: Option<&DataFrame>) -> Result<()> {
+        use polars_parquet::write as pw;
         if self.writer.is_none() {
             if let Some(df) = empty {
                 self.write(df)?;
@@ -91,9 +126,18 @@ impl ParquetStream {
                 return Err(Error::input(&self.path, "no rows to write"));
             }
         }
-        let w = self.writer.take().expect("writer");
-        w.finish().map_err(|e| Error::table(&self.path, e))?;
-        drop(w);
+        let mut w = self.writer.take().expect("writer");
+        let mut kv = vec![pw::schema_to_metadata_key(w.file.schema())];
+        kv.extend(self.meta.drain(..).map(|(key, value)| pw::KeyValue {
+            key,
+            value: Some(value),
+        }));
+        w.file
+            .end(Some(kv))
+            .map_err(|e| Error::table(&self.path, e))?;
+        let mut buf = w.file.into_inner();
+        std::io::Write::flush(&mut buf).map_err(|e| Error::io(&self.path, e))?;
+        drop(buf);
         std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
         self.done = true;
         Ok(())
@@ -129,6 +173,17 @@ pub fn write_csv(path: &Path, df: &mut DataFrame) -> Result<()> {
 
 fn open(path: &Path) -> Result<File> {
     File::open(path).map_err(|e| Error::io(path, e))
+}
+
+/// Open a Parquet file whose footer [`footer::check`] finds well formed (list and binary
+/// sizes within the footer's bytes): polars' footer decoder pre-sizes its vectors from
+/// those counts, and a corrupt one aborts the process on allocation.
+fn open_parquet(path: &Path) -> Result<File> {
+    let file = open(path)?;
+    // SAFETY: a read-only map of a file this run only reads (see `check_pages`).
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+    footer::check(&map).map_err(|m| Error::table(path, format!("corrupt Parquet file ({m})")))?;
+    Ok(file)
 }
 
 /// Guarded reads in progress (the panic hook is silent while this is above 0).
@@ -205,7 +260,7 @@ pub fn check_pages(path: &Path) -> Result<()> {
     use polars_parquet::parquet::page::CompressedPage;
     use polars_parquet::parquet::read::{get_page_iterator, read_metadata};
     use std::io::Cursor;
-    let file = open(path)?;
+    let file = open_parquet(path)?;
     // SAFETY: a read-only map of a file this run only reads; a file truncated by another
     // process meanwhile is outside what any reader can defend against.
     let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
@@ -256,15 +311,53 @@ pub fn read_parquet(path: &Path, slice: Option<(usize, usize)>) -> Result<DataFr
     Ok(df)
 }
 
+/// The Parquet metadata (footer) of a file, parsed once for [`read_parquet_part`].
+pub type FileMetadataRef = std::sync::Arc<polars_parquet::read::FileMetadata>;
+
+/// Parse the footer of a Parquet file (guarded).
+pub fn parquet_file_metadata(path: &Path) -> Result<FileMetadataRef> {
+    let file = open_parquet(path)?;
+    guarded(path, || {
+        let mut r = ParquetReader::new(file);
+        r.get_metadata().cloned()
+    })
+}
+
+/// Read the rows `slice = (offset, len)` of the columns `columns` of a Parquet file whose
+/// footer `md` has been parsed and whose pages [`check_pages`] has checked: only the row
+/// groups overlapping the slice are decoded. A missing column is named.
+pub fn read_parquet_part(
+    path: &Path,
+    md: &FileMetadataRef,
+    slice: (usize, usize),
+    columns: &[&str],
+) -> Result<DataFrame> {
+    let file = open(path)?;
+    let mut r = ParquetReader::new(file);
+    r.set_metadata(md.clone());
+    let schema = guarded(path, || r.schema())?;
+    for c in columns {
+        if schema.get(*c).is_none() {
+            return Err(Error::input(path, format!("missing column `{c}`")));
+        }
+    }
+    let cols = columns.iter().map(|c| c.to_string()).collect();
+    let df = guarded(path, || {
+        r.with_columns(Some(cols)).with_slice(Some(slice)).finish()
+    })?;
+    check_frame(path, &df)?;
+    Ok(df)
+}
+
 /// Number of rows of a Parquet file.
 pub fn parquet_rows(path: &Path) -> Result<usize> {
-    let file = open(path)?;
+    let file = open_parquet(path)?;
     guarded(path, || ParquetReader::new(file).num_rows())
 }
 
 /// File-level key-value metadata of a Parquet file.
 pub fn parquet_metadata(path: &Path) -> Result<Vec<(String, String)>> {
-    let file = open(path)?;
+    let file = open_parquet(path)?;
     guarded(path, || {
         let mut r = ParquetReader::new(file);
         let md = r.get_metadata()?;

@@ -10,6 +10,7 @@ use crate::common;
 use common::*;
 use pradar::campaign::layout::{CellClass, GridSpec};
 use pradar::campaign::manifest::SweepFormat;
+use pradar::energy::EnergySource;
 use pradar::mapping::ekf::{
     ekf_run, DenseEkf, EkfMap, EkfParams, EkfVariant, Linearized, NoiseModel, Observation,
     RrcsFilter, TiledEkf,
@@ -56,7 +57,7 @@ fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::mapping::job::LoadedRun {
 }
 
 fn noise_of(l: &pradar::mapping::job::LoadedRun, p: &EkfParams) -> NoiseModel {
-    NoiseModel::new(&l.energy.meta, p.model_error, &l.energy_path).unwrap()
+    NoiseModel::new(&l.energy.header().meta, p.model_error, &l.energy_path).unwrap()
 }
 
 /// Min and max eigenvalue of a symmetric matrix (cyclic Jacobi).
@@ -491,10 +492,11 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
     for p in 0..np {
         let geom = l.model.pose_geometry(p);
         let kern = pradar::mapping::ekf::truncate_kernel(&kernel, params.kernel_floor_db);
+        let part = l.energy.load(p, p + 1).unwrap();
         for d in 0..l.model.directions() {
             let beam = l.model.beam(&geom, d);
             let mut scratch = vec![0.0; n];
-            let prof = l.energy.profile(p, d);
+            let prof = part.profile(p, d);
             let o = Observation::build(
                 &beam,
                 &prof[..l.model.bins],

@@ -26,6 +26,7 @@ mod mpc;
 mod occlusion;
 mod physics;
 mod responsiveness;
+mod streaming;
 mod synth;
 mod touchstone;
 

@@ -6,6 +6,14 @@
 //! the heading of every position, recovered as wrap(angle_global − angle_rel). Every
 //! (position, direction, bin) must appear exactly once with a non-negative energy and the
 //! metadata's `schema_version` must be the one this build writes.
+//!
+//! Two ways in: [`EnergyMatrix::read`] loads the whole table; [`EnergyTable::open`] checks
+//! the table in two streaming passes over its row groups (the indices, then the values and
+//! axes) and then serves a few positions at a time ([`EnergySource::load`]), decoding only
+//! the `energy` column of the row groups that hold them, so `extract` and `map` run in
+//! memory that does not grow with the number of poses. Streaming needs the rows in the
+//! order the writer uses (`[position][direction][bin]`); a table in another order (written
+//! by another tool) is checked the same way and then loaded whole.
 
 use super::wrap_deg;
 use crate::campaign::manifest::{Campaign, SCHEMA_VERSION};
@@ -93,7 +101,11 @@ pub struct EnergyMatrix {
     pub headings_deg: Vec<f64>,
     /// Bins per profile.
     pub bins: usize,
-    /// Energies, position-major.
+    /// First position whose energies `data` holds (0 for a whole matrix; a matrix of
+    /// [`EnergySource::load`] holds a run of positions).
+    pub first: usize,
+    /// Energies, position-major, of the positions `first..` (all of them for a whole
+    /// matrix).
     pub data: Vec<f64>,
 }
 
@@ -102,9 +114,14 @@ impl EnergyMatrix {
     pub fn directions(&self) -> usize {
         self.angles_rel_deg.len()
     }
-    /// The profile of one (position, direction).
+    /// The positions whose energies this matrix holds.
+    pub fn held(&self) -> std::ops::Range<usize> {
+        let per = (self.directions() * self.bins).max(1);
+        self.first..self.first + self.data.len() / per
+    }
+    /// The profile of one (position, direction); `p` must be [`held`](Self::held).
     pub fn profile(&self, p: usize, d: usize) -> &[f64] {
-        let i = (p * self.directions() + d) * self.bins;
+        let i = ((p - self.first) * self.directions() + d) * self.bins;
         &self.data[i..i + self.bins]
     }
     /// Delay of a bin centre, ns.
@@ -116,46 +133,14 @@ impl EnergyMatrix {
         wrap_deg(self.headings_deg[p] + self.angles_rel_deg[d])
     }
 
-    /// Read an energy Parquet file; `headings_deg` may be empty (then recovered from the
-    /// table's angle columns).
+    /// Read a whole energy Parquet file.
     pub fn read(path: &Path) -> Result<EnergyMatrix> {
-        let kv = table::parquet_metadata(path)?;
-        let get = |k: &str| -> Result<String> {
-            kv.iter()
-                .find(|(key, _)| key == k)
-                .map(|(_, v)| v.clone())
-                .ok_or_else(|| {
-                    Error::input(
-                        path,
-                        format!("metadata key `{k}` missing (not an energy table?)"),
-                    )
-                })
-        };
-        let num = |k: &str| -> Result<f64> {
-            get(k)?
-                .parse::<f64>()
-                .map_err(|_| Error::input(path, format!("metadata `{k}` is not a number")))
-        };
-        let meta = EnergyMeta {
-            schema_version: num("schema_version")? as u32,
-            bin_width_ns: num("bin_width_ns")?,
-            pulses: num("pulses")? as usize,
-            n0: num("n0")?,
-            enbw: num("enbw")?,
-            tw: num("tw").unwrap_or(1.0),
-            array: get("array")?,
-            coupling: get("coupling").unwrap_or_default(),
-            all: kv.clone(),
-        };
-        if meta.schema_version != SCHEMA_VERSION {
-            return Err(Error::input(
-                path,
-                format!(
-                    "metadata schema_version {} unsupported",
-                    meta.schema_version
-                ),
-            ));
-        }
+        let meta = read_meta(path)?;
+        Self::read_with(path, meta)
+    }
+
+    /// Read a whole energy Parquet file whose metadata has been read.
+    fn read_with(path: &Path, meta: EnergyMeta) -> Result<EnergyMatrix> {
         let df = table::read_parquet(path, None)?;
         if df.height() == 0 {
             return Err(Error::input(path, "energy table has no rows"));
@@ -196,18 +181,7 @@ impl EnergyMatrix {
                     format!("row {i}: duplicate (position {p}, direction {d}, bin {b})"),
                 ));
             }
-            if energy[i] < 0.0 {
-                return Err(Error::input(path, format!("row {i}: negative energy")));
-            }
-            if energy[i] > MAX_ENERGY {
-                return Err(Error::input(
-                    path,
-                    format!(
-                        "column `energy` row {i}: {:e} above {MAX_ENERGY:e} (a unit-amplitude echo gives about 1)",
-                        energy[i]
-                    ),
-                ));
-            }
+            check_energy(path, i, energy[i])?;
             data[idx] = energy[i];
             angles[d] = arel[i];
             headings[p] = wrap_deg(aglob[i] - arel[i]);
@@ -218,9 +192,287 @@ impl EnergyMatrix {
             angles_rel_deg: angles,
             headings_deg: headings,
             bins: nb,
+            first: 0,
             data,
         })
     }
+}
+
+/// The key-value metadata of an energy table, checked (schema version, numbers).
+fn read_meta(path: &Path) -> Result<EnergyMeta> {
+    let kv = table::parquet_metadata(path)?;
+    let get = |k: &str| -> Result<String> {
+        kv.iter()
+            .find(|(key, _)| key == k)
+            .map(|(_, v)| v.clone())
+            .ok_or_else(|| {
+                Error::input(
+                    path,
+                    format!("metadata key `{k}` missing (not an energy table?)"),
+                )
+            })
+    };
+    let num = |k: &str| -> Result<f64> {
+        get(k)?
+            .parse::<f64>()
+            .map_err(|_| Error::input(path, format!("metadata `{k}` is not a number")))
+    };
+    let meta = EnergyMeta {
+        schema_version: num("schema_version")? as u32,
+        bin_width_ns: num("bin_width_ns")?,
+        pulses: num("pulses")? as usize,
+        n0: num("n0")?,
+        enbw: num("enbw")?,
+        tw: num("tw").unwrap_or(1.0),
+        array: get("array")?,
+        coupling: get("coupling").unwrap_or_default(),
+        all: kv.clone(),
+    };
+    if meta.schema_version != SCHEMA_VERSION {
+        return Err(Error::input(
+            path,
+            format!(
+                "metadata schema_version {} unsupported",
+                meta.schema_version
+            ),
+        ));
+    }
+    Ok(meta)
+}
+
+/// Energy matrices served a run of positions at a time: a whole [`EnergyMatrix`] in
+/// memory, or an [`EnergyTable`] read from its file as needed.
+pub trait EnergySource: Sync {
+    /// The axes and metadata (positions, directions, bins, angles, headings, `meta`); the
+    /// energies it holds, if any, are not to be read through it.
+    fn header(&self) -> &EnergyMatrix;
+    /// The energies of positions `p0..p1` (a matrix whose [`EnergyMatrix::held`] covers
+    /// them).
+    fn load(&self, p0: usize, p1: usize) -> Result<std::borrow::Cow<'_, EnergyMatrix>>;
+}
+
+impl EnergySource for EnergyMatrix {
+    fn header(&self) -> &EnergyMatrix {
+        self
+    }
+    fn load(&self, p0: usize, p1: usize) -> Result<std::borrow::Cow<'_, EnergyMatrix>> {
+        let held = self.held();
+        if p0 > p1 || p0 < held.start || p1 > held.end {
+            return Err(Error::param(
+                "energy",
+                format!("positions {p0}..{p1} not held (the matrix holds {held:?})"),
+            ));
+        }
+        Ok(std::borrow::Cow::Borrowed(self))
+    }
+}
+
+/// An energy table checked on opening and read a run of positions at a time (see the
+/// module docs).
+#[derive(Debug)]
+pub struct EnergyTable {
+    path: std::path::PathBuf,
+    /// Axes and metadata; `data` empty.
+    header: EnergyMatrix,
+    /// The file's Parquet metadata, parsed once.
+    md: polars::prelude::FileMetadataRef,
+    /// The whole matrix, when the rows are not in the writer's order.
+    whole: Option<EnergyMatrix>,
+}
+
+impl EnergyTable {
+    /// Open and check an energy table: metadata, page headers ([`table::check_pages`]),
+    /// then the index columns and the values row group by row group.
+    pub fn open(path: &Path) -> Result<EnergyTable> {
+        let meta = read_meta(path)?;
+        table::check_pages(path)?;
+        let md = table::parquet_file_metadata(path)?;
+        let groups: Vec<usize> = md.row_groups.iter().map(|g| g.num_rows()).collect();
+        let rows: usize = groups.iter().sum();
+        if rows == 0 {
+            return Err(Error::input(path, "energy table has no rows"));
+        }
+        // pass 1: the grid from the index columns
+        let (mut np, mut nd, mut nb) = (0usize, 0usize, 0usize);
+        let mut canonical_possible = true;
+        let mut off = 0;
+        for &n in &groups {
+            let df =
+                table::read_parquet_part(path, &md, (off, n), &["position", "direction", "bin"])?;
+            let pos = table::i64_column(path, &df, "position")?;
+            let dir = table::i64_column(path, &df, "direction")?;
+            let bin = table::i64_column(path, &df, "bin")?;
+            for i in 0..df.height() {
+                let (p, d, b) = (pos[i], dir[i], bin[i]);
+                if p < 0 || d < 0 || b < 0 {
+                    return Err(Error::input(path, "negative position/direction/bin index"));
+                }
+                // indices past the row count cannot fit the grid (checked below) and
+                // would size the axes beyond the file
+                if p as u64 >= rows as u64 || d as u64 >= rows as u64 || b as u64 >= rows as u64 {
+                    return Err(Error::input(
+                        path,
+                        format!("row {}: index beyond the table's {rows} rows", off + i),
+                    ));
+                }
+                np = np.max(p as usize + 1);
+                nd = nd.max(d as usize + 1);
+                nb = nb.max(b as usize + 1);
+            }
+            canonical_possible &= df.height() == n;
+            off += n;
+        }
+        let cells = np.checked_mul(nd).and_then(|v| v.checked_mul(nb));
+        if cells != Some(rows) {
+            return Err(Error::input(
+                path,
+                format!("{rows} rows but {np} positions x {nd} directions x {nb} bins"),
+            ));
+        }
+        // pass 2: order, values and axes
+        let mut angles = vec![f64::NAN; nd];
+        let mut headings = vec![f64::NAN; np];
+        let mut canonical = canonical_possible;
+        let mut off = 0;
+        for &n in &groups {
+            if !canonical {
+                break;
+            }
+            let df = table::read_parquet_part(
+                path,
+                &md,
+                (off, n),
+                &[
+                    "position",
+                    "direction",
+                    "bin",
+                    "angle_rel_deg",
+                    "angle_global_deg",
+                    "energy",
+                ],
+            )?;
+            let pos = table::i64_column(path, &df, "position")?;
+            let dir = table::i64_column(path, &df, "direction")?;
+            let bin = table::i64_column(path, &df, "bin")?;
+            let arel = table::f64_column(path, &df, "angle_rel_deg")?;
+            let aglob = table::f64_column(path, &df, "angle_global_deg")?;
+            let energy = table::f64_column(path, &df, "energy")?;
+            for i in 0..df.height() {
+                let row = off + i;
+                let (p, d, b) = (pos[i] as usize, dir[i] as usize, bin[i] as usize);
+                if (p * nd + d) * nb + b != row {
+                    canonical = false;
+                    break;
+                }
+                check_energy(path, row, energy[i])?;
+                angles[d] = arel[i];
+                headings[p] = wrap_deg(aglob[i] - arel[i]);
+            }
+            off += n;
+        }
+        if !canonical {
+            // another tool's row order: checked and held whole
+            let whole = EnergyMatrix::read_with(path, meta)?;
+            let mut header = whole.clone();
+            header.data = Vec::new();
+            return Ok(EnergyTable {
+                path: path.to_path_buf(),
+                header,
+                md,
+                whole: Some(whole),
+            });
+        }
+        Ok(EnergyTable {
+            path: path.to_path_buf(),
+            header: EnergyMatrix {
+                meta,
+                positions: np,
+                angles_rel_deg: angles,
+                headings_deg: headings,
+                bins: nb,
+                first: 0,
+                data: Vec::new(),
+            },
+            md,
+            whole: None,
+        })
+    }
+
+    /// The table's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Whether positions are read from the file as needed (false: held whole, the rows
+    /// being in another order than the writer's).
+    pub fn streams(&self) -> bool {
+        self.whole.is_none()
+    }
+}
+
+impl EnergySource for EnergyTable {
+    fn header(&self) -> &EnergyMatrix {
+        &self.header
+    }
+
+    fn load(&self, p0: usize, p1: usize) -> Result<std::borrow::Cow<'_, EnergyMatrix>> {
+        if let Some(w) = &self.whole {
+            return w.load(p0, p1);
+        }
+        let h = &self.header;
+        if p0 > p1 || p1 > h.positions {
+            return Err(Error::param(
+                "energy",
+                format!("positions {p0}..{p1} outside the table's {}", h.positions),
+            ));
+        }
+        let per = h.directions() * h.bins;
+        let df = table::read_parquet_part(
+            &self.path,
+            &self.md,
+            (p0 * per, (p1 - p0) * per),
+            &["energy"],
+        )?;
+        let data = table::f64_column(&self.path, &df, "energy")?;
+        if data.len() != (p1 - p0) * per {
+            return Err(Error::input(
+                &self.path,
+                format!(
+                    "positions {p0}..{p1}: {} energies read, {} expected (file changed?)",
+                    data.len(),
+                    (p1 - p0) * per
+                ),
+            ));
+        }
+        for (i, &e) in data.iter().enumerate() {
+            check_energy(&self.path, p0 * per + i, e)?;
+        }
+        Ok(std::borrow::Cow::Owned(EnergyMatrix {
+            meta: h.meta.clone(),
+            positions: h.positions,
+            angles_rel_deg: h.angles_rel_deg.clone(),
+            headings_deg: h.headings_deg.clone(),
+            bins: h.bins,
+            first: p0,
+            data,
+        }))
+    }
+}
+
+/// A bin energy must be non-negative and at most [`MAX_ENERGY`] (`row` names it).
+fn check_energy(path: &Path, row: usize, e: f64) -> Result<()> {
+    if e < 0.0 {
+        return Err(Error::input(path, format!("row {row}: negative energy")));
+    }
+    if e > MAX_ENERGY {
+        return Err(Error::input(
+            path,
+            format!(
+                "column `energy` row {row}: {e:e} above {MAX_ENERGY:e} (a unit-amplitude echo gives about 1)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Check that an energy table belongs to a campaign (file named in every error).

@@ -39,9 +39,9 @@ pub mod matrix;
 pub mod processor;
 pub mod writer;
 
-pub use matrix::{check_campaign, EnergyMatrix, EnergyMeta};
+pub use matrix::{check_campaign, EnergyMatrix, EnergyMeta, EnergySource, EnergyTable};
 pub use processor::{window, EnergyProcessor};
-pub use writer::{table_metadata, write_table};
+pub use writer::{table_metadata, write_table, EnergyWriter};
 
 use crate::campaign::manifest::Campaign;
 use crate::campaign::sweeps::SweepReader;
@@ -69,8 +69,8 @@ pub struct EnergyReport {
 /// `progress` is called after each position with (done, total).
 ///
 /// Steps: open the sweeps, build the [`EnergyProcessor`], stream the positions (energies of
-/// bins 0..=max_delay kept, the noise region summed), N0 = noise-bin mean / TW, then
-/// [`write_table`] with [`table_metadata`].
+/// bins 0..=max_delay written as they come by an [`EnergyWriter`], the noise region
+/// summed), N0 = noise-bin mean / TW, then the metadata ([`table_metadata`]) at the end.
 ///
 /// ```no_run
 /// use pradar::campaign::Campaign;
@@ -111,7 +111,8 @@ pub fn run(
             ),
         ));
     }
-    let mut energies = Vec::with_capacity(np * nd * nb);
+    let mut writer = EnergyWriter::create(out, m, nb)?;
+    let mut energies = Vec::with_capacity(nd * nb);
     let (mut noise_sum, mut noise_n) = (0.0, 0usize);
     let chunk = reader.chunk_positions();
     let mut p0 = 0;
@@ -119,12 +120,14 @@ pub fn run(
         for mut sw in reader.read_positions(p0, chunk)? {
             cal.apply(&mut sw);
             let e = proc.position_energy(&sw);
+            energies.clear();
             for d in 0..nd {
                 let prof = &e[d * nbf..(d + 1) * nbf];
                 energies.extend_from_slice(&prof[..nb]);
                 noise_sum += prof[noise_from..noise_to].iter().sum::<f64>();
                 noise_n += noise_to - noise_from;
             }
+            writer.push(&energies)?;
             progress(sw.position + 1, np);
         }
         p0 += chunk;
@@ -133,7 +136,7 @@ pub fn run(
     let n0 = noise_bin_mean / proc.tw();
     let mut meta = table_metadata(m, &proc, n0, noise_bin_mean);
     meta.extend(cal.metadata());
-    write_table(out, m, nb, &energies, meta)?;
+    writer.finish(meta)?;
     Ok(EnergyReport {
         sweeps: np * nd * m.pulses,
         rows: np * nd * nb,

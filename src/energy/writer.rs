@@ -2,8 +2,11 @@
 //! angle_global_deg, bin, delay_ns, energy` and its key-value metadata.
 //!
 //! Floating-point metadata values are written with 17 significant digits (`{:.17e}`) so
-//! they read back bit for bit; rows come in `[position][direction][bin]` order, about 2^20
-//! per row group, written atomically.
+//! they read back bit for bit; rows come in `[position][direction][bin]` order, whole
+//! positions per row group (as many as fit in [`GROUP_ROWS`] rows, at least one), written
+//! atomically. [`EnergyWriter`] takes the positions one at a time as the stage produces
+//! them and the metadata at the end, so the stage never holds the whole table; readers
+//! ([`super::EnergyTable`]) fetch a few positions at a time from the row groups.
 
 use super::processor::EnergyProcessor;
 use super::wrap_deg;
@@ -63,34 +66,82 @@ pub fn table_metadata(
     meta
 }
 
-/// Write an energy table (`energies` as `[position][direction][bin]`, `nb` bins per
-/// profile) with its metadata, atomically, about 2^20 rows per row group.
-pub fn write_table(
-    out: &Path,
-    m: &Manifest,
+/// Rows per row group aimed at: whole positions up to this many rows (at least one
+/// position), so a reader of a few positions decodes little more than those (a 37 × 481
+/// corridor position is 17,797 rows: 3 per group).
+pub const GROUP_ROWS: usize = 1 << 16;
+
+/// Positions per row group for `nd` directions of `nb` bins.
+pub fn group_positions(nd: usize, nb: usize) -> usize {
+    (GROUP_ROWS / (nd * nb).max(1)).max(1)
+}
+
+/// A streaming energy-table writer: positions in order, one at a time
+/// ([`EnergyWriter::push`]), the metadata at [`EnergyWriter::finish`].
+pub struct EnergyWriter<'a> {
+    out: std::path::PathBuf,
+    m: &'a Manifest,
     nb: usize,
-    energies: &[f64],
-    meta: Vec<(String, String)>,
-) -> Result<()> {
-    let np = m.positions();
-    let nd = m.directions.count();
-    let tb = 1e9 / m.band.bandwidth_hz();
-    if energies.len() != np * nd * nb {
-        return Err(Error::input(
-            out,
-            format!(
-                "energy table: {} values for {np} positions x {nd} directions x {nb} bins",
-                energies.len()
-            ),
-        ));
+    stream: table::ParquetStream,
+    /// Energies of the positions not yet written, `[position][direction][bin]`.
+    pending: Vec<f64>,
+    /// First position of `pending`.
+    first: usize,
+    /// Positions pushed.
+    pushed: usize,
+    group: usize,
+}
+
+impl<'a> EnergyWriter<'a> {
+    /// Start the table `out` of the campaign `m` with `nb` bins per profile.
+    pub fn create(out: &Path, m: &'a Manifest, nb: usize) -> Result<Self> {
+        let nd = m.directions.count();
+        let group = group_positions(nd, nb);
+        Ok(EnergyWriter {
+            out: out.to_path_buf(),
+            m,
+            nb,
+            stream: table::ParquetStream::create(out)?,
+            pending: Vec::with_capacity(group * nd * nb),
+            first: 0,
+            pushed: 0,
+            group,
+        })
     }
-    let mut stream = table::ParquetStream::create(out)?;
-    stream.set_metadata(meta);
-    let angles = m.directions.angles_deg();
-    // about 2^20 rows per row group
-    let group = ((1usize << 20) / (nd * nb).max(1)).max(1);
-    for g0 in (0..np).step_by(group) {
-        let ps = g0..(g0 + group).min(np);
+
+    /// Append the next position's energies (`[direction][bin]`, directions × `nb` values).
+    pub fn push(&mut self, energies: &[f64]) -> Result<()> {
+        let nd = self.m.directions.count();
+        if energies.len() != nd * self.nb || self.pushed >= self.m.positions() {
+            return Err(Error::input(
+                &self.out,
+                format!(
+                    "energy table: position {} of {} values for {} positions x {nd} directions x {} bins",
+                    self.pushed,
+                    energies.len(),
+                    self.m.positions(),
+                    self.nb
+                ),
+            ));
+        }
+        self.pending.extend_from_slice(energies);
+        self.pushed += 1;
+        if self.pushed - self.first == self.group {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Write the pending positions as one row group.
+    fn flush(&mut self) -> Result<()> {
+        let (m, nb) = (self.m, self.nb);
+        let ps = self.first..self.pushed;
+        if ps.is_empty() {
+            return Ok(());
+        }
+        let nd = m.directions.count();
+        let tb = 1e9 / m.band.bandwidth_hz();
+        let angles = m.directions.angles_deg();
         let n = ps.len() * nd * nb;
         let mut pos = Vec::with_capacity(n);
         let mut dir = Vec::with_capacity(n);
@@ -111,8 +162,9 @@ pub fn write_table(
                 }
             }
         }
+        let energy = std::mem::take(&mut self.pending);
         let df = table::frame(
-            out,
+            &self.out,
             vec![
                 table::col("position", pos),
                 table::col("direction", dir),
@@ -120,14 +172,57 @@ pub fn write_table(
                 table::col("angle_global_deg", aglob),
                 table::col("bin", bin),
                 table::col("delay_ns", delay),
-                table::col(
-                    "energy",
-                    energies[ps.start * nd * nb..ps.end * nd * nb].to_vec(),
-                ),
+                table::col("energy", energy),
             ],
         )?;
-        stream.write(&df)?;
+        self.stream.write(&df)?;
+        self.pending = Vec::with_capacity(self.group * nd * nb);
+        self.first = self.pushed;
+        Ok(())
     }
-    stream.finish(None)?;
-    Ok(())
+
+    /// Write the last row group and the metadata, and rename the table into place; every
+    /// position of the campaign must have been pushed.
+    pub fn finish(mut self, meta: Vec<(String, String)>) -> Result<()> {
+        if self.pushed != self.m.positions() {
+            return Err(Error::input(
+                &self.out,
+                format!(
+                    "energy table: {} of {} positions written",
+                    self.pushed,
+                    self.m.positions()
+                ),
+            ));
+        }
+        self.flush()?;
+        self.stream.set_metadata(meta);
+        self.stream.finish(None)
+    }
+}
+
+/// Write an energy table (`energies` as `[position][direction][bin]`, `nb` bins per
+/// profile) with its metadata, atomically (through [`EnergyWriter`]).
+pub fn write_table(
+    out: &Path,
+    m: &Manifest,
+    nb: usize,
+    energies: &[f64],
+    meta: Vec<(String, String)>,
+) -> Result<()> {
+    let np = m.positions();
+    let nd = m.directions.count();
+    if energies.len() != np * nd * nb {
+        return Err(Error::input(
+            out,
+            format!(
+                "energy table: {} values for {np} positions x {nd} directions x {nb} bins",
+                energies.len()
+            ),
+        ));
+    }
+    let mut w = EnergyWriter::create(out, m, nb)?;
+    for p in 0..np {
+        w.push(&energies[p * nd * nb..(p + 1) * nd * nb])?;
+    }
+    w.finish(meta)
 }

@@ -48,7 +48,7 @@ pub use io::{mpc_frame, read_mpcs, read_sector_deg, table_metadata, write_mpcs, 
 pub use params::{ExtractParams, ExtractValid, Method};
 
 use crate::campaign::manifest::{Campaign, Pose};
-use crate::energy::EnergyMatrix;
+use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::units::{db, wrap_deg};
 use footprint::Footprint;
@@ -259,12 +259,20 @@ pub fn extract(em: &EnergyMatrix, c: &Campaign, params: &ExtractValid) -> Result
     extract_labelled(em, c, params).map(|x| x.0)
 }
 
-/// [`extract`], with what the diffuse stage found.
+/// Positions loaded together from an [`EnergySource`]: a few row groups, and at least two
+/// per thread so the positions of a run keep both cores busy.
+fn load_positions(nd: usize, nb: usize) -> usize {
+    (4 * crate::energy::writer::group_positions(nd, nb)).max(2 * rayon::current_num_threads())
+}
+
+/// [`extract`], with what the diffuse stage found, from any [`EnergySource`] (a whole
+/// matrix, or a table read a few positions at a time: the MPCs do not depend on which).
 pub fn extract_labelled(
-    em: &EnergyMatrix,
+    src: &dyn EnergySource,
     c: &Campaign,
     params: &ExtractValid,
 ) -> Result<(Vec<Mpc>, DiffuseSummary)> {
+    let em = src.header();
     crate::energy::check_campaign(c, em, &c.path)?;
     let floor = em.meta.noise_mean();
     if !(floor.is_finite() && floor > 0.0) {
@@ -279,11 +287,17 @@ pub fn extract_labelled(
         None
     };
     let clean_fp = fp.as_ref().filter(|_| params.method == Method::Clean);
-    let per: Vec<Vec<Mpc>> = (0..em.positions)
-        .into_par_iter()
-        .map(|p| extract_position(em, c, clean_fp, p, params, floor))
-        .collect();
-    let mut mpcs: Vec<Mpc> = per.into_iter().flatten().collect();
+    let step = load_positions(em.directions(), em.bins);
+    let mut mpcs: Vec<Mpc> = Vec::new();
+    for p0 in (0..em.positions).step_by(step) {
+        let p1 = (p0 + step).min(em.positions);
+        let part = src.load(p0, p1)?;
+        let per: Vec<Vec<Mpc>> = (p0..p1)
+            .into_par_iter()
+            .map(|p| extract_position(&part, c, clean_fp, p, params, floor))
+            .collect();
+        mpcs.extend(per.into_iter().flatten());
+    }
     // checked with the extraction parameters
     let diffuse_params = crate::params::Valid::new(params.diffuse);
     let summary = match &fp {

@@ -100,7 +100,7 @@ use crate::campaign::manifest::{Campaign, SweepFormat};
 use crate::campaign::modelfile::ModelConfig;
 use crate::campaign::simulate::SimReport;
 use crate::cluster::ClusterParams;
-use crate::energy::{EnergyMatrix, EnergyReport};
+use crate::energy::{EnergyReport, EnergySource, EnergyTable};
 use crate::error::Result;
 use crate::fit::channel::{ChannelFit, FitParams};
 use crate::mapping::{MapOptions, MapReport, MapRun};
@@ -417,12 +417,14 @@ pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
     let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
     inputs.push((cmd.energy.clone(), "--energy"));
     refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
-    let em = EnergyMatrix::read(&cmd.energy)?;
+    // read a few positions at a time: memory does not grow with the number of poses
+    let table = EnergyTable::open(&cmd.energy)?;
+    let em = table.header();
     // checked here, where the energy file's name is known, so a mismatch names it
-    crate::energy::check_campaign(&c, &em, &cmd.energy)?;
+    crate::energy::check_campaign(&c, em, &cmd.energy)?;
     em.meta.check_noise(&cmd.energy)?;
-    let (mpcs, diffuse) = crate::mpc::extract_labelled(&em, &c, &cmd.params.check()?)?;
-    let mut meta = crate::mpc::table_metadata(&em, &c, &cmd.params);
+    let (mpcs, diffuse) = crate::mpc::extract_labelled(&table, &c, &cmd.params.check()?)?;
+    let mut meta = crate::mpc::table_metadata(em, &c, &cmd.params);
     meta.push((
         "diffuse_level_m2_per_m".into(),
         format!("{:.17e}", diffuse.level_m2_per_m),

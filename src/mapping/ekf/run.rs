@@ -17,7 +17,7 @@ use super::{
     normal_cdf, truncate_kernel, EkfParams, EkfValid, Linearized, NoiseModel, Observation,
     RrcsFilter,
 };
-use crate::energy::EnergyMatrix;
+use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{ObservationModel, Occlusion};
 use crate::mapping::og::Detector;
@@ -51,7 +51,7 @@ pub struct EkfStats {
 #[allow(clippy::too_many_arguments)]
 pub fn ekf_run(
     model: &ObservationModel,
-    energy: &EnergyMatrix,
+    src: &dyn EnergySource,
     kernel: &[f64],
     params: &EkfValid,
     noise: &NoiseModel,
@@ -63,7 +63,8 @@ pub fn ekf_run(
     if filter.len() != n {
         return Err(Error::param("ekf", "filter and grid sizes differ"));
     }
-    if energy.positions != model.poses.len() || energy.directions() != model.directions() {
+    let head = src.header();
+    if head.positions != model.poses.len() || head.directions() != model.directions() {
         return Err(Error::param(
             "ekf",
             "energy table and observation model disagree on poses/directions",
@@ -77,8 +78,12 @@ pub fn ekf_run(
     // pose p − 1 are applied, in order, on the calling thread
     // with a sight model, the occluders of pose p are confirmed against the binary map of
     // the filter before pose p − 1 was applied (the state the observations are built from)
-    let build = |p: usize, occupied: Option<Vec<bool>>| -> (Vec<Observation>, f64, u64) {
+    // (the energies are loaded one pose at a time: a table read from its file is never
+    // held whole)
+    let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<(Vec<Observation>, f64, u64)> {
         let tb = Instant::now();
+        let part = src.load(p, p + 1)?;
+        let energy: &EnergyMatrix = &part;
         let geom = model.pose_geometry(p);
         let seen = sight.map(|s| {
             let dets = s.detector.detect_pose(energy, p);
@@ -131,11 +136,11 @@ pub fn ekf_run(
             )
             .collect();
         let withheld = obs.iter().map(|o| o.1).sum();
-        (
+        Ok((
             obs.into_iter().map(|o| o.0).collect(),
             tb.elapsed().as_secs_f64(),
             withheld,
-        )
+        ))
     };
     // the filter's binary map (EkfMap's rule)
     let snapshot = |f: &dyn RrcsFilter| -> Option<Vec<bool>> {
@@ -147,7 +152,7 @@ pub fn ekf_run(
         None
     };
     for p in 0..np {
-        let (obs, build_s, withheld) = current.take().expect("built");
+        let (obs, build_s, withheld) = current.take().expect("built")?;
         st.build_seconds += build_s;
         st.withheld += withheld;
         let occupied = if p + 1 < np { snapshot(&*filter) } else { None };

@@ -14,6 +14,7 @@ use super::{
     LoadedRun, MapReport, MapValid, MetricsPair, Regions, RunSummary,
 };
 use crate::campaign::layout::{GridSpec, ReferenceMap};
+use crate::energy::EnergySource;
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{
     ekf_run, mean_grey, new_filter, std_grey, truncate_kernel, EkfMap, EkfReport, EkfStats,
@@ -112,7 +113,7 @@ fn ekf_inputs(opts: &MapValid, params: &EkfValid) -> Result<EkfInputs> {
         occlusions.push(l.occlusion(&opts.og()));
         kernels.push(super::window_kernel(&l.campaign)?);
         noises.push(NoiseModel::new(
-            &l.energy.meta,
+            &l.energy.header().meta,
             params.model_error,
             &l.energy_path,
         )?);

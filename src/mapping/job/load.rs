@@ -10,7 +10,7 @@
 use super::{MapRun, MapValid};
 use crate::campaign::layout::{GridSpec, Layout, ReferenceMap};
 use crate::campaign::manifest::{Campaign, Pose};
-use crate::energy::EnergyMatrix;
+use crate::energy::{EnergyMatrix, EnergySource, EnergyTable};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
 use crate::mapping::og::{detection_threshold, Detector, OgValid};
@@ -23,8 +23,8 @@ pub struct LoadedRun {
     pub campaign: Campaign,
     /// Its layout.
     pub layout: Layout,
-    /// The energy matrix.
-    pub energy: EnergyMatrix,
+    /// The energy table (read a few poses at a time by the mappers).
+    pub energy: EnergyTable,
     /// Its path.
     pub energy_path: PathBuf,
     /// The observation model.
@@ -91,10 +91,11 @@ pub fn load_run(
         c.set_elements(n)?;
     }
     let layout = Layout::load(&c.layout_path())?;
-    let energy = EnergyMatrix::read(&run.energy)?;
-    crate::energy::check_campaign(&c, &energy, &run.energy)?;
-    let threshold = detection_threshold(&energy.meta, og.pfa, &run.energy)?;
-    let detector = Detector::new(threshold, &window_kernel(&c)?, og.mask_db, min_bin(&energy));
+    let energy = EnergyTable::open(&run.energy)?;
+    let head = energy.header();
+    crate::energy::check_campaign(&c, head, &run.energy)?;
+    let threshold = detection_threshold(&head.meta, og.pfa, &run.energy)?;
+    let detector = Detector::new(threshold, &window_kernel(&c)?, og.mask_db, min_bin(head));
     let own = GridSpec::covering(layout.bbox(), grid.cell_m, grid.margin_m);
     let spec = match spec {
         Some(s) => {
@@ -112,9 +113,9 @@ pub fn load_run(
         spec,
         grid,
         &c.manifest,
-        energy.bins,
-        energy.meta.bin_width_ns,
-        min_bin(&energy),
+        head.bins,
+        head.meta.bin_width_ns,
+        min_bin(head),
     )?;
     Ok(LoadedRun {
         true_poses: c.manifest.poses.clone(),

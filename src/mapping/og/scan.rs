@@ -3,7 +3,7 @@
 //! [`og_map_stats`] map a run scan by scan.
 
 use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
-use crate::energy::EnergyMatrix;
+use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
     Beam, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility,
@@ -110,7 +110,7 @@ fn scan_boresight(
 /// pose.
 pub fn og_map(
     model: &ObservationModel,
-    em: &EnergyMatrix,
+    em: &dyn EnergySource,
     params: &OgValid,
     method: Method,
     detector: &Detector,
@@ -119,10 +119,11 @@ pub fn og_map(
     og_map_stats(model, em, params, method, detector, progress).map(|r| r.0)
 }
 
-/// [`og_map`] with the work statistics.
+/// [`og_map`] with the work statistics. The energies are loaded a batch of poses at a time
+/// (a table read from its file never needs to be held whole).
 pub fn og_map_stats(
     model: &ObservationModel,
-    em: &EnergyMatrix,
+    src: &dyn EnergySource,
     params: &OgValid,
     method: Method,
     detector: &Detector,
@@ -136,6 +137,7 @@ pub fn og_map_stats(
     }
     let np = model.poses.len();
     let nd = model.directions();
+    let em = src.header();
     if em.positions != np || em.directions() != nd {
         return Err(Error::param(
             "energy",
@@ -148,7 +150,7 @@ pub fn og_map_stats(
     }
     let t0 = Instant::now();
     let spec = model.spec;
-    let ctx = ScanContext::new(model, em, params, method, detector);
+    let ctx = ScanContext::new(model, params, method, detector);
     let mut stats = OgStats::default();
     let passes = if method == Method::Og {
         params.passes
@@ -169,6 +171,7 @@ pub fn og_map_stats(
         let mut p0 = 0;
         while p0 < np {
             let p1 = (p0 + batch).min(np);
+            let part = src.load(p0, p1)?;
             let geoms: Vec<_> = if method == Method::Og {
                 (p0..p1)
                     .into_par_iter()
@@ -185,7 +188,7 @@ pub fn og_map_stats(
                         .collect_into_vec(&mut belief);
                 }
                 let bel: &[f32] = fixed_belief.as_deref().unwrap_or(&belief);
-                let scans = ctx.scan_pose(p, geom.as_ref(), bel);
+                let scans = ctx.scan_pose(&part, p, geom.as_ref(), bel);
                 apply_scans(&mut map, &mut stats, scans, ctx.clamp);
                 progress(pass * np + p + 1, passes * np);
             }
@@ -196,11 +199,10 @@ pub fn og_map_stats(
     Ok((map, stats))
 }
 
-/// What the scans of a run share: the model, the energy, the detector, the occlusion
-/// model and the inverse sensor model's constants.
+/// What the scans of a run share: the model, the detector, the occlusion model and the
+/// inverse sensor model's constants.
 struct ScanContext<'a> {
     model: &'a ObservationModel,
-    em: &'a EnergyMatrix,
     detector: &'a Detector,
     method: Method,
     clamp: f64,
@@ -213,7 +215,6 @@ struct ScanContext<'a> {
 impl<'a> ScanContext<'a> {
     fn new(
         model: &'a ObservationModel,
-        em: &'a EnergyMatrix,
         params: &OgValid,
         method: Method,
         detector: &'a Detector,
@@ -221,7 +222,6 @@ impl<'a> ScanContext<'a> {
         let min_bin = model.min_bin.max(detector.min_bin);
         ScanContext {
             model,
-            em,
             detector,
             method,
             clamp: params.clamp,
@@ -237,10 +237,16 @@ impl<'a> ScanContext<'a> {
     }
 
     /// The increments of every direction of pose `p` (in parallel, in direction order)
-    /// from the beliefs `bel` (`geom`: the pose's geometry, for `og`).
-    fn scan_pose(&self, p: usize, geom: Option<&PoseGeometry>, bel: &[f32]) -> Vec<ScanResult> {
+    /// from its energies `em` and the beliefs `bel` (`geom`: the pose's geometry, for `og`).
+    fn scan_pose(
+        &self,
+        em: &EnergyMatrix,
+        p: usize,
+        geom: Option<&PoseGeometry>,
+        bel: &[f32],
+    ) -> Vec<ScanResult> {
         let nd = self.model.directions();
-        let dets = self.detector.detect_pose(self.em, p);
+        let dets = self.detector.detect_pose(em, p);
         match (geom, self.method) {
             (Some(g), Method::Og) => {
                 // mapped surfaces: more likely occupied than free and above the prior (a
@@ -249,7 +255,7 @@ impl<'a> ScanContext<'a> {
                 let occupied: Vec<bool> = bel.par_iter().map(|&b| b > t).collect();
                 let echoes = self
                     .occlusion
-                    .echoes(self.model, self.em, p, dets, Some(&occupied));
+                    .echoes(self.model, em, p, dets, Some(&occupied));
                 let vis = self.occlusion.visibility(self.model, g, &echoes);
                 (0..nd)
                     .into_par_iter()

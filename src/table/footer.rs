@@ -1,0 +1,236 @@
+//! A structural check of a Parquet footer before polars parses it.
+//!
+//! Takes the bytes of a Parquet file; gives `Ok` when its footer (the `FileMetaData` thrift
+//! struct in the compact protocol, DESIGN-independent: the Parquet format) is well formed
+//! enough to parse without unbounded allocations, or the reason it is not.
+//!
+//! polars-parquet's footer decoder sizes each list from its header before reading it
+//! (`Vec::with_capacity(size)`): a corrupt size of 2^31 row groups asks for hundreds of
+//! gigabytes and *aborts* the process, which no panic guard catches (the fuzzer found 13
+//! such files, now regression fixtures in `fuzz/regressions/`). This walker reads the same bytes with the compact
+//! protocol's grammar only (field headers, varints, binaries, lists, sets, maps, structs)
+//! and refuses any list, set, map or binary claiming more elements or bytes than remain in
+//! the footer (each element takes at least one byte), nesting deeper than
+//! [`MAX_DEPTH`], and a footer length or magic that does not fit the file. Written by hand
+//! because no crate exposes a bounded compact-protocol skipper over a byte slice without
+//! pulling in the Apache `thrift` runtime (whose own skipper has the same pre-sizing).
+
+/// Deepest struct/list nesting accepted (the Parquet schema nests a handful deep).
+pub const MAX_DEPTH: usize = 64;
+
+/// Check the footer of a whole Parquet file held in `file`.
+pub fn check(file: &[u8]) -> Result<(), String> {
+    let n = file.len();
+    if n < 12 || &file[..4] != b"PAR1" || &file[n - 4..] != b"PAR1" {
+        return Err("not a Parquet file (magic `PAR1` missing at its start or end)".into());
+    }
+    let len = u32::from_le_bytes(file[n - 8..n - 4].try_into().expect("4 bytes")) as usize;
+    if len > n - 12 {
+        return Err(format!(
+            "footer length {len} larger than the file's {} bytes",
+            n - 12
+        ));
+    }
+    let mut w = Walker {
+        buf: &file[n - 8 - len..n - 8],
+        pos: 0,
+    };
+    w.skip_struct(0)
+}
+
+/// The compact protocol's element types.
+const BOOL_TRUE: u8 = 1;
+const BOOL_FALSE: u8 = 2;
+const BYTE: u8 = 3;
+const I16: u8 = 4;
+const I32: u8 = 5;
+const I64: u8 = 6;
+const DOUBLE: u8 = 7;
+const BINARY: u8 = 8;
+const LIST: u8 = 9;
+const SET: u8 = 10;
+const MAP: u8 = 11;
+const STRUCT: u8 = 12;
+const UUID: u8 = 13;
+
+struct Walker<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+impl Walker<'_> {
+    fn remaining(&self) -> usize {
+        self.buf.len() - self.pos
+    }
+
+    fn byte(&mut self) -> Result<u8, String> {
+        let b = *self
+            .buf
+            .get(self.pos)
+            .ok_or_else(|| format!("footer truncated at byte {}", self.pos))?;
+        self.pos += 1;
+        Ok(b)
+    }
+
+    fn skip(&mut self, n: usize) -> Result<(), String> {
+        if n > self.remaining() {
+            return Err(format!(
+                "footer field of {n} bytes at byte {} past its end ({} left)",
+                self.pos,
+                self.remaining()
+            ));
+        }
+        self.pos += n;
+        Ok(())
+    }
+
+    fn varint(&mut self) -> Result<u64, String> {
+        let mut v = 0u64;
+        for i in 0..10 {
+            let b = self.byte()?;
+            v |= u64::from(b & 0x7f) << (7 * i);
+            if b & 0x80 == 0 {
+                return Ok(v);
+            }
+        }
+        Err(format!(
+            "footer varint longer than 10 bytes at byte {}",
+            self.pos
+        ))
+    }
+
+    /// A collection of `size` elements needs at least `size × min_bytes` bytes.
+    fn check_size(&self, size: u64, min_bytes: u64, what: &str) -> Result<usize, String> {
+        if size.saturating_mul(min_bytes) > self.remaining() as u64 {
+            return Err(format!(
+                "footer {what} of {size} elements at byte {} with {} bytes left",
+                self.pos,
+                self.remaining()
+            ));
+        }
+        Ok(size as usize)
+    }
+
+    fn skip_value(&mut self, ty: u8, depth: usize, in_collection: bool) -> Result<(), String> {
+        if depth > MAX_DEPTH {
+            return Err(format!("footer nested deeper than {MAX_DEPTH}"));
+        }
+        match ty {
+            // a field's boolean lives in its type; a collection's takes one byte
+            BOOL_TRUE | BOOL_FALSE => {
+                if in_collection {
+                    self.byte()?;
+                }
+                Ok(())
+            }
+            BYTE => self.byte().map(|_| ()),
+            I16 | I32 | I64 => self.varint().map(|_| ()),
+            DOUBLE => self.skip(8),
+            UUID => self.skip(16),
+            BINARY => {
+                let len = self.varint()?;
+                let len = self.check_size(len, 1, "binary")?;
+                self.skip(len)
+            }
+            LIST | SET => {
+                let h = self.byte()?;
+                let elem = h & 0x0f;
+                let size = match h >> 4 {
+                    15 => self.varint()?,
+                    s => u64::from(s),
+                };
+                let size = self.check_size(size, 1, "list")?;
+                for _ in 0..size {
+                    self.skip_value(elem, depth + 1, true)?;
+                }
+                Ok(())
+            }
+            MAP => {
+                let size = self.varint()?;
+                let size = self.check_size(size, 2, "map")?;
+                if size > 0 {
+                    let kv = self.byte()?;
+                    for _ in 0..size {
+                        self.skip_value(kv >> 4, depth + 1, true)?;
+                        self.skip_value(kv & 0x0f, depth + 1, true)?;
+                    }
+                }
+                Ok(())
+            }
+            STRUCT => self.skip_struct(depth + 1),
+            t => Err(format!(
+                "footer holds unknown type {t} at byte {}",
+                self.pos
+            )),
+        }
+    }
+
+    fn skip_struct(&mut self, depth: usize) -> Result<(), String> {
+        if depth > MAX_DEPTH {
+            return Err(format!("footer nested deeper than {MAX_DEPTH}"));
+        }
+        loop {
+            let h = self.byte()?;
+            if h == 0 {
+                return Ok(());
+            }
+            if h >> 4 == 0 {
+                // a long-form field id follows (zigzag i16)
+                self.varint()?;
+            }
+            self.skip_value(h & 0x0f, depth, false)?;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file around a footer.
+    fn file(footer: &[u8]) -> Vec<u8> {
+        let mut f = b"PAR1".to_vec();
+        f.extend_from_slice(footer);
+        f.extend_from_slice(&(footer.len() as u32).to_le_bytes());
+        f.extend_from_slice(b"PAR1");
+        f
+    }
+
+    #[test]
+    fn well_formed_footers_pass() {
+        // field 1 i32 = 1, field 2 list<struct> of 1 (an empty struct), field 3 binary "ab",
+        // field 4 bool true, stop
+        let f = file(&[
+            0x15, 0x02, 0x19, 0x1c, 0x00, 0x18, 0x02, b'a', b'b', 0x11, 0x00,
+        ]);
+        assert_eq!(check(&f), Ok(()));
+    }
+
+    #[test]
+    fn oversized_lists_binaries_and_lengths_are_refused() {
+        // a list claiming 2^31 - 1 structs in a few bytes
+        let f = file(&[0x19, 0xfc, 0xff, 0xff, 0xff, 0xff, 0x07, 0x00]);
+        assert!(check(&f).unwrap_err().contains("list of 2147483647"));
+        // a binary of 1000 bytes with 1 left
+        let f = file(&[0x18, 0xe8, 0x07, 0x00]);
+        assert!(check(&f).unwrap_err().contains("binary of 1000"));
+        // footer length beyond the file
+        let mut f = file(&[0x00]);
+        let n = f.len();
+        f[n - 8..n - 4].copy_from_slice(&1000u32.to_le_bytes());
+        assert!(check(&f).unwrap_err().contains("footer length 1000"));
+        // truncated and unknown types
+        assert!(check(&file(&[0x15])).unwrap_err().contains("truncated"));
+        assert!(check(&file(&[0x1e, 0x00]))
+            .unwrap_err()
+            .contains("unknown type 14"));
+        assert!(check(b"PAR1PAR1").is_err());
+    }
+
+    #[test]
+    fn deep_nesting_is_refused() {
+        let mut footer = vec![0x1c; 100];
+        footer.extend(vec![0x00; 101]);
+        assert!(check(&file(&footer)).unwrap_err().contains("deeper"));
+    }
+}
