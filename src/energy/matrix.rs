@@ -309,10 +309,14 @@ impl EnergyTable {
                 }
                 // indices past the row count cannot fit the grid (checked below) and
                 // would size the axes beyond the file
-                if p as u64 >= rows as u64 || d as u64 >= rows as u64 || b as u64 >= rows as u64 {
+                let big = p.max(d).max(b);
+                if big as u64 >= rows as u64 {
                     return Err(Error::input(
                         path,
-                        format!("row {}: index beyond the table's {rows} rows", off + i),
+                        format!(
+                            "{rows} rows but row {} holds index {big} (position, direction or bin)",
+                            off + i
+                        ),
                     ));
                 }
                 np = np.max(p as usize + 1);

@@ -7,11 +7,15 @@
 //! polars-parquet's footer decoder sizes each list from its header before reading it
 //! (`Vec::with_capacity(size)`): a corrupt size of 2^31 row groups asks for hundreds of
 //! gigabytes and *aborts* the process, which no panic guard catches (the fuzzer found 13
-//! such files, now regression fixtures in `fuzz/regressions/`). This walker reads the same bytes with the compact
-//! protocol's grammar only (field headers, varints, binaries, lists, sets, maps, structs)
-//! and refuses any list, set, map or binary claiming more elements or bytes than remain in
-//! the footer (each element takes at least one byte), nesting deeper than
-//! [`MAX_DEPTH`], and a footer length or magic that does not fit the file. Written by hand
+//! such files, now regression fixtures in `fuzz/regressions/`). This walker reads the same
+//! bytes the way that decoder does: it knows the Parquet `FileMetaData` schema (the
+//! structs and field ids polars decodes, [`expect`]) and refuses a known field whose wire
+//! type is not the one the decoder will read it as (the decoder does not look at the
+//! type, so a mutated type makes it read a list header out of other bytes), any list,
+//! set, map or binary claiming more elements or bytes than remain in the footer (each
+//! element takes at least one byte; a list size is also taken modulo 2^32 as the decoder
+//! does), nesting deeper than [`MAX_DEPTH`], and a footer length or magic that does not
+//! fit the file. Unknown fields are skipped by their wire type, as the decoder does. Written by hand
 //! because no crate exposes a bounded compact-protocol skipper over a byte slice without
 //! pulling in the Apache `thrift` runtime (whose own skipper has the same pre-sizing).
 
@@ -35,7 +39,95 @@ pub fn check(file: &[u8]) -> Result<(), String> {
         buf: &file[n - 8 - len..n - 8],
         pos: 0,
     };
-    w.skip_struct(0)
+    w.skip_struct(Kind::FileMeta, 0)
+}
+
+/// The structs of the Parquet footer that polars decodes field by field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    FileMeta,
+    SchemaElement,
+    RowGroup,
+    ColumnChunk,
+    ColumnMeta,
+    Statistics,
+    KeyValue,
+    SortingColumn,
+    ColumnOrder,
+    LogicalType,
+    Decimal,
+    TimeUnit,
+    Time,
+    IntType,
+    /// A struct whose fields are all skipped by their wire type.
+    Opaque,
+}
+
+/// How the decoder reads a known field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Expect {
+    /// A varint (i16/i32/i64).
+    Varint,
+    /// A binary or string.
+    Binary,
+    /// One raw byte (i8).
+    Byte,
+    /// A boolean (in the field header).
+    Bool,
+    /// A struct.
+    Struct(Kind),
+    /// A list of varints.
+    ListVarint,
+    /// A list of binaries.
+    ListBinary,
+    /// A list of structs.
+    ListStruct(Kind),
+}
+
+/// The field `id` of struct `kind` as polars-parquet 0.55's footer decoder reads it
+/// (`handwritten_thrift/file_metadata_thrift.rs`); `None`: skipped by its wire type.
+fn expect(kind: Kind, id: i64) -> Option<Expect> {
+    use Expect::*;
+    use Kind::*;
+    Some(match (kind, id) {
+        (FileMeta, 1 | 3) => Varint,
+        (FileMeta, 2) => ListStruct(SchemaElement),
+        (FileMeta, 4) => ListStruct(RowGroup),
+        (FileMeta, 5) => ListStruct(KeyValue),
+        (FileMeta, 6) => Binary,
+        (FileMeta, 7) => ListStruct(ColumnOrder),
+        (SchemaElement, 1..=3 | 5..=9) => Varint,
+        (SchemaElement, 4) => Binary,
+        (SchemaElement, 10) => Struct(LogicalType),
+        (RowGroup, 1) => ListStruct(ColumnChunk),
+        (RowGroup, 2 | 3 | 5..=7) => Varint,
+        (RowGroup, 4) => ListStruct(SortingColumn),
+        (ColumnChunk, 1) => Binary,
+        (ColumnChunk, 2 | 4..=7) => Varint,
+        (ColumnChunk, 3) => Struct(ColumnMeta),
+        (ColumnMeta, 1 | 4..=7 | 9..=11 | 14 | 15) => Varint,
+        (ColumnMeta, 2) => ListVarint,
+        (ColumnMeta, 3) => ListBinary,
+        (ColumnMeta, 12) => Struct(Statistics),
+        (Statistics, 1 | 2 | 5 | 6) => Binary,
+        (Statistics, 3 | 4) => Varint,
+        (Statistics, 7 | 8) => Bool,
+        (KeyValue, 1 | 2) => Binary,
+        (SortingColumn, 1) => Varint,
+        (SortingColumn, 2 | 3) => Bool,
+        (ColumnOrder, 1 | 2) => Struct(Opaque),
+        (LogicalType, 1..=4 | 6 | 11..=15) => Struct(Opaque),
+        (LogicalType, 5) => Struct(Decimal),
+        (LogicalType, 7 | 8) => Struct(Time),
+        (LogicalType, 10) => Struct(IntType),
+        (Decimal, 1 | 2) => Varint,
+        (TimeUnit, 1..=3) => Struct(Opaque),
+        (Time, 1) => Bool,
+        (Time, 2) => Struct(TimeUnit),
+        (IntType, 1) => Byte,
+        (IntType, 2) => Bool,
+        _ => return None,
+    })
 }
 
 /// The compact protocol's element types.
@@ -157,7 +249,7 @@ impl Walker<'_> {
                 }
                 Ok(())
             }
-            STRUCT => self.skip_struct(depth + 1),
+            STRUCT => self.skip_struct(Kind::Opaque, depth + 1),
             t => Err(format!(
                 "footer holds unknown type {t} at byte {}",
                 self.pos
@@ -165,20 +257,90 @@ impl Walker<'_> {
         }
     }
 
-    fn skip_struct(&mut self, depth: usize) -> Result<(), String> {
+    fn skip_struct(&mut self, kind: Kind, depth: usize) -> Result<(), String> {
         if depth > MAX_DEPTH {
             return Err(format!("footer nested deeper than {MAX_DEPTH}"));
         }
+        let mut last_id: i64 = 0;
         loop {
             let h = self.byte()?;
             if h == 0 {
                 return Ok(());
             }
-            if h >> 4 == 0 {
+            let ty = h & 0x0f;
+            let id = match h >> 4 {
                 // a long-form field id follows (zigzag i16)
-                self.varint()?;
+                0 => {
+                    let z = self.varint()? as u16 as i64;
+                    (z >> 1) ^ -(z & 1)
+                }
+                delta => last_id + i64::from(delta),
+            };
+            match expect(kind, id) {
+                None => self.skip_value(ty, depth, false)?,
+                Some(e) => self.read_expected(kind, id, ty, e, depth)?,
             }
-            self.skip_value(h & 0x0f, depth, false)?;
+            last_id = id;
+        }
+    }
+
+    /// A known field: its wire type must be the one the decoder reads it as.
+    fn read_expected(
+        &mut self,
+        kind: Kind,
+        id: i64,
+        ty: u8,
+        e: Expect,
+        depth: usize,
+    ) -> Result<(), String> {
+        let ok = match e {
+            Expect::Varint => matches!(ty, I16 | I32 | I64),
+            Expect::Binary => ty == BINARY,
+            Expect::Byte => ty == BYTE,
+            Expect::Bool => matches!(ty, BOOL_TRUE | BOOL_FALSE),
+            Expect::Struct(_) => ty == STRUCT,
+            Expect::ListVarint | Expect::ListBinary | Expect::ListStruct(_) => {
+                matches!(ty, LIST | SET)
+            }
+        };
+        if !ok {
+            return Err(format!(
+                "footer field {id} of {kind:?} has wire type {ty}, not the {e:?} it holds"
+            ));
+        }
+        match e {
+            Expect::Struct(k) => self.skip_struct(k, depth + 1),
+            Expect::ListVarint | Expect::ListBinary | Expect::ListStruct(_) => {
+                let h = self.byte()?;
+                let elem = h & 0x0f;
+                let size = match h >> 4 {
+                    // the decoder takes the varint as an i32
+                    15 => i64::from(self.varint()? as i32),
+                    s => i64::from(s),
+                };
+                let size = self.check_size(size.max(0) as u64, 1, "list")?;
+                if size == 0 {
+                    return Ok(());
+                }
+                let elem_ok = match e {
+                    Expect::ListVarint => matches!(elem, I16 | I32 | I64),
+                    Expect::ListBinary => elem == BINARY,
+                    _ => elem == STRUCT,
+                };
+                if !elem_ok {
+                    return Err(format!(
+                        "footer list {id} of {kind:?} holds wire type {elem}, not {e:?}"
+                    ));
+                }
+                for _ in 0..size {
+                    match e {
+                        Expect::ListStruct(k) => self.skip_struct(k, depth + 1)?,
+                        _ => self.skip_value(elem, depth + 1, true)?,
+                    }
+                }
+                Ok(())
+            }
+            _ => self.skip_value(ty, depth, false),
         }
     }
 }
@@ -198,22 +360,26 @@ mod tests {
 
     #[test]
     fn well_formed_footers_pass() {
-        // field 1 i32 = 1, field 2 list<struct> of 1 (an empty struct), field 3 binary "ab",
-        // field 4 bool true, stop
+        // version (1, i32) = 1, schema (2) a list of 1 empty struct, num_rows (3, i64) = 0,
+        // created_by (6, binary) "ab", an unknown field 9 (bool), stop
         let f = file(&[
-            0x15, 0x02, 0x19, 0x1c, 0x00, 0x18, 0x02, b'a', b'b', 0x11, 0x00,
+            0x15, 0x02, 0x19, 0x1c, 0x00, 0x16, 0x00, 0x38, 0x02, b'a', b'b', 0x31, 0x00,
         ]);
         assert_eq!(check(&f), Ok(()));
     }
 
     #[test]
     fn oversized_lists_binaries_and_lengths_are_refused() {
-        // a list claiming 2^31 - 1 structs in a few bytes
-        let f = file(&[0x19, 0xfc, 0xff, 0xff, 0xff, 0xff, 0x07, 0x00]);
+        // a list of row groups (4) claiming 2^31 - 1 structs in a few bytes
+        let f = file(&[0x49, 0xfc, 0xff, 0xff, 0xff, 0xff, 0x07, 0x00]);
         assert!(check(&f).unwrap_err().contains("list of 2147483647"));
-        // a binary of 1000 bytes with 1 left
-        let f = file(&[0x18, 0xe8, 0x07, 0x00]);
+        // created_by (6): a binary of 1000 bytes with 1 left
+        let f = file(&[0x68, 0xe8, 0x07, 0x00]);
         assert!(check(&f).unwrap_err().contains("binary of 1000"));
+        // row groups (4) with an i32 wire type: the decoder would read a list header from
+        // the varint's bytes
+        let f = file(&[0x45, 0x02, 0x00]);
+        assert!(check(&f).unwrap_err().contains("wire type 5"));
         // footer length beyond the file
         let mut f = file(&[0x00]);
         let n = f.len();
@@ -221,7 +387,7 @@ mod tests {
         assert!(check(&f).unwrap_err().contains("footer length 1000"));
         // truncated and unknown types
         assert!(check(&file(&[0x15])).unwrap_err().contains("truncated"));
-        assert!(check(&file(&[0x1e, 0x00]))
+        assert!(check(&file(&[0x9e, 0x00]))
             .unwrap_err()
             .contains("unknown type 14"));
         assert!(check(b"PAR1PAR1").is_err());
@@ -229,7 +395,9 @@ mod tests {
 
     #[test]
     fn deep_nesting_is_refused() {
-        let mut footer = vec![0x1c; 100];
+        // an unknown struct field (9) holding structs 100 deep
+        let mut footer = vec![0x9c];
+        footer.extend(vec![0x1c; 99]);
         footer.extend(vec![0x00; 101]);
         assert!(check(&file(&footer)).unwrap_err().contains("deeper"));
     }
