@@ -163,7 +163,7 @@ fn pool(n: usize) -> rayon::ThreadPool {
 
 fn run(
     model: &ObservationModel,
-    em: &EnergyMatrix,
+    em: &dyn pradar::energy::EnergySource,
     det: &Detector,
     method: Method,
 ) -> (LogOddsMap, OgStats) {

@@ -37,9 +37,9 @@ pub fn frame(path: &Path, cols: Vec<Column>) -> Result<DataFrame> {
 ///
 /// Written over polars-parquet's `FileWriter` rather than polars' `BatchedWriter`, whose
 /// metadata is fixed when the first batch is written: a stage that learns its metadata
-/// only at the end (the energy stage's N0) can then stream its rows. The bytes are those
-/// of polars' writer (same encodings, statistics, Snappy pages, the Arrow schema first in
-/// the metadata).
+/// only at the end (the energy stage's N0) can then stream its rows. The file is what
+/// polars' writer makes (statistics, Snappy pages, the Arrow schema first in the
+/// metadata), except that floating-point columns are written plain, not dictionary-encoded.
 pub struct ParquetStream {
     path: PathBuf,
     tmp: PathBuf,
@@ -83,9 +83,17 @@ impl ParquetStream {
         if self.writer.is_none() {
             let file = File::create(&self.tmp).map_err(|e| Error::io(&self.path, e))?;
             let schema = df.schema().to_arrow(CompatLevel::newest());
+            // floating-point columns plain: measured values (energies, positions) are
+            // nearly all distinct, and polars' dictionary attempt (a cardinality estimate
+            // over every value, then a fallback) was most of the energy stage's write time
             let encodings = schema
                 .iter_values()
-                .map(|f| pw::get_dtype_encoding(&f.dtype))
+                .map(|f| match f.dtype {
+                    ArrowDataType::Float64 | ArrowDataType::Float32 => {
+                        vec![pw::Encoding::Plain]
+                    }
+                    _ => pw::get_dtype_encoding(&f.dtype),
+                })
                 .collect();
             let options = pw::WriteOptions {
                 statistics: pw::StatisticsOptions::default(),
@@ -343,7 +351,7 @@ pub fn read_parquet_part(
     r.set_metadata(md.clone());
     let schema = guarded(path, || r.schema())?;
     for c in columns {
-        if schema.get(*c).is_none() {
+        if schema.get(c).is_none() {
             return Err(Error::input(path, format!("missing column `{c}`")));
         }
     }

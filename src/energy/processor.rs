@@ -194,12 +194,20 @@ impl EnergyProcessor {
             }
         }
         let norm = scale / l as f64;
+        let n = self.nfft;
         for (bin, o) in out.iter_mut().enumerate().take(self.nbins_full) {
-            let start = (bin * l + self.nfft - half) % self.nfft;
-            let mut e = 0.0;
-            for j in 0..l {
-                e += buf[(start + j) % self.nfft].norm_sqr();
-            }
+            // the bin's L samples start at bin·L − half (circularly): contiguous but for the
+            // bins that wrap past either end, summed in the same order either way
+            let start = (bin * l + n - half) % n;
+            let e = if start + l <= n {
+                buf[start..start + l]
+                    .iter()
+                    .map(|v| v.norm_sqr())
+                    .sum::<f64>()
+            } else {
+                let (a, b) = (&buf[start..], &buf[..start + l - n]);
+                a.iter().chain(b).map(|v| v.norm_sqr()).sum::<f64>()
+            };
             *o += e * norm;
         }
     }
