@@ -254,6 +254,10 @@ pub fn check_frame(path: &Path, df: &DataFrame) -> Result<()> {
     Ok(())
 }
 
+/// Most rows a row group may claim: 2^27, so a column's decode buffer stays within 1 GiB
+/// (pradar writes at most 2^20; pyarrow's default is 2^20, polars' 2^18).
+pub const MAX_GROUP_ROWS: usize = 1 << 27;
+
 /// Largest ratio of a page's uncompressed to compressed size accepted (zstd and LZ4 reach
 /// a few hundred on constant data; a corrupt header claims billions).
 const MAX_PAGE_EXPANSION: usize = 4096;
@@ -261,9 +265,11 @@ const MAX_PAGE_EXPANSION: usize = 4096;
 /// Walk every page header of a Parquet file (memory-mapped: nothing is decoded or copied)
 /// and refuse counts the decoder would trust for its allocations: a data page's
 /// `num_values` above its row group's row count (a negative count reads as about 2^64 and
-/// made polars abort on a 2^61-byte allocation), or an uncompressed size more than
-/// [`MAX_PAGE_EXPANSION`] times the compressed one. Such an allocation failure aborts
-/// the process, which [`guarded`] cannot catch; this check runs before it.
+/// made polars abort on a 2^61-byte allocation), an uncompressed size more than
+/// [`MAX_PAGE_EXPANSION`] times the compressed one, a column whose pages' counts do not
+/// add up to its row group's rows, or a row group of more than [`MAX_GROUP_ROWS`] rows.
+/// Such an allocation failure aborts the process, which [`guarded`] cannot catch; this
+/// check runs before it.
 pub fn check_pages(path: &Path) -> Result<()> {
     use polars_parquet::parquet::page::CompressedPage;
     use polars_parquet::parquet::read::{get_page_iterator, read_metadata};
@@ -281,6 +287,12 @@ pub fn check_pages(path: &Path) -> Result<()> {
     drop(buf);
     for (g, rg) in md.row_groups.iter().enumerate() {
         let rows = rg.num_rows();
+        // the decoders size their buffers from the claimed row count
+        if rows > MAX_GROUP_ROWS {
+            return Err(bad(format!(
+                "row group {g} claims {rows} rows (at most {MAX_GROUP_ROWS} are read)"
+            )));
+        }
         // a fresh map per row group: the pages read through it leave the process's resident
         // set when it is dropped, so the check's memory does not grow with the file
         // SAFETY: as above.
@@ -291,6 +303,7 @@ pub fn check_pages(path: &Path) -> Result<()> {
                 get_page_iterator(col, Cursor::new(buf.clone()), Vec::new(), size)
                     .map_err(PolarsError::from)
             })?;
+            let mut values = 0usize;
             for page in pages {
                 let page = page.map_err(|e| Error::table(path, PolarsError::from(e)))?;
                 // (a dictionary page's sizes are not exposed by polars-parquet: unchecked)
@@ -309,6 +322,14 @@ pub fn check_pages(path: &Path) -> Result<()> {
                         "row group {g} column {c}: a page of {compressed} bytes claims {uncompressed} uncompressed"
                     )));
                 }
+                values = values.saturating_add(n);
+            }
+            // a flat column holds one value (or null) per row: the pages' counts add up to
+            // the group's, so a group cannot claim rows its pages do not hold
+            if values != rows {
+                return Err(bad(format!(
+                    "row group {g} column {c}: pages hold {values} values for {rows} rows"
+                )));
             }
         }
     }

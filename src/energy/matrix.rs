@@ -294,7 +294,6 @@ impl EnergyTable {
         }
         // pass 1: the grid from the index columns
         let (mut np, mut nd, mut nb) = (0usize, 0usize, 0usize);
-        let mut canonical_possible = true;
         let mut off = 0;
         for &n in &groups {
             let df =
@@ -323,7 +322,12 @@ impl EnergyTable {
                 nd = nd.max(d as usize + 1);
                 nb = nb.max(b as usize + 1);
             }
-            canonical_possible &= df.height() == n;
+            if df.height() != n {
+                return Err(Error::input(
+                    path,
+                    format!("row group at row {off} claims {n} rows but holds {}", df.height()),
+                ));
+            }
             off += n;
         }
         let cells = np.checked_mul(nd).and_then(|v| v.checked_mul(nb));
@@ -336,7 +340,7 @@ impl EnergyTable {
         // pass 2: order, values and axes
         let mut angles = vec![f64::NAN; nd];
         let mut headings = vec![f64::NAN; np];
-        let mut canonical = canonical_possible;
+        let mut canonical = true;
         let mut off = 0;
         for &n in &groups {
             if !canonical {
