@@ -242,7 +242,9 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
                     let streamed = crate::energy::EnergyTable::open(&p).and_then(|t| {
                         use crate::energy::EnergySource;
                         let np = t.header().positions;
-                        (0..np).try_for_each(|q| t.load(q, q + 1).map(|_| ()))
+                        t.load(0, np)?;
+                        t.load(0, 1.min(np))?;
+                        t.load(np.saturating_sub(1), np).map(|_| ())
                     });
                     whole.and(streamed)
                 }

@@ -54,6 +54,8 @@ struct StreamWriter {
     encodings: polars_buffer::Buffer<Vec<polars_parquet::write::Encoding>>,
     fields: Vec<polars_parquet::write::ParquetType>,
     options: polars_parquet::write::WriteOptions,
+    /// The first frame's schema: every later frame must have it.
+    schema: Schema,
 }
 
 impl ParquetStream {
@@ -109,9 +111,16 @@ impl ParquetStream {
                 encodings,
                 fields,
                 options,
+                schema: df.schema().as_ref().clone(),
             });
         }
         let w = self.writer.as_mut().expect("writer");
+        if df.schema().as_ref() != &w.schema {
+            return Err(Error::table(
+                &self.path,
+                "a batch's columns differ from the first batch's (internal error)",
+            ));
+        }
         for batch in df.iter_chunks(CompatLevel::newest(), false) {
             let rows = batch.len();
             if rows == 0 {
@@ -188,9 +197,25 @@ fn open(path: &Path) -> Result<File> {
 /// those counts, and a corrupt one aborts the process on allocation.
 fn open_parquet(path: &Path) -> Result<File> {
     let file = open(path)?;
+    check_footer(path, &file)?;
+    Ok(file)
+}
+
+/// [`footer::check`] on an open file (`path` names it in the error).
+fn check_footer(path: &Path, file: &File) -> Result<()> {
     // SAFETY: a read-only map of a file this run only reads (see `check_pages`).
-    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
-    footer::check(&map).map_err(|m| Error::table(path, format!("corrupt Parquet file ({m})")))?;
+    let map = unsafe { memmap2::Mmap::map(file) }.map_err(|e| Error::io(path, e))?;
+    footer::check(&map).map_err(|m| Error::table(path, format!("corrupt Parquet file ({m})")))
+}
+
+/// Open a Parquet file for several reads: its footer ([`footer::check`]) and pages
+/// ([`check_pages`]) checked once. The reads that follow go through this handle (clones
+/// of it), so a file renamed over the path meanwhile — how pradar's writers replace
+/// outputs — is never read with the first file's footer.
+pub fn open_checked(path: &Path) -> Result<File> {
+    let file = open(path)?;
+    check_footer(path, &file)?;
+    check_pages_file(path, &file)?;
     Ok(file)
 }
 
@@ -271,13 +296,18 @@ const MAX_PAGE_EXPANSION: usize = 4096;
 /// Such an allocation failure aborts the process, which [`guarded`] cannot catch; this
 /// check runs before it.
 pub fn check_pages(path: &Path) -> Result<()> {
+    let file = open_parquet(path)?;
+    check_pages_file(path, &file)
+}
+
+/// [`check_pages`] on an open file whose footer has been checked.
+fn check_pages_file(path: &Path, file: &File) -> Result<()> {
     use polars_parquet::parquet::page::CompressedPage;
     use polars_parquet::parquet::read::{get_page_iterator, read_metadata};
     use std::io::Cursor;
-    let file = open_parquet(path)?;
     // SAFETY: a read-only map of a file this run only reads; a file truncated by another
     // process meanwhile is outside what any reader can defend against.
-    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+    let map = unsafe { memmap2::Mmap::map(file) }.map_err(|e| Error::io(path, e))?;
     let size = map.len();
     let buf = polars_buffer::Buffer::from_owner(map);
     let bad = |msg: String| Error::table(path, format!("corrupt Parquet file ({msg})"));
@@ -296,7 +326,7 @@ pub fn check_pages(path: &Path) -> Result<()> {
         // a fresh map per row group: the pages read through it leave the process's resident
         // set when it is dropped, so the check's memory does not grow with the file
         // SAFETY: as above.
-        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+        let map = unsafe { memmap2::Mmap::map(file) }.map_err(|e| Error::io(path, e))?;
         let buf = polars_buffer::Buffer::from_owner(map);
         for (c, col) in rg.parquet_columns().iter().enumerate() {
             let pages = guarded(path, || {
@@ -352,22 +382,41 @@ pub type FileMetadataRef = std::sync::Arc<polars_parquet::read::FileMetadata>;
 /// Parse the footer of a Parquet file (guarded).
 pub fn parquet_file_metadata(path: &Path) -> Result<FileMetadataRef> {
     let file = open_parquet(path)?;
+    file_metadata(path, &file)
+}
+
+/// Parse the footer of a file from [`open_checked`] (guarded; `path` names it).
+pub fn file_metadata(path: &Path, file: &File) -> Result<FileMetadataRef> {
+    let file = file.try_clone().map_err(|e| Error::io(path, e))?;
     guarded(path, || {
         let mut r = ParquetReader::new(file);
         r.get_metadata().cloned()
     })
 }
 
-/// Read the rows `slice = (offset, len)` of the columns `columns` of a Parquet file whose
-/// footer `md` has been parsed and whose pages [`check_pages`] has checked: only the row
-/// groups overlapping the slice are decoded. A missing column is named.
+/// The file-level key-value metadata held in a parsed footer.
+pub fn key_values(md: &FileMetadataRef) -> Vec<(String, String)> {
+    md.key_value_metadata
+        .as_ref()
+        .map(|kv| {
+            kv.iter()
+                .map(|k| (k.key.clone(), k.value.clone().unwrap_or_default()))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Read the rows `slice = (offset, len)` of the columns `columns` of a file from
+/// [`open_checked`] whose footer `md` has been parsed: only the row groups overlapping the
+/// slice are decoded. A missing column is named (`path` names the file).
 pub fn read_parquet_part(
     path: &Path,
+    file: &File,
     md: &FileMetadataRef,
     slice: (usize, usize),
     columns: &[&str],
 ) -> Result<DataFrame> {
-    let file = open(path)?;
+    let file = file.try_clone().map_err(|e| Error::io(path, e))?;
     let mut r = ParquetReader::new(file);
     r.set_metadata(md.clone());
     let schema = guarded(path, || r.schema())?;

@@ -121,6 +121,11 @@ impl EnergyMatrix {
     }
     /// The profile of one (position, direction); `p` must be [`held`](Self::held).
     pub fn profile(&self, p: usize, d: usize) -> &[f64] {
+        debug_assert!(
+            self.held().contains(&p),
+            "position {p} not held ({:?})",
+            self.held()
+        );
         let i = ((p - self.first) * self.directions() + d) * self.bins;
         &self.data[i..i + self.bins]
     }
@@ -200,7 +205,11 @@ impl EnergyMatrix {
 
 /// The key-value metadata of an energy table, checked (schema version, numbers).
 fn read_meta(path: &Path) -> Result<EnergyMeta> {
-    let kv = table::parquet_metadata(path)?;
+    meta_from(path, table::parquet_metadata(path)?)
+}
+
+/// The metadata of an energy table from its key-value pairs, checked.
+fn meta_from(path: &Path, kv: Vec<(String, String)>) -> Result<EnergyMeta> {
     let get = |k: &str| -> Result<String> {
         kv.iter()
             .find(|(key, _)| key == k)
@@ -274,6 +283,8 @@ pub struct EnergyTable {
     path: std::path::PathBuf,
     /// Axes and metadata; `data` empty.
     header: EnergyMatrix,
+    /// The file, opened once (its footer and pages checked then).
+    file: std::fs::File,
     /// The file's Parquet metadata, parsed once.
     md: polars::prelude::FileMetadataRef,
     /// The whole matrix, when the rows are not in the writer's order.
@@ -281,12 +292,13 @@ pub struct EnergyTable {
 }
 
 impl EnergyTable {
-    /// Open and check an energy table: metadata, page headers ([`table::check_pages`]),
-    /// then the index columns and the values row group by row group.
+    /// Open and check an energy table: footer and page headers ([`table::open_checked`]),
+    /// metadata, then the index columns and the values row group by row group.
     pub fn open(path: &Path) -> Result<EnergyTable> {
-        let meta = read_meta(path)?;
-        table::check_pages(path)?;
-        let md = table::parquet_file_metadata(path)?;
+        // one handle for every read: a table renamed over the path meanwhile is not mixed in
+        let file = table::open_checked(path)?;
+        let md = table::file_metadata(path, &file)?;
+        let meta = meta_from(path, table::key_values(&md))?;
         let groups: Vec<usize> = md.row_groups.iter().map(|g| g.num_rows()).collect();
         let rows: usize = groups.iter().sum();
         if rows == 0 {
@@ -296,8 +308,13 @@ impl EnergyTable {
         let (mut np, mut nd, mut nb) = (0usize, 0usize, 0usize);
         let mut off = 0;
         for &n in &groups {
-            let df =
-                table::read_parquet_part(path, &md, (off, n), &["position", "direction", "bin"])?;
+            let df = table::read_parquet_part(
+                path,
+                &file,
+                &md,
+                (off, n),
+                &["position", "direction", "bin"],
+            )?;
             let pos = table::i64_column(path, &df, "position")?;
             let dir = table::i64_column(path, &df, "direction")?;
             let bin = table::i64_column(path, &df, "bin")?;
@@ -325,7 +342,10 @@ impl EnergyTable {
             if df.height() != n {
                 return Err(Error::input(
                     path,
-                    format!("row group at row {off} claims {n} rows but holds {}", df.height()),
+                    format!(
+                        "row group at row {off} claims {n} rows but holds {}",
+                        df.height()
+                    ),
                 ));
             }
             off += n;
@@ -348,6 +368,7 @@ impl EnergyTable {
             }
             let df = table::read_parquet_part(
                 path,
+                &file,
                 &md,
                 (off, n),
                 &[
@@ -368,7 +389,7 @@ impl EnergyTable {
             for i in 0..df.height() {
                 let row = off + i;
                 let (p, d, b) = (pos[i] as usize, dir[i] as usize, bin[i] as usize);
-                if (p * nd + d) * nb + b != row {
+                if p >= np || d >= nd || b >= nb || (p * nd + d) * nb + b != row {
                     canonical = false;
                     break;
                 }
@@ -381,17 +402,26 @@ impl EnergyTable {
         if !canonical {
             // another tool's row order: checked and held whole
             let whole = EnergyMatrix::read_with(path, meta)?;
-            let mut header = whole.clone();
-            header.data = Vec::new();
+            let header = EnergyMatrix {
+                meta: whole.meta.clone(),
+                positions: whole.positions,
+                angles_rel_deg: whole.angles_rel_deg.clone(),
+                headings_deg: whole.headings_deg.clone(),
+                bins: whole.bins,
+                first: 0,
+                data: Vec::new(),
+            };
             return Ok(EnergyTable {
                 path: path.to_path_buf(),
                 header,
+                file,
                 md,
                 whole: Some(whole),
             });
         }
         Ok(EnergyTable {
             path: path.to_path_buf(),
+            file,
             header: EnergyMatrix {
                 meta,
                 positions: np,
@@ -429,14 +459,15 @@ impl EnergySource for EnergyTable {
         }
         let h = &self.header;
         if p0 > p1 || p1 > h.positions {
-            return Err(Error::param(
-                "energy",
+            return Err(Error::input(
+                &self.path,
                 format!("positions {p0}..{p1} outside the table's {}", h.positions),
             ));
         }
         let per = h.directions() * h.bins;
         let df = table::read_parquet_part(
             &self.path,
+            &self.file,
             &self.md,
             (p0 * per, (p1 - p0) * per),
             &["energy"],

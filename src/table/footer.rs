@@ -1,8 +1,8 @@
 //! A structural check of a Parquet footer before polars parses it.
 //!
 //! Takes the bytes of a Parquet file; gives `Ok` when its footer (the `FileMetaData` thrift
-//! struct in the compact protocol, DESIGN-independent: the Parquet format) is well formed
-//! enough to parse without unbounded allocations, or the reason it is not.
+//! struct in the compact protocol) is well formed enough to parse without unbounded
+//! allocations or recursion, or a [`FooterError`] saying why it is not.
 //!
 //! polars-parquet's footer decoder sizes each list from its header before reading it
 //! (`Vec::with_capacity(size)`): a corrupt size of 2^31 row groups asks for hundreds of
@@ -15,15 +15,35 @@
 //! set, map or binary claiming more elements or bytes than remain in the footer (each
 //! element takes at least one byte; a list size is also taken modulo 2^32 as the decoder
 //! does), nesting deeper than [`MAX_DEPTH`], and a footer length or magic that does not
-//! fit the file. Unknown fields are skipped by their wire type, as the decoder does. Written by hand
+//! fit the file. Unknown fields are skipped by their wire type, as the decoder does (a
+//! list of booleans, which the decoder's skipper reads as zero bytes but the protocol as
+//! one byte each, is refused: no Parquet footer holds one). Long-form field ids are
+//! zigzag-decoded from the whole varint and then cut to 16 bits, as the decoder does. The
+//! schema's nesting (`num_children` chains, which the decoder walks recursively) is
+//! limited to [`MAX_DEPTH`] levels. Written by hand
 //! because no crate exposes a bounded compact-protocol skipper over a byte slice without
 //! pulling in the Apache `thrift` runtime (whose own skipper has the same pre-sizing).
 
 /// Deepest struct/list nesting accepted (the Parquet schema nests a handful deep).
 pub const MAX_DEPTH: usize = 64;
 
+/// Why a footer is refused (one line, for the error naming the file).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct FooterError(String);
+
+impl From<String> for FooterError {
+    fn from(s: String) -> Self {
+        FooterError(s)
+    }
+}
+
 /// Check the footer of a whole Parquet file held in `file`.
-pub fn check(file: &[u8]) -> Result<(), String> {
+pub fn check(file: &[u8]) -> Result<(), FooterError> {
+    check_str(file).map_err(FooterError)
+}
+
+fn check_str(file: &[u8]) -> Result<(), String> {
     let n = file.len();
     if n < 12 || &file[..4] != b"PAR1" || &file[n - 4..] != b"PAR1" {
         return Err("not a Parquet file (magic `PAR1` missing at its start or end)".into());
@@ -38,8 +58,32 @@ pub fn check(file: &[u8]) -> Result<(), String> {
     let mut w = Walker {
         buf: &file[n - 8 - len..n - 8],
         pos: 0,
+        children: Vec::new(),
     };
-    w.skip_struct(Kind::FileMeta, 0)
+    w.skip_struct(Kind::FileMeta, 0)?;
+    schema_depth(&w.children)
+}
+
+/// The schema's elements come depth-first, each with its `num_children`: the depth of
+/// that tree must stay within [`MAX_DEPTH`] (the decoder recurses once per level).
+fn schema_depth(children: &[i64]) -> Result<(), String> {
+    // remaining children of each open level
+    let mut open: Vec<i64> = Vec::new();
+    for &c in children {
+        while open.last() == Some(&0) {
+            open.pop();
+        }
+        if let Some(top) = open.last_mut() {
+            *top -= 1;
+        }
+        if c > 0 {
+            open.push(c);
+            if open.len() > MAX_DEPTH {
+                return Err(format!("footer schema nested deeper than {MAX_DEPTH}"));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The structs of the Parquet footer that polars decodes field by field.
@@ -148,6 +192,8 @@ const UUID: u8 = 13;
 struct Walker<'a> {
     buf: &'a [u8],
     pos: usize,
+    /// `num_children` of every schema element read, in order (0 when absent).
+    children: Vec<i64>,
 }
 
 impl Walker<'_> {
@@ -208,10 +254,14 @@ impl Walker<'_> {
             return Err(format!("footer nested deeper than {MAX_DEPTH}"));
         }
         match ty {
-            // a field's boolean lives in its type; a collection's takes one byte
+            // a field's boolean lives in its type; in a collection the protocol gives it a
+            // byte but the decoder's skipper none: refused there (see the module docs)
             BOOL_TRUE | BOOL_FALSE => {
                 if in_collection {
-                    self.byte()?;
+                    return Err(format!(
+                        "footer collection of booleans at byte {}",
+                        self.pos
+                    ));
                 }
                 Ok(())
             }
@@ -262,23 +312,34 @@ impl Walker<'_> {
             return Err(format!("footer nested deeper than {MAX_DEPTH}"));
         }
         let mut last_id: i64 = 0;
+        let mut children = 0i64;
         loop {
             let h = self.byte()?;
             if h == 0 {
+                if kind == Kind::SchemaElement {
+                    self.children.push(children);
+                }
                 return Ok(());
             }
             let ty = h & 0x0f;
             let id = match h >> 4 {
                 // a long-form field id follows (zigzag i16)
+                // (zigzag over the whole varint, then cut to i16, as the decoder does)
                 0 => {
-                    let z = self.varint()? as u16 as i64;
-                    (z >> 1) ^ -(z & 1)
+                    let v = self.varint()?;
+                    (((v >> 1) as i64) ^ -((v & 1) as i64)) as i16 as i64
                 }
                 delta => last_id + i64::from(delta),
             };
-            match expect(kind, id) {
-                None => self.skip_value(ty, depth, false)?,
-                Some(e) => self.read_expected(kind, id, ty, e, depth)?,
+            if kind == Kind::SchemaElement && id == 5 && matches!(ty, I16 | I32 | I64) {
+                let v = self.varint()?;
+                // zigzag, taken as the decoder's i32
+                children = (((v >> 1) as i64) ^ -((v & 1) as i64)) as i32 as i64;
+            } else {
+                match expect(kind, id) {
+                    None => self.skip_value(ty, depth, false)?,
+                    Some(e) => self.read_expected(kind, id, ty, e, depth)?,
+                }
             }
             last_id = id;
         }
@@ -365,32 +426,54 @@ mod tests {
         let f = file(&[
             0x15, 0x02, 0x19, 0x1c, 0x00, 0x16, 0x00, 0x38, 0x02, b'a', b'b', 0x31, 0x00,
         ]);
-        assert_eq!(check(&f), Ok(()));
+        assert_eq!(check_str(&f), Ok(()));
     }
 
     #[test]
     fn oversized_lists_binaries_and_lengths_are_refused() {
         // a list of row groups (4) claiming 2^31 - 1 structs in a few bytes
         let f = file(&[0x49, 0xfc, 0xff, 0xff, 0xff, 0xff, 0x07, 0x00]);
-        assert!(check(&f).unwrap_err().contains("list of 2147483647"));
+        assert!(check_str(&f).unwrap_err().contains("list of 2147483647"));
         // created_by (6): a binary of 1000 bytes with 1 left
         let f = file(&[0x68, 0xe8, 0x07, 0x00]);
-        assert!(check(&f).unwrap_err().contains("binary of 1000"));
+        assert!(check_str(&f).unwrap_err().contains("binary of 1000"));
         // row groups (4) with an i32 wire type: the decoder would read a list header from
         // the varint's bytes
         let f = file(&[0x45, 0x02, 0x00]);
-        assert!(check(&f).unwrap_err().contains("wire type 5"));
+        assert!(check_str(&f).unwrap_err().contains("wire type 5"));
         // footer length beyond the file
         let mut f = file(&[0x00]);
         let n = f.len();
         f[n - 8..n - 4].copy_from_slice(&1000u32.to_le_bytes());
-        assert!(check(&f).unwrap_err().contains("footer length 1000"));
+        assert!(check_str(&f).unwrap_err().contains("footer length 1000"));
         // truncated and unknown types
-        assert!(check(&file(&[0x15])).unwrap_err().contains("truncated"));
-        assert!(check(&file(&[0x9e, 0x00]))
+        assert!(check_str(&file(&[0x15])).unwrap_err().contains("truncated"));
+        assert!(check_str(&file(&[0x9e, 0x00]))
             .unwrap_err()
             .contains("unknown type 14"));
-        assert!(check(b"PAR1PAR1").is_err());
+        assert!(check_str(b"PAR1PAR1").is_err());
+    }
+
+    #[test]
+    fn the_decoders_readings_are_followed() {
+        // an unknown field 8 holding a list of 8 booleans (the decoder's skipper reads no
+        // bytes for them, then a row-group list of 2^31 - 1 from what follows)
+        let f = file(&[
+            0x89, 0x81, 0x09, 0x08, 0xfc, 0xff, 0xff, 0xff, 0xff, 0x07, 0x00,
+        ]);
+        assert!(check_str(&f).unwrap_err().to_string().contains("booleans"));
+        // a long-form id 0x1FFF7 is field 4 (row groups) to the decoder: its i32 wire type
+        // is refused
+        let f = file(&[0x05, 0xf7, 0xff, 0x07, 0x02, 0x00]);
+        assert!(check_str(&f).unwrap_err().to_string().contains("field 4"));
+        // a schema of 100 elements each the only child of the one before
+        let mut footer = vec![0x29, 0xfc, 100];
+        for _ in 0..100 {
+            footer.extend([0x55, 0x02, 0x00]); // num_children (5) = 1
+        }
+        footer.push(0x00);
+        let e = check_str(&file(&footer)).unwrap_err();
+        assert!(e.contains("schema nested"), "{e}");
     }
 
     #[test]
@@ -399,6 +482,9 @@ mod tests {
         let mut footer = vec![0x9c];
         footer.extend(vec![0x1c; 99]);
         footer.extend(vec![0x00; 101]);
-        assert!(check(&file(&footer)).unwrap_err().contains("deeper"));
+        assert!(check_str(&file(&footer))
+            .unwrap_err()
+            .to_string()
+            .contains("deeper"));
     }
 }
