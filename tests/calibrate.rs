@@ -1,0 +1,224 @@
+//! `pradar calibrate` (issue 19): closed loops `synth` → `calibrate` (the CLI, as a user
+//! runs it), scored against the model `synth` drew from. The calibration reads only the
+//! energy table and the campaign (never synth's truth folder, nor the corridor's
+//! `[clutter]`). Figures are in `docs/calibrate.md`.
+
+use crate::common;
+
+use pradar::campaign::modelfile::ModelConfig;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+type Pick = fn(&ModelConfig) -> f64;
+
+/// The quantities scored: name in the model file, and how to read it.
+const QUANTITIES: [(&str, Pick); 8] = [
+    ("intra_cluster_rate", |m| m.intra_cluster_rate.value),
+    ("intra_cluster_aoa", |m| m.intra_cluster_aoa.value),
+    ("perimeter_spacing", |m| m.perimeter_spacing.value),
+    ("perimeter_offset", |m| m.perimeter_offset.value),
+    ("cluster_decay", |m| m.cluster_decay.value),
+    ("ray_decay", |m| m.ray_decay.value),
+    ("cluster_rrcs", |m| m.cluster_rrcs.value),
+    ("rays_per_cluster", |m| m.rays_per_cluster.value),
+];
+
+fn s(p: &Path) -> String {
+    p.to_str().unwrap().to_string()
+}
+
+fn run(args: &[String], threads: Option<usize>) {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_pradar"));
+    c.args(args).arg("--quiet");
+    if let Some(t) = threads {
+        c.env("RAYON_NUM_THREADS", t.to_string());
+    }
+    let o = c.output().unwrap();
+    assert!(
+        o.status.success(),
+        "pradar {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// `synth` of `model` on campaign `cpath` with `seed` into `dir`; the energy table.
+fn synth(dir: &Path, cpath: &Path, model: &ModelConfig, seed: u64) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let mp = dir.join("model.toml");
+    model.save(&mp).unwrap();
+    let e = dir.join("e.parquet");
+    let args: Vec<String> = [
+        "synth",
+        "--model",
+        &s(&mp),
+        "--campaign",
+        &s(cpath),
+        "--out",
+        &s(&e),
+        "--truth",
+        &s(&dir.join("truth")),
+        "--seed",
+        &seed.to_string(),
+    ]
+    .map(String::from)
+    .into();
+    run(&args, None);
+    e
+}
+
+/// `calibrate` of `energy` (budget `sims`, population `pop`, seed `seed`) into `out`.
+fn calibrate(
+    energy: &Path,
+    cpath: &Path,
+    out: &Path,
+    sims: usize,
+    pop: usize,
+    seed: u64,
+    threads: Option<usize>,
+) -> ModelConfig {
+    let args: Vec<String> = [
+        "calibrate",
+        "--energy",
+        &s(energy),
+        "--campaign",
+        &s(cpath),
+        "--out",
+        &s(out),
+        "--simulations",
+        &sims.to_string(),
+        "--population",
+        &pop.to_string(),
+        "--seed",
+        &seed.to_string(),
+    ]
+    .map(String::from)
+    .into();
+    run(&args, threads);
+    ModelConfig::load(out).unwrap()
+}
+
+/// Print each quantity (posterior median, interval, truth, error); return the first six
+/// (λ, AoA, d_c, d_p, Γ, γ) outside `tol` of the truth, and per quantity whether the
+/// interval covers the truth.
+fn score(name: &str, got: &ModelConfig, truth: &ModelConfig, tol: f64) -> (Vec<String>, Vec<bool>) {
+    let mut failures = Vec::new();
+    let mut covered = Vec::new();
+    eprintln!("== {name}: quantity | median | 95 % interval | truth | error");
+    for (i, (q, pick)) in QUANTITIES.iter().enumerate() {
+        let (v, t) = (pick(got), pick(truth));
+        let [lo, hi] = got
+            .quantity(q)
+            .and_then(|x| x.interval)
+            .unwrap_or([f64::NAN; 2]);
+        let rel = (v - t) / t;
+        let cov = lo <= t && t <= hi;
+        covered.push(cov);
+        eprintln!(
+            "{q:20} | {v:9.4} | [{lo:9.4}, {hi:9.4}] | {t:9.4} | {:+6.1} %{}{}",
+            100.0 * rel,
+            if rel.abs() <= tol { "" } else { "  OUTSIDE" },
+            if cov { "" } else { "  (not covered)" }
+        );
+        if i < 6 && rel.abs() > tol {
+            failures.push(format!(
+                "{name} {q}: {v:.4} vs {t:.4} ({:+.1} %)",
+                100.0 * rel
+            ));
+        }
+    }
+    (failures, covered)
+}
+
+/// The corridor campaign (`data/corridor`, its `[scene]`/`[clutter]` untouched: calibrate
+/// must ignore them) copied into `dir`.
+fn corridor(dir: &Path) -> PathBuf {
+    common::write_campaign(dir, &common::corridor())
+}
+
+/// Priority 1: the built-in corridor, Table 1 model (`table1_defaults`: λ 0.43/ns, AoA
+/// 16.9°, d_c 1.505 m, d_p 0.3 m, Γ 12 ns, γ 3 ns, 6 rays, σ 0.01 m²), synth seed 11,
+/// calibrate 1500 simulations (population 300) seed 5, default prior. Asserts the posterior
+/// medians of λ, AoA std, d_c, d_p, Γ, γ within 15 % of the model and the run's
+/// determinism (1 and 2 threads give the same model file bytes, at a small budget).
+#[test]
+fn corridor_closed_loop() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = corridor(&tmp.path().join("in"));
+    let truth = ModelConfig::table1_defaults();
+    let e = synth(&tmp.path().join("synth"), &cpath, &truth, 11);
+    let t = Instant::now();
+    let out = tmp.path().join("cal.toml");
+    let got = calibrate(&e, &cpath, &out, 1500, 300, 5, None);
+    let wall = t.elapsed().as_secs_f64();
+    let (failures, _) = score("corridor, Table 1 model", &got, &truth, 0.15);
+    let meta = got.calibration.as_ref().unwrap();
+    eprintln!(
+        "calibrate: {} simulations, {} generations, ε {:.3}, {wall:.1} s ({:.1} simulations/s)",
+        meta.simulations,
+        meta.generations,
+        meta.epsilon,
+        meta.simulations as f64 / wall
+    );
+    assert!(meta.method.starts_with("abc-smc"));
+    assert!(tmp.path().join("cal_posterior.csv").is_file());
+    // determinism over threads, at a small budget
+    let a = tmp.path().join("a.toml");
+    let b = tmp.path().join("b.toml");
+    calibrate(&e, &cpath, &a, 60, 30, 9, Some(1));
+    calibrate(&e, &cpath, &b, 60, 30, 9, Some(2));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    assert_eq!(
+        std::fs::read(tmp.path().join("a_posterior.csv")).unwrap(),
+        std::fs::read(tmp.path().join("b_posterior.csv")).unwrap()
+    );
+    assert!(failures.is_empty(), "outside 15 %: {failures:?}");
+}
+
+/// Bad input: a prior interval that is no range, a table of another campaign; one line
+/// naming the file and field, exit 1, no panic, nothing written.
+#[test]
+fn bad_inputs_are_one_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = corridor(&tmp.path().join("in"));
+    let mut prior = ModelConfig::table1_defaults();
+    prior.ray_decay.interval = Some([0.0, 5.0]);
+    let pp = tmp.path().join("prior.toml");
+    prior.save(&pp).unwrap();
+    let out = tmp.path().join("cal.toml");
+    let o = common::pradar_quiet(&[
+        "calibrate",
+        "--energy",
+        common::path_str(&tmp.path().join("missing.parquet")),
+        "--campaign",
+        common::path_str(&cpath),
+        "--out",
+        common::path_str(&out),
+        "--prior",
+        common::path_str(&pp),
+    ]);
+    common::assert_one_line_error(&o, "ray_decay.interval");
+    assert!(!out.exists());
+    let o = common::pradar_quiet(&[
+        "calibrate",
+        "--energy",
+        common::path_str(&tmp.path().join("missing.parquet")),
+        "--campaign",
+        common::path_str(&cpath),
+        "--out",
+        common::path_str(&out),
+    ]);
+    common::assert_one_line_error(&o, "missing.parquet");
+    let o = common::pradar_quiet(&[
+        "calibrate",
+        "--energy",
+        "x.parquet",
+        "--campaign",
+        common::path_str(&cpath),
+        "--out",
+        common::path_str(&out),
+        "--simulations",
+        "5",
+    ]);
+    common::assert_one_line_error(&o, "--simulations");
+}
