@@ -219,6 +219,8 @@ fn calibrate(a: CalibrateArgs, quiet: bool) -> Result<()> {
         campaign: a.campaign,
         out: a.out,
         prior: a.prior,
+        report: a.report,
+        chain: a.chain,
         params: pradar::calibrate::CalibrateParams {
             simulations: a.simulations,
             population: a.population,

@@ -258,12 +258,52 @@ pub fn weighted_quantile(x: &[f64], w: &[f64], q: f64) -> f64 {
     x[*idx.last().expect("non-empty population")]
 }
 
-/// One simulated particle: ln parameters, raw summaries.
-type Sim = (Vec<f64>, Vec<f64>);
+/// A particle: ln parameters, raw summaries, projected summaries, distance, weight.
+#[derive(Debug, Clone)]
+struct Particle {
+    theta: Vec<f64>,
+    f: Vec<f64>,
+    s: Vec<f64>,
+    d: f64,
+    w: f64,
+}
+
+/// Fit the projection on `pts` (all of them) and recompute every particle's projected
+/// summaries and distance; returns the observed projected summaries and the projection's
+/// R² per parameter on `pts`.
+fn refit(pts: &mut [Particle], observed: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+    let proj = Projection::fit(
+        &pts.iter().map(|p| p.f.clone()).collect::<Vec<_>>(),
+        &pts.iter().map(|p| p.theta.clone()).collect::<Vec<_>>(),
+    )?;
+    let s_obs = proj.project(observed);
+    for p in pts.iter_mut() {
+        p.s = proj.project(&p.f);
+        p.d = proj.distance(&p.s, &s_obs);
+    }
+    let dim = s_obs.len();
+    let r2 = (0..dim)
+        .map(|k| {
+            let n = pts.len() as f64;
+            let m = pts.iter().map(|p| p.theta[k]).sum::<f64>() / n;
+            let tot: f64 = pts.iter().map(|p| (p.theta[k] - m).powi(2)).sum();
+            let res: f64 = pts.iter().map(|p| (p.theta[k] - p.s[k]).powi(2)).sum();
+            1.0 - res / tot.max(1e-300)
+        })
+        .collect();
+    Ok((s_obs, r2))
+}
+
+/// Whether `PRADAR_ABC_TRACE` asks for a per-generation trace on stderr.
+fn trace() -> bool {
+    std::env::var("PRADAR_ABC_TRACE").is_ok_and(|v| v == "1")
+}
 
 /// Run APMC. `simulate(theta, seed)` gives the raw summaries of one simulation at ln
 /// parameters `theta`; `observed` the data's; `progress(done, budget)` after each
-/// generation.
+/// generation. The projection of the semi-automatic summaries is fitted on the prior
+/// generation, then refitted at every generation on the kept and new particles (the
+/// distance adapted per generation, Prangle 2017), every distance recomputed with it.
 pub fn apmc<F>(
     prior: &BoxPrior,
     observed: &[f64],
@@ -276,43 +316,39 @@ where
 {
     let (n, na) = (opts.population, opts.kept);
     let dim = prior.dim();
-    // generation 0: the prior (also the pilot of the semi-automatic summaries)
-    let pilot: Vec<Sim> = (0..n)
+    // generation 0: the prior (also the first fit of the semi-automatic summaries)
+    let mut pop: Vec<Particle> = (0..n)
         .into_par_iter()
         .map(|i| {
             let mut rng = ChaCha8Rng::seed_from_u64(key(opts.seed, 0, i));
-            let th = prior.draw(&mut rng);
-            let f = simulate(&th, rng.gen())?;
-            Ok((th, f))
+            let theta = prior.draw(&mut rng);
+            let f = simulate(&theta, rng.gen())?;
+            Ok(Particle {
+                theta,
+                f,
+                s: Vec::new(),
+                d: 0.0,
+                w: 1.0,
+            })
         })
         .collect::<Result<_>>()?;
     let mut used = n;
     progress(used, opts.simulations);
-    let proj = Projection::fit(
-        &pilot.iter().map(|s| s.1.clone()).collect::<Vec<_>>(),
-        &pilot.iter().map(|s| s.0.clone()).collect::<Vec<_>>(),
-    )?;
-    let s_obs = proj.project(observed);
-    // population: (theta, projected summaries, distance, weight)
-    let mut pop: Vec<(Vec<f64>, Vec<f64>, f64, f64)> = pilot
-        .into_iter()
-        .map(|(th, f)| {
-            let s = proj.project(&f);
-            let d = proj.distance(&s, &s_obs);
-            (th, s, d, 1.0)
-        })
-        .collect();
-    let keep = |pop: &mut Vec<(Vec<f64>, Vec<f64>, f64, f64)>| -> f64 {
-        pop.sort_by(|a, b| a.2.total_cmp(&b.2)); // stable: ties keep their order
+    let (mut s_obs, r2) = refit(&mut pop, observed)?;
+    if trace() {
+        eprintln!("abc: prior generation, R² of the projection {r2:.2?}");
+    }
+    let keep = |pop: &mut Vec<Particle>| -> f64 {
+        pop.sort_by(|a, b| a.d.total_cmp(&b.d)); // stable: ties keep their order
         pop.truncate(na);
-        pop.last().map_or(f64::INFINITY, |p| p.2)
+        pop.last().map_or(f64::INFINITY, |p| p.d)
     };
     let mut eps = keep(&mut pop);
     let mut generations = 1;
     let mut acceptance = 1.0;
     while used + (n - na) <= opts.simulations && acceptance >= opts.min_acceptance {
-        let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.0.clone()).collect();
-        let w: Vec<f64> = pop.iter().map(|p| p.3).collect();
+        let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
+        let w: Vec<f64> = pop.iter().map(|p| p.w).collect();
         let tw: f64 = w.iter().sum();
         let (_, cov) = weighted_cov(&theta, &w);
         // Gaussian kernel of twice the weighted covariance (a small floor keeps it definite)
@@ -335,7 +371,7 @@ where
                 Some(*acc)
             })
             .collect();
-        let new: Vec<(Vec<f64>, Vec<f64>, f64, f64)> = (0..n - na)
+        let new: Vec<Particle> = (0..n - na)
             .into_par_iter()
             .map(|i| {
                 let mut rng = ChaCha8Rng::seed_from_u64(key(opts.seed, generations, i));
@@ -359,8 +395,6 @@ where
                     }
                 }
                 let f = simulate(&th, rng.gen())?;
-                let s = proj.project(&f);
-                let d = proj.distance(&s, &s_obs);
                 // w ∝ π(θ) / Σ_j w_j K_Σ(θ | θ_j); π is constant on the box
                 let q: f64 = theta
                     .iter()
@@ -371,25 +405,41 @@ where
                         wj / tw * (-0.5 * y.norm_squared()).exp()
                     })
                     .sum();
-                Ok((th, s, d, 1.0 / q.max(1e-300)))
+                Ok(Particle {
+                    theta: th,
+                    f,
+                    s: Vec::new(),
+                    d: 0.0,
+                    w: 1.0 / q.max(1e-300),
+                })
             })
             .collect::<Result<_>>()?;
         used += n - na;
         generations += 1;
-        acceptance = new.iter().filter(|p| p.2 < eps).count() as f64 / (n - na) as f64;
+        let old = pop.len();
         pop.extend(new);
+        let (so, r2) = refit(&mut pop, observed)?;
+        s_obs = so;
+        // the previous tolerance under the refitted distance: the kept particles' largest
+        let eps_prev = pop[..old].iter().map(|p| p.d).fold(0.0, f64::max);
+        acceptance = pop[old..].iter().filter(|p| p.d < eps_prev).count() as f64 / (n - na) as f64;
         eps = keep(&mut pop);
+        if trace() {
+            eprintln!(
+                "abc: generation {generations}, {used} simulations, acceptance {acceptance:.3}, ε {eps:.3}, R² {r2:.2?}"
+            );
+        }
         progress(used, opts.simulations);
     }
-    let tw: f64 = pop.iter().map(|p| p.3).sum();
-    let weights: Vec<f64> = pop.iter().map(|p| p.3 / tw).collect();
-    let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.0.clone()).collect();
+    let tw: f64 = pop.iter().map(|p| p.w).sum();
+    let weights: Vec<f64> = pop.iter().map(|p| p.w / tw).collect();
+    let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
     let adjusted = adjust(prior, &pop, &s_obs, eps, &weights);
     Ok(Posterior {
         theta,
         adjusted,
         weights,
-        distances: pop.iter().map(|p| p.2).collect(),
+        distances: pop.iter().map(|p| p.d).collect(),
         epsilon: eps,
         generations,
         simulations: used,
@@ -401,13 +451,7 @@ where
 /// θ_i* = θ_i − β̂ᵀ(s_i − s_obs), β̂ the weighted least-squares slopes of θ on the
 /// projected summaries, weights w_i·K(d_i/ε) with the Epanechnikov kernel; clamped to the
 /// prior box. Falls back to the unadjusted particles if the fit is singular.
-fn adjust(
-    prior: &BoxPrior,
-    pop: &[(Vec<f64>, Vec<f64>, f64, f64)],
-    s_obs: &[f64],
-    eps: f64,
-    w: &[f64],
-) -> Vec<Vec<f64>> {
+fn adjust(prior: &BoxPrior, pop: &[Particle], s_obs: &[f64], eps: f64, w: &[f64]) -> Vec<Vec<f64>> {
     let n = pop.len();
     let p = s_obs.len();
     let dim = prior.dim();
@@ -415,7 +459,7 @@ fn adjust(
         .iter()
         .zip(w)
         .map(|(x, w)| {
-            let r = if eps > 0.0 { x.2 / (eps * 1.0001) } else { 0.0 };
+            let r = if eps > 0.0 { x.d / (eps * 1.0001) } else { 0.0 };
             w * (1.0 - r * r).max(0.0)
         })
         .collect();
@@ -423,10 +467,10 @@ fn adjust(
         if j == 0 {
             1.0
         } else {
-            pop[i].1[j - 1] - s_obs[j - 1]
+            pop[i].s[j - 1] - s_obs[j - 1]
         }
     });
-    let y = DMatrix::from_fn(n, dim, |i, k| pop[i].0[k]);
+    let y = DMatrix::from_fn(n, dim, |i, k| pop[i].theta[k]);
     let sw = DMatrix::from_fn(n, 1, |i, _| kw[i].sqrt());
     let xw = DMatrix::from_fn(n, p + 1, |i, j| x[(i, j)] * sw[(i, 0)]);
     let yw = DMatrix::from_fn(n, dim, |i, k| y[(i, k)] * sw[(i, 0)]);
@@ -435,7 +479,7 @@ fn adjust(
         xtx[(j, j)] += 1e-9;
     }
     let Some(chol) = xtx.cholesky() else {
-        return pop.iter().map(|x| x.0.clone()).collect();
+        return pop.iter().map(|x| x.theta.clone()).collect();
     };
     let beta = chol.solve(&(xw.transpose() * yw));
     (0..n)
@@ -443,7 +487,7 @@ fn adjust(
             (0..dim)
                 .map(|k| {
                     let corr: f64 = (1..=p).map(|j| beta[(j, k)] * x[(i, j)]).sum();
-                    (pop[i].0[k] - corr).clamp(prior.lo[k], prior.hi[k])
+                    (pop[i].theta[k] - corr).clamp(prior.lo[k], prior.hi[k])
                 })
                 .collect()
         })

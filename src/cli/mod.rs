@@ -175,6 +175,13 @@ pub struct CalibrateArgs {
     /// Simulation budget (at least the population).
     #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
     pub simulations: usize,
+    /// Report folder: index.html with the marginal posteriors and their correlations.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// The cluster chain's model file (`fit --out`), shown beside the posterior in the
+    /// report and flagged where outside the credible interval.
+    #[arg(long, requires = "report")]
+    pub chain: Option<PathBuf>,
     /// Population size per generation.
     #[arg(long, default_value_t = 400, value_parser = ranges::population)]
     pub population: usize,

@@ -634,6 +634,11 @@ pub struct Calibrate {
     pub prior: Option<PathBuf>,
     /// Budget, population, seed.
     pub params: crate::calibrate::CalibrateParams,
+    /// Report folder (`index.html` with the marginal posteriors and correlations).
+    pub report: Option<PathBuf>,
+    /// The cluster chain's model file (`fit` output), shown beside the posterior in the
+    /// report.
+    pub chain: Option<PathBuf>,
 }
 
 /// What `calibrate` wrote.
@@ -694,13 +699,22 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
     if let Some(p) = &cmd.prior {
         inputs.push((p.clone(), "--prior"));
     }
-    refuse(
-        &[
-            (cmd.out.clone(), "--out"),
-            (posterior.clone(), "--out (its posterior CSV)"),
-        ],
-        &inputs,
-    )?;
+    if let Some(p) = &cmd.chain {
+        inputs.push((p.clone(), "--chain"));
+    }
+    let mut outputs = vec![
+        (cmd.out.clone(), "--out"),
+        (posterior.clone(), "--out (its posterior CSV)"),
+    ];
+    if let Some(r) = &cmd.report {
+        outputs.push((r.join("index.html"), "--report"));
+        outputs.push((r.join("posterior.png"), "--report"));
+    }
+    refuse(&outputs, &inputs)?;
+    let chain = match &cmd.chain {
+        Some(p) => Some(ModelConfig::load(p)?),
+        None => None,
+    };
     let params = cmd.params.check()?;
     let prior = match &cmd.prior {
         Some(p) => crate::calibrate::Prior::load(p)?,
@@ -709,6 +723,12 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
     let em = EnergyMatrix::read(&cmd.energy)?;
     let calibration = crate::calibrate::calibrate(&c, &em, &cmd.energy, &prior, &params, progress)?;
     calibration.write_posterior_csv(&posterior)?;
+    if let Some(r) = &cmd.report {
+        std::fs::create_dir_all(r).map_err(|e| crate::error::Error::io(r, e))?;
+        let sec =
+            crate::report::calibrate::section(r, "posterior.png", &calibration, chain.as_ref())?;
+        crate::report::write_index(&r.join("index.html"), "pradar calibrate", &[sec])?;
+    }
     calibration.model.save(&cmd.out)?;
     Ok(CalibrateSummary {
         calibration,
