@@ -234,17 +234,11 @@ impl Calibration {
         }
         t.push('\n');
         let rep = self.particles();
-        for i in 0..self.posterior.weights.len() {
-            t.push_str(&format!(
-                "{:e},{:e}",
-                self.posterior.weights[i], self.posterior.distances[i]
-            ));
-            for k in 0..self.free.len() {
-                t.push_str(&format!(
-                    ",{:e},{:e}",
-                    rep[i][k].exp(),
-                    self.posterior.theta[i][k].exp()
-                ));
+        let post = &self.posterior;
+        for (i, (w, d)) in post.weights.iter().zip(&post.distances).enumerate() {
+            t.push_str(&format!("{w:e},{d:e}"));
+            for (a, r) in rep[i].iter().zip(&post.theta[i]) {
+                t.push_str(&format!(",{:e},{:e}", a.exp(), r.exp()));
             }
             t.push('\n');
         }
@@ -365,4 +359,56 @@ pub fn calibrate(
         free: prior.free.clone(),
         wall_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prior_from_template() {
+        let d = Prior::default_prior();
+        assert_eq!(d.free.len(), 8);
+        assert_eq!((d.lo[0], d.hi[0]), (0.05, 3.0));
+        let mut m = ModelConfig::table1_defaults();
+        m.ray_decay.interval = Some([1.0, 8.0]);
+        m.rays_per_cluster.interval = Some([4.0, 4.0]); // held fixed
+        let p = Prior::from_template(m.clone(), Path::new("p.toml")).unwrap();
+        assert_eq!(p.free.len(), 7);
+        let k = p.free.iter().position(|f| f == "ray_decay").unwrap();
+        assert_eq!((p.lo[k], p.hi[k]), (1.0, 8.0));
+        assert_eq!(p.template.rays_per_cluster.value, 4.0);
+        let x: Vec<f64> = p.lo.iter().map(|v| v.ln()).collect();
+        let at = p.model_at(&x);
+        assert!((at.ray_decay.value - 1.0).abs() < 1e-12);
+        at.check().unwrap();
+        m.cluster_decay.interval = Some([-1.0, 8.0]);
+        let e = Prior::from_template(m, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("p.toml") && e.contains("cluster_decay.interval"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn calibrated_model_round_trips() {
+        let mut m = ModelConfig::table1_defaults();
+        m.calibration = Some(CalibrationMeta {
+            method: "abc-smc".into(),
+            simulations: 10,
+            particles: 5,
+            generations: 2,
+            epsilon: 0.5,
+            seed: 1,
+            free: vec!["ray_decay".into()],
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.toml");
+        m.save(&p).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains("[calibration]") && text.contains("method = \"abc-smc\""));
+        assert_eq!(ModelConfig::load(&p).unwrap(), m);
+    }
 }

@@ -195,6 +195,7 @@ struct Peak {
 }
 
 /// The summaries ([`NAMES`]) of energies `e` (position-major, then direction, then bin).
+#[allow(clippy::needless_range_loop)] // (position, direction, bin) index several arrays
 pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
     let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
     let (mu, tb) = (ctx.mu, ctx.bin_ns);
@@ -460,4 +461,47 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_only_and_one_echo_are_finite() {
+        let layout = Layout::from_geojson(
+            r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"perimeter"},"geometry":{"type":"Polygon","coordinates":[[[-5,-5],[5,-5],[5,5],[-5,5],[-5,-5]]]}}]}"#,
+            std::path::Path::new("t.geojson"),
+        )
+        .unwrap();
+        let angles: Vec<f64> = (0..7).map(|i| -30.0 + 10.0 * i as f64).collect();
+        let ctx = SummaryContext::new(
+            &[(0.0, 0.0, 0.0)],
+            &angles,
+            200,
+            0.25,
+            1.0,
+            4.0,
+            3.0,
+            &layout,
+        );
+        assert_eq!(ctx.first_bin, 12);
+        assert!((ctx.wall_m[3] - 5.0).abs() < 1e-9);
+        let mut e = vec![1.0; 7 * 200];
+        let s0 = summaries(&ctx, &e);
+        assert_eq!(s0.len(), NAMES.len());
+        assert!(s0.iter().all(|v| v.is_finite()));
+        // one echo at 4.5 m (depth 0.5 m before the wall at 5 m) in direction 3
+        let b = (2.0 * 4.5 / C0 * 1e9 / 0.25).round() as usize;
+        e[3 * 200 + b] = 1000.0;
+        let s1 = summaries(&ctx, &e);
+        assert!(s1.iter().all(|v| v.is_finite()));
+        let i = NAMES.iter().position(|n| *n == "median depth").unwrap();
+        assert!((s1[i] - 0.5).abs() < 0.05, "{}", s1[i]);
+        let i = NAMES
+            .iter()
+            .position(|n| *n == "ln(1 + peaks/position)")
+            .unwrap();
+        assert!((s1[i] - 2f64.ln()).abs() < 1e-12);
+    }
 }
