@@ -354,3 +354,34 @@ fn corridor_coverage() {
         );
     }
 }
+
+/// The calibration's in-memory simulator gives exactly the energies `synth` writes for the
+/// same model and seed (the corridor, Table 1 model with and without `[diffuse]`).
+#[test]
+fn in_memory_simulator_is_synth() {
+    use pradar::campaign::manifest::Campaign;
+    use pradar::campaign::modelfile::{DiffuseModel, Quantity};
+    use pradar::model::{EnergySimulator, SynthParams};
+    use pradar::params::ParamGuard;
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = corridor(&tmp.path().join("in"));
+    let c = Campaign::load(&cpath).unwrap();
+    let sim = EnergySimulator::new(&c, &SynthParams::default().check().unwrap()).unwrap();
+    let mut walls = ModelConfig::table1_defaults();
+    walls.diffuse = Some(DiffuseModel {
+        wall_rcs_per_m: Quantity::new(0.02, "m2/m", "constant"),
+        lambert_exponent: Quantity::new(1.0, "1", "constant"),
+        power_share: Quantity::new(0.5, "1", "constant"),
+        decay: Quantity::new(10.0, "ns", "exponential"),
+    });
+    for (k, model) in [ModelConfig::table1_defaults(), walls].iter().enumerate() {
+        let e = synth(&tmp.path().join(format!("s{k}")), &cpath, model, 11);
+        let written = pradar::energy::EnergyMatrix::read(&e).unwrap();
+        let mem = sim.energies(model, 11).unwrap();
+        assert_eq!(written.data.len(), mem.len());
+        assert!(
+            written.data == mem,
+            "model {k}: in-memory energies differ from synth's"
+        );
+    }
+}
