@@ -141,16 +141,20 @@ fn corridor(dir: &Path) -> PathBuf {
 /// calibrate 1500 simulations (population 300) seed 5, default prior (seeds fixed before
 /// the first run, never changed).
 ///
-/// Asserted (each a check the code could fail): the posterior median of d_c within 15 %
-/// of the model; the 95 % credible interval of each of the eight quantities covering the
-/// model value; the run's determinism (1 and 2 threads give the same model file and
-/// posterior bytes, at a small budget).
+/// Asserted (each a check the code could fail; measured: median vs model): AoA std
+/// 18.68° (+10.5 %), d_c 1.673 m (+11.2 %), Γ 11.69 ns (−2.6 %) within 15 %; the 95 %
+/// credible interval of each of the eight quantities covering the model value; the run's
+/// determinism (1 and 2 threads give the same model file and posterior bytes, at a small
+/// budget). Runtime: 48 s for the calibration alone on an idle pair of cores, 130 s while
+/// another calibration ran beside it.
 ///
-/// NOT met (printed only; measured figures in `docs/calibrate.md`): λ, AoA std, d_p, Γ, γ
-/// within 15 %. The corridor (12 poses over 4.5 m, about 20 clusters drawn along 32 m of
-/// walls) carries little information: the posterior is wide (95 % intervals spanning a
-/// factor 4–12) and its median moves by 30–70 % between environments drawn with the same
-/// model (`corridor_coverage`).
+/// NOT met (printed only): λ 0.359/ns (−16.6 %), d_p 0.183 m (−39.1 %), γ 1.64 ns
+/// (−45.3 %); also σ −49 %, rays −36 %. Nor is meeting the three asserted ones robust: the
+/// corridor (12 poses over 4.5 m, about 20 clusters along 32 m of walls) carries little
+/// information, the posterior is wide (95 % intervals spanning a factor 6–12 for the six
+/// quantities) and its median moves by 13–39 % (median |error|) between environments
+/// drawn with the same model (`corridor_coverage`); the same run on a model file whose
+/// d_c differs in the fifth digit (1.505 m) gave AoA −45 %, Γ −45 %, d_c +3 %.
 #[test]
 fn corridor_closed_loop() {
     let tmp = tempfile::tempdir().unwrap();
@@ -184,7 +188,11 @@ fn corridor_closed_loop() {
     );
     let asserted: Vec<&String> = failures
         .iter()
-        .filter(|f| f.contains("perimeter_spacing"))
+        .filter(|f| {
+            ["intra_cluster_aoa", "perimeter_spacing", "cluster_decay"]
+                .iter()
+                .any(|q| f.contains(&format!(" {q}:")))
+        })
         .collect();
     assert!(asserted.is_empty(), "outside 15 %: {asserted:?}");
     for ((q, _), c) in QUANTITIES.iter().zip(&covered) {
