@@ -67,8 +67,12 @@ pub struct AbcOptions {
 pub struct Posterior {
     /// Particles (ln parameters), unadjusted.
     pub theta: Vec<Vec<f64>>,
-    /// Particles after the regression adjustment (clamped to the prior box).
+    /// Particles after the regression adjustment (clamped to the prior box); the raw
+    /// particles when it was not applied.
     pub adjusted: Vec<Vec<f64>>,
+    /// Whether the regression adjustment was applied (at least 10 particles per
+    /// coefficient of its regression, and a non-singular fit).
+    pub regression_adjusted: bool,
     /// Normalised importance weights.
     pub weights: Vec<f64>,
     /// Distances of the particles.
@@ -436,8 +440,9 @@ where
     let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
     let adjusted = adjust(prior, &pop, &s_obs, eps, &weights);
     Ok(Posterior {
+        regression_adjusted: adjusted.is_some(),
+        adjusted: adjusted.unwrap_or_else(|| theta.clone()),
         theta,
-        adjusted,
         weights,
         distances: pop.iter().map(|p| p.d).collect(),
         epsilon: eps,
@@ -450,10 +455,20 @@ where
 /// Local-linear regression adjustment (Beaumont, Zhang & Balding 2002):
 /// θ_i* = θ_i − β̂ᵀ(s_i − s_obs), β̂ the weighted least-squares slopes of θ on the
 /// projected summaries, weights w_i·K(d_i/ε) with the Epanechnikov kernel; clamped to the
-/// prior box. Falls back to the unadjusted particles if the fit is singular.
-fn adjust(prior: &BoxPrior, pop: &[Particle], s_obs: &[f64], eps: f64, w: &[f64]) -> Vec<Vec<f64>> {
+/// prior box. None (the unadjusted particles stand) when there are fewer than 10
+/// particles per coefficient (p + 1) or the fit is singular.
+fn adjust(
+    prior: &BoxPrior,
+    pop: &[Particle],
+    s_obs: &[f64],
+    eps: f64,
+    w: &[f64],
+) -> Option<Vec<Vec<f64>>> {
     let n = pop.len();
     let p = s_obs.len();
+    if n < 10 * (p + 1) {
+        return None;
+    }
     let dim = prior.dim();
     let kw: Vec<f64> = pop
         .iter()
@@ -478,11 +493,9 @@ fn adjust(prior: &BoxPrior, pop: &[Particle], s_obs: &[f64], eps: f64, w: &[f64]
     for j in 1..=p {
         xtx[(j, j)] += 1e-9;
     }
-    let Some(chol) = xtx.cholesky() else {
-        return pop.iter().map(|x| x.theta.clone()).collect();
-    };
+    let chol = xtx.cholesky()?;
     let beta = chol.solve(&(xw.transpose() * yw));
-    (0..n)
+    let adjusted = (0..n)
         .map(|i| {
             (0..dim)
                 .map(|k| {
@@ -491,7 +504,8 @@ fn adjust(prior: &BoxPrior, pop: &[Particle], s_obs: &[f64], eps: f64, w: &[f64]
                 })
                 .collect()
         })
-        .collect()
+        .collect();
+    Some(adjusted)
 }
 
 #[cfg(test)]

@@ -49,7 +49,8 @@
 //! 5. Stop when p_acc < p_min (`min_acceptance`) or the budget `--simulations` is spent.
 //! 6. Regression adjustment (Beaumont, Zhang & Balding, Genetics 2002):
 //!    x_i* = x_i − β̂ᵀ(s(y_i) − s(y_obs)), β̂ the least-squares slopes of x on s with weights
-//!    w_i·(1 − (ρ_i/ε)²) (Epanechnikov), clamped to the box. The posterior median and the
+//!    w_i·(1 − (ρ_i/ε)²) (Epanechnikov), clamped to the box; skipped (and not named in
+//!    the method) with fewer than 10 particles per coefficient. The posterior median and the
 //!    2.5/97.5 % quantiles are the weighted quantiles of the adjusted particles (of the raw
 //!    ones with `adjust = false`), mapped back by exp.
 //!
@@ -310,7 +311,8 @@ pub fn calibrate(
         Ok(summaries::summaries(&ctx, &e))
     };
     let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;
-    let particles = if params.adjust {
+    let adjusted = params.adjust && post.regression_adjusted;
+    let particles = if adjusted {
         &post.adjusted
     } else {
         &post.theta
@@ -340,7 +342,7 @@ pub fn calibrate(
         window: format!("{:?}", m.processing.window).to_lowercase(),
     });
     model.calibration = Some(CalibrationMeta {
-        method: if params.adjust {
+        method: if adjusted {
             "abc-smc (APMC, semi-automatic summaries, regression-adjusted)".into()
         } else {
             "abc-smc (APMC, semi-automatic summaries)".into()
