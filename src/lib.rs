@@ -5,6 +5,7 @@
 //! [`mpc`] → [`cluster`] → [`fit`] → [`model`] → [`mapping`] → [`report`].
 #![deny(missing_docs)]
 
+pub mod calibrate;
 pub mod campaign;
 pub mod cluster;
 pub mod energy;

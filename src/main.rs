@@ -15,8 +15,8 @@ use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::Parser;
 use cli::{
-    Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs, ImportArgs, MapArgs,
-    ReproduceArgs, SimulateArgs, SynthArgs,
+    CalibrateArgs, Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs,
+    ImportArgs, MapArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use pradar::params::ParamGuard;
@@ -68,6 +68,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Extract(a) => extract(a, quiet),
         Cmd::Cluster(a) => cluster(a, quiet),
         Cmd::Fit(a) => fit(a, quiet),
+        Cmd::Calibrate(a) => calibrate(a, quiet),
         Cmd::Reproduce(a) => reproduce(a, quiet),
         Cmd::Experiment(a) => experiment(a, quiet),
     }
@@ -208,6 +209,28 @@ fn synth(a: SynthArgs, quiet: bool) -> Result<()> {
     report(
         quiet,
         with_bar(quiet, "synth", |p| commands::synth(&cmd, p))?,
+    );
+    Ok(())
+}
+
+fn calibrate(a: CalibrateArgs, quiet: bool) -> Result<()> {
+    let cmd = commands::Calibrate {
+        energy: a.energy,
+        campaign: a.campaign,
+        out: a.out,
+        prior: a.prior,
+        report: a.report,
+        chain: a.chain,
+        params: pradar::calibrate::CalibrateParams {
+            simulations: a.simulations,
+            population: a.population,
+            seed: a.seed,
+            ..Default::default()
+        },
+    };
+    report(
+        quiet,
+        with_bar(quiet, "calibrate", |p| commands::calibrate(&cmd, p))?,
     );
     Ok(())
 }

@@ -16,6 +16,7 @@ use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
+pub mod calibrate;
 pub mod experiments;
 pub mod reproduce;
 

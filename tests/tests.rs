@@ -8,6 +8,7 @@
 mod common;
 
 mod bad_inputs;
+mod calibrate;
 mod calibration;
 mod cli;
 mod closed_loop;

@@ -194,6 +194,31 @@ pub struct ModelConfig {
     /// The dense (diffuse) component (absent: no walls are drawn).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diffuse: Option<DiffuseModel>,
+    /// How the values were obtained when not by the cluster fit (`pradar calibrate`
+    /// writes it; absent in fitted and hand-written models, which read as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationMeta>,
+}
+
+/// `[calibration]` of a calibrated model: the method and its run. The quantities' `value`
+/// is then the posterior median and `interval` the 95 % credible interval.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationMeta {
+    /// Method, e.g. `abc-smc` (the calibrate module's docs give its equations).
+    pub method: String,
+    /// Simulations run.
+    pub simulations: usize,
+    /// Weighted particles in the final population.
+    pub particles: usize,
+    /// Generations (populations) run.
+    pub generations: usize,
+    /// Final tolerance ε (distance in MAD-scaled summary units).
+    pub epsilon: f64,
+    /// Seed of the run.
+    pub seed: u64,
+    /// The quantities inferred (the others were held at the prior file's value).
+    pub free: Vec<String>,
 }
 
 impl ModelConfig {
@@ -216,6 +241,7 @@ impl ModelConfig {
             rays_per_cluster: Quantity::new(6.0, "count", "poisson"),
             cluster_rrcs: Quantity::new(0.01, "m2", "lognormal"),
             diffuse: None,
+            calibration: None,
         }
     }
 
@@ -383,8 +409,17 @@ impl ModelConfig {
         Ok(m)
     }
 
+    /// The quantity called `name` (as in the file; `diffuse.` prefix for the dense
+    /// component's).
+    pub fn quantity(&self, name: &str) -> Option<&Quantity> {
+        self.quantities()
+            .into_iter()
+            .find(|q| q.0 == name)
+            .map(|q| q.1)
+    }
+
     /// The quantity called `name` (as in the file), mutably.
-    fn quantity_mut(&mut self, name: &str) -> Option<&mut Quantity> {
+    pub fn quantity_mut(&mut self, name: &str) -> Option<&mut Quantity> {
         Some(match name {
             "inter_cluster_rate" => &mut self.inter_cluster_rate,
             "intra_cluster_rate" => &mut self.intra_cluster_rate,

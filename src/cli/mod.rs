@@ -49,6 +49,8 @@ pub enum Cmd {
     Cluster(ClusterArgs),
     /// Fit the channel model (Table 1) from clustered MPCs.
     Fit(FitArgs),
+    /// Calibrate the channel model without clustering (ABC-SMC, synth as the simulator).
+    Calibrate(CalibrateArgs),
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce(ReproduceArgs),
     /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
@@ -152,6 +154,40 @@ pub struct SynthArgs {
     /// (`--set diffuse.decay=10`; names as in the model file; repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = ranges::name_value)]
     pub set: Vec<(String, f64)>,
+}
+
+// `pradar calibrate`
+#[derive(Args)]
+pub struct CalibrateArgs {
+    /// Energy Parquet (from `energy` or `synth`).
+    #[arg(long)]
+    pub energy: PathBuf,
+    /// Campaign manifest (layout, poses, directions, band, array, noise, processing).
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Output model file (the final population goes beside it, <stem>_posterior.csv).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Prior file in the model schema: each free quantity's `interval` is its log-uniform
+    /// prior range (default: the documented wide indoor ranges).
+    #[arg(long)]
+    pub prior: Option<PathBuf>,
+    /// Simulation budget (at least the population).
+    #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
+    pub simulations: usize,
+    /// Report folder: index.html with the marginal posteriors and their correlations.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// The cluster chain's model file (`fit --out`), shown beside the posterior in the
+    /// report and flagged where outside the credible interval.
+    #[arg(long, requires = "report")]
+    pub chain: Option<PathBuf>,
+    /// Population size per generation.
+    #[arg(long, default_value_t = 400, value_parser = ranges::population)]
+    pub population: usize,
+    /// Seed (default: the campaign's).
+    #[arg(long)]
+    pub seed: Option<u64>,
 }
 
 // `pradar map`

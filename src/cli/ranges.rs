@@ -54,6 +54,17 @@ pub fn bootstrap(s: &str) -> Result<usize, String> {
     )
 }
 
+/// `calibrate --simulations`: in [20, 1e7] (`CalibrateParams` simulations; it must also
+/// reach the population, which the library checks).
+pub fn simulations(s: &str) -> Result<usize, String> {
+    whole_in(s, 20, 10_000_000, "the simulation budget")
+}
+
+/// `calibrate --population`: in [20, 100000] (`CalibrateParams` population).
+pub fn population(s: &str) -> Result<usize, String> {
+    whole_in(s, 20, 100_000, "particles per generation")
+}
+
 /// `--cell-m`: in [0.005, 10] m (`GridParams` cell_m).
 pub fn cell_m(s: &str) -> Result<f64, String> {
     checked(s, |v| (0.005..=10.0).contains(&v), "in [0.005, 10] m")

@@ -164,6 +164,93 @@ pub fn synth_channel(
     })
 }
 
+/// The statistical model's energy matrices in memory, for the calibration's inner loop
+/// (`pradar calibrate`): the campaign's response, detector and layout set up once, then
+/// per call a model drawn and its energies computed exactly as [`synth`] does (same
+/// streams keyed by the seed, same order), without the truth or any file. For a model and
+/// seed, [`EnergySimulator::energies`] equals the `energy` column [`synth`] writes with
+/// that seed (position-major, then direction, then bin).
+pub struct EnergySimulator {
+    layout: Layout,
+    resp: Response,
+    headings_deg: Vec<f64>,
+    poses: Vec<Coord<f64>>,
+    bandwidth_hz: f64,
+}
+
+impl EnergySimulator {
+    /// Set up the campaign's response (array pattern, kernel, detector) and layout; `cull`
+    /// as [`SynthParams::cull`](super::SynthParams).
+    pub fn new(c: &Campaign, params: &SynthValid) -> Result<EnergySimulator> {
+        let m = &c.manifest;
+        Ok(EnergySimulator {
+            layout: Layout::load(&c.layout_path())?,
+            resp: Response::new(c, params.cull)?,
+            headings_deg: m.poses.iter().map(|p| p.heading_deg).collect(),
+            poses: m
+                .poses
+                .iter()
+                .map(|p| Coord { x: p.x_m, y: p.y_m })
+                .collect(),
+            bandwidth_hz: m.band.bandwidth_hz(),
+        })
+    }
+
+    /// The campaign's layout.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// (positions, directions, bins) of the energies.
+    pub fn shape(&self) -> (usize, usize, usize) {
+        (
+            self.poses.len(),
+            self.resp.angles.len(),
+            self.resp.proc.nbins(),
+        )
+    }
+
+    /// Mean noise-bin energy N0·TW and TW of the detector.
+    pub fn noise(&self) -> (f64, f64) {
+        (self.resp.noise_mean, self.resp.proc.tw())
+    }
+
+    /// Draw `model` (checked, every quantity with a value) with `seed` and return its
+    /// energies, position-major (as [`synth`] with that seed).
+    pub fn energies(&self, model: &ModelConfig, seed: u64) -> Result<Vec<f64>> {
+        let channel = ChannelModel::draw(&self.layout, model, seed)?;
+        let walls = match &channel.config.diffuse {
+            Some(d) => Some(DiffuseWalls::draw(
+                &self.layout,
+                d,
+                self.bandwidth_hz,
+                seed,
+            )?),
+            None => None,
+        };
+        let resp = &self.resp;
+        let min_amp2 = resp.cull * resp.noise_mean / (resp.g_peak * resp.g_peak);
+        let (np, nd, nb) = self.shape();
+        let last = (nb * resp.l) as f64 * resp.dt + resp.kernel_reach + 5e-9;
+        let mut energies = vec![0.0; np * nd * nb];
+        for (p, profiles) in energies.chunks_mut(nd * nb).enumerate() {
+            let at = self.poses[p];
+            let heading = self.headings_deg[p];
+            let mut rays = channel.rays_from(&self.layout, at, heading);
+            if let Some(w) = &walls {
+                rays.extend(w.rays_from(&self.layout, at, min_amp2));
+            }
+            // a ray arriving after the last sample plus the kernel's reach (and the group
+            // delay, clamped to ±1 ns) adds nothing to any profile: dropped before the
+            // per-direction loop (the same energies, far fewer pattern look-ups in a
+            // large hall)
+            rays.retain(|r| r.tau_s <= last);
+            resp.position(p, heading.to_radians(), &rays, seed, profiles);
+        }
+        Ok(energies)
+    }
+}
+
 /// The truth clusters (`clusters.csv`) and the model as read (`model.toml`).
 fn write_truth(truth_dir: &Path, channel: &ChannelModel) -> Result<()> {
     let truth_clusters: Vec<TruthCluster> = channel

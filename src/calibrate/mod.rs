@@ -1,0 +1,416 @@
+//! `pradar calibrate`: the statistical channel model fitted without clustering, by
+//! simulation-based inference (DESIGN §1 "[calibrate]", issue 19).
+//!
+//! Takes a campaign's energy matrices (`pradar energy` or `pradar synth` output), the
+//! campaign (layout, poses, directions, band, array, noise, processing — never its
+//! `[scene]`/`[clutter]` truth) and a prior; gives the posterior over the model's free
+//! quantities and a model file in the model schema: per quantity the posterior median as
+//! `value`, the 95 % credible interval (2.5 % and 97.5 % weighted quantiles) as `interval`,
+//! the final population size as `n`, and `[calibration]` recording the method
+//! (`method = "abc-smc (…)"`), the simulations, generations, tolerance, seed and free
+//! quantities. The simulator is `synth`'s model run in memory
+//! ([`EnergySimulator`](crate::model::EnergySimulator): the same draws and detector as
+//! `synth`, without writing files).
+//!
+//! **Free quantities** θ (inferred in ln units): λ `intra_cluster_rate`, AoA std
+//! `intra_cluster_aoa`, d_c `perimeter_spacing`, d_p `perimeter_offset`, Γ
+//! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, and when the
+//! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`. The
+//! others (Λ, which the model derives from geometry; the diffuse `power_share` and
+//! `decay`, which synth does not draw from) are copied from the prior file.
+//!
+//! **Prior**: independent log-uniform, p(θ_k) ∝ 1/θ_k on [a_k, b_k]. Defaults
+//! ([`DEFAULT_PRIOR`], wide for indoor mm-wave): λ 0.05–3 /ns, AoA 2–60°, d_c 0.3–20 m,
+//! d_p 0.05–1.5 m (synth caps offsets at 1.5 m), Γ 2–60 ns, γ 0.5–20 ns, σ 1e-4–1 m²,
+//! rays 1–20; σ′ 1e-3–1 m²/m, Lambert n 0.2–10. `--prior FILE` (model schema): a free
+//! quantity's `interval = [a, b]` is its prior range (a > 0); `a = b` holds it fixed at a;
+//! no interval keeps the default range.
+//!
+//! **Method**: adaptive ABC population Monte Carlo (APMC; Lenormand, Jabot & Deffuant,
+//! Comput. Stat. 2013), the ABC-SMC of Beaumont, Cornuet, Marin & Robert (Biometrika 2009)
+//! with the tolerance sequence chosen adaptively (Del Moral, Doucet & Jasra, Stat. Comput.
+//! 2012), in ln-parameter space x = ln θ ([`abc`]):
+//! 1. t = 0: draw N particles x_i ~ π (uniform on the box), simulate y_i ~ p(y | x_i),
+//!    compute the raw summaries f(y_i) ([`summaries`]).
+//! 2. Summaries (semi-automatic ABC, Fearnhead & Prangle, JRSS-B 2012): standardise each
+//!    raw summary by its median and MAD over the t = 0 draws, z = (f − med)/MAD, fit
+//!    x ≈ β₀ + Bᵀz by ridge least squares on them, and use s(y) = β₀ + Bᵀz(y) (one
+//!    summary per parameter, an estimate of E[x | y]). Distance
+//!    ρ(y, y_obs) = (Σ_k ((s_k(y) − s_k(y_obs))/MAD_k)²)^½, MAD_k of s_k under the prior
+//!    predictive (the t = 0 draws).
+//! 3. Keep the N_α = ⌊αN⌋ particles with the smallest ρ, weights w_i = 1; ε_1 their
+//!    largest ρ.
+//! 4. t ≥ 1: Σ = 2·Cov_w(x) (the weighted covariance of the kept particles, Beaumont et
+//!    al.'s optimal Gaussian kernel). Draw N − N_α new particles: an ancestor j with
+//!    probability w_j/Σw, x* ~ N(x_j, Σ) (redrawn until inside the box), simulate,
+//!    ρ*; weight w* = π(x*) / Σ_j (w_j/Σw)·φ_Σ(x* − x_j). The acceptance rate
+//!    p_acc = #{ρ* < ε_t}/(N − N_α). Merge with the kept particles, keep the N_α with
+//!    the smallest ρ, ε_{t+1} their largest.
+//! 5. Stop when p_acc < p_min (`min_acceptance`) or the budget `--simulations` is spent.
+//! 6. Regression adjustment (Beaumont, Zhang & Balding, Genetics 2002):
+//!    x_i* = x_i − β̂ᵀ(s(y_i) − s(y_obs)), β̂ the least-squares slopes of x on s with weights
+//!    w_i·(1 − (ρ_i/ε)²) (Epanechnikov), clamped to the box; skipped (and not named in
+//!    the method) with fewer than 10 particles per coefficient. The posterior median and the
+//!    2.5/97.5 % quantiles are the weighted quantiles of the adjusted particles (of the raw
+//!    ones with `adjust = false`), mapped back by exp.
+//!
+//! **Determinism**: particle i of generation t draws everything (ancestor, perturbation,
+//! the simulator's seed) from `ChaCha8Rng` keyed by (seed, t, i); simulations run in
+//! parallel over particles (rayon) and are collected in order, so the same seed gives the
+//! same bytes with any number of threads. The keys differ from synth's streams: the
+//! simulations never replay the data's own draw even at the campaign seed.
+//!
+//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`abc`] (the
+//! sampler).
+
+pub mod abc;
+pub mod params;
+pub mod summaries;
+
+pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior};
+pub use params::{CalibrateParams, CalibrateValid};
+
+use crate::campaign::manifest::Campaign;
+use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
+use crate::energy::EnergyMatrix;
+use crate::error::{Error, Result};
+use crate::model::{EnergySimulator, SynthParams};
+use crate::params::ParamGuard;
+use std::path::Path;
+use summaries::SummaryContext;
+
+/// Default prior ranges (log-uniform): (quantity, lower, upper), in the schema's units.
+pub const DEFAULT_PRIOR: [(&str, f64, f64); 10] = [
+    ("intra_cluster_rate", 0.05, 3.0),
+    ("intra_cluster_aoa", 2.0, 60.0),
+    ("perimeter_spacing", 0.3, 20.0),
+    ("perimeter_offset", 0.05, 1.5),
+    ("cluster_decay", 2.0, 60.0),
+    ("ray_decay", 0.5, 20.0),
+    ("cluster_rrcs", 1e-4, 1.0),
+    ("rays_per_cluster", 1.0, 20.0),
+    ("diffuse.wall_rcs_per_m", 1e-3, 1.0),
+    ("diffuse.lambert_exponent", 0.2, 10.0),
+];
+
+/// The prior: a model template (units, families, the quantities not inferred) and the
+/// free quantities' log-uniform ranges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prior {
+    /// The model the free quantities are written into.
+    pub template: ModelConfig,
+    /// Free quantities, by file name.
+    pub free: Vec<String>,
+    /// Their ranges, schema units.
+    pub lo: Vec<f64>,
+    /// Upper ends.
+    pub hi: Vec<f64>,
+}
+
+impl Prior {
+    /// The default prior ([`DEFAULT_PRIOR`] over `table1_defaults`, no `[diffuse]`).
+    pub fn default_prior() -> Prior {
+        Prior::from_template(ModelConfig::table1_defaults(), Path::new("(default prior)"))
+            .expect("the default prior is valid")
+    }
+
+    /// Read a prior file (model schema; see the module docs); errors name the file and field.
+    pub fn load(path: &Path) -> Result<Prior> {
+        let m = ModelConfig::load(path)?;
+        Prior::from_template(m, path)
+    }
+
+    /// The prior of a model template: a free quantity's interval is its range.
+    pub fn from_template(mut template: ModelConfig, path: &Path) -> Result<Prior> {
+        let (mut free, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new());
+        for (name, a, b) in DEFAULT_PRIOR {
+            let Some(q) = template.quantity(name) else {
+                continue; // a diffuse quantity without [diffuse]
+            };
+            let (a, b) = match q.interval {
+                Some([x, y]) => {
+                    if !(x > 0.0 && x <= y && y.is_finite()) {
+                        return Err(Error::input(
+                            path,
+                            format!("{name}.interval [{x}, {y}]: a prior range needs 0 < lo <= hi"),
+                        ));
+                    }
+                    (x, y)
+                }
+                None => (a, b),
+            };
+            let q = template
+                .quantity_mut(name)
+                .expect("the quantity exists (read above)");
+            if a == b {
+                // held fixed
+                q.value = a;
+                q.not_estimable = None;
+                continue;
+            }
+            // a value inside the range keeps the template checkable
+            q.value = (a * b).sqrt();
+            q.not_estimable = None;
+            free.push(name.to_string());
+            lo.push(a);
+            hi.push(b);
+        }
+        template.calibration = None;
+        template
+            .require_estimable(&Default::default())
+            .map_err(|e| Error::input(path, e.to_string()))?;
+        if free.is_empty() {
+            return Err(Error::input(
+                path,
+                "no free quantity (every interval is a point)",
+            ));
+        }
+        Ok(Prior {
+            template,
+            free,
+            lo,
+            hi,
+        })
+    }
+
+    /// The box in ln units.
+    pub fn box_prior(&self) -> BoxPrior {
+        BoxPrior {
+            lo: self.lo.iter().map(|v| v.ln()).collect(),
+            hi: self.hi.iter().map(|v| v.ln()).collect(),
+        }
+    }
+
+    /// The model at ln parameters `x`.
+    pub fn model_at(&self, x: &[f64]) -> ModelConfig {
+        let mut m = self.template.clone();
+        for (name, v) in self.free.iter().zip(x) {
+            if let Some(q) = m.quantity_mut(name) {
+                q.value = v.exp();
+            }
+        }
+        m
+    }
+}
+
+/// What `calibrate` gives.
+#[derive(Debug, Clone)]
+pub struct Calibration {
+    /// The calibrated model (posterior medians, 95 % credible intervals, `[calibration]`).
+    pub model: ModelConfig,
+    /// The final population (ln units).
+    pub posterior: Posterior,
+    /// The free quantities, in the posterior's order.
+    pub free: Vec<String>,
+    /// Wall time, s.
+    pub wall_s: f64,
+}
+
+impl Calibration {
+    /// The particles reported (adjusted or raw, as the model file), ln units.
+    pub fn particles(&self) -> &[Vec<f64>] {
+        if self
+            .model
+            .calibration
+            .as_ref()
+            .is_some_and(|c| c.method.contains("adjusted"))
+        {
+            &self.posterior.adjusted
+        } else {
+            &self.posterior.theta
+        }
+    }
+
+    /// Posterior correlations of the reported particles (ln units).
+    pub fn correlations(&self) -> Vec<Vec<f64>> {
+        correlations(self.particles(), &self.posterior.weights)
+    }
+
+    /// Write the final population as CSV: `weight, distance`, then per free quantity its
+    /// reported value (schema units) and raw value.
+    pub fn write_posterior_csv(&self, path: &Path) -> Result<()> {
+        let mut t = String::from("weight,distance");
+        for f in &self.free {
+            t.push_str(&format!(",{f},{f}_raw"));
+        }
+        t.push('\n');
+        let rep = self.particles();
+        let post = &self.posterior;
+        for (i, (w, d)) in post.weights.iter().zip(&post.distances).enumerate() {
+            t.push_str(&format!("{w:e},{d:e}"));
+            for (a, r) in rep[i].iter().zip(&post.theta[i]) {
+                t.push_str(&format!(",{:e},{:e}", a.exp(), r.exp()));
+            }
+            t.push('\n');
+        }
+        crate::io::write_bytes(path, t.as_bytes())
+    }
+}
+
+/// Calibrate the model on the energy table `energy` (read from `energy_path`, of campaign
+/// `c`) under `prior`. `progress(done, budget)` after each generation.
+pub fn calibrate(
+    c: &Campaign,
+    energy: &EnergyMatrix,
+    energy_path: &Path,
+    prior: &Prior,
+    params: &CalibrateValid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Calibration> {
+    let t0 = std::time::Instant::now();
+    crate::energy::matrix::check_campaign(c, energy, energy_path)?;
+    energy.meta.check_noise(energy_path)?;
+    let m = &c.manifest;
+    let sim = EnergySimulator::new(
+        c,
+        &SynthParams {
+            cull: params.cull,
+            ..Default::default()
+        }
+        .check()?,
+    )?;
+    let (np, nd, nb) = sim.shape();
+    if (np, nd, nb) != (energy.positions, energy.directions(), energy.bins) {
+        return Err(Error::input(
+            energy_path,
+            format!(
+                "{} x {} x {} bins, but campaign {} gives {np} x {nd} x {nb} (other processing settings?)",
+                energy.positions,
+                energy.directions(),
+                energy.bins,
+                c.path.display()
+            ),
+        ));
+    }
+    let poses: Vec<(f64, f64, f64)> = m
+        .poses
+        .iter()
+        .map(|p| (p.x_m, p.y_m, p.heading_deg))
+        .collect();
+    let ctx = SummaryContext::new(
+        &poses,
+        &energy.angles_rel_deg,
+        nb,
+        energy.meta.bin_width_ns,
+        energy.meta.noise_mean(),
+        energy.meta.tw * energy.meta.pulses as f64,
+        energy.meta.gate_ns(),
+        sim.layout(),
+    );
+    let observed = summaries::summaries(&ctx, &energy.data);
+    let seed = params.seed.unwrap_or(m.seed);
+    let opts = abc::AbcOptions {
+        simulations: params.simulations,
+        population: params.population,
+        kept: params.kept(),
+        min_acceptance: params.min_acceptance,
+        seed,
+    };
+    let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
+        let e = sim.energies(&prior.model_at(x), s)?;
+        Ok(summaries::summaries(&ctx, &e))
+    };
+    let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;
+    let adjusted = params.adjust && post.regression_adjusted;
+    let particles = if adjusted {
+        &post.adjusted
+    } else {
+        &post.theta
+    };
+    let mut model = prior.template.clone();
+    for (k, name) in prior.free.iter().enumerate() {
+        let x: Vec<f64> = particles.iter().map(|t| t[k]).collect();
+        let q = model.quantity_mut(name).expect("a free quantity exists");
+        let w = &post.weights;
+        *q = Quantity {
+            value: weighted_quantile(&x, w, 0.5).exp(),
+            interval: Some([
+                weighted_quantile(&x, w, 0.025).exp(),
+                weighted_quantile(&x, w, 0.975).exp(),
+            ]),
+            n: Some(w.len()),
+            ks: None,
+            ks_p: None,
+            not_estimable: None,
+            ..q.clone()
+        };
+    }
+    model.array = Some(m.array);
+    model.band = Some(m.band);
+    model.bins = Some(BinSettings {
+        bin_width_ns: energy.meta.bin_width_ns,
+        window: format!("{:?}", m.processing.window).to_lowercase(),
+    });
+    model.calibration = Some(CalibrationMeta {
+        method: if adjusted {
+            "abc-smc (APMC, semi-automatic summaries, regression-adjusted)".into()
+        } else {
+            "abc-smc (APMC, semi-automatic summaries)".into()
+        },
+        simulations: post.simulations,
+        particles: post.weights.len(),
+        generations: post.generations,
+        epsilon: post.epsilon,
+        seed,
+        free: prior.free.clone(),
+    });
+    model.check()?;
+    Ok(Calibration {
+        model,
+        posterior: post,
+        free: prior.free.clone(),
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prior_from_template() {
+        let d = Prior::default_prior();
+        assert_eq!(d.free.len(), 8);
+        assert_eq!((d.lo[0], d.hi[0]), (0.05, 3.0));
+        let mut m = ModelConfig::table1_defaults();
+        m.ray_decay.interval = Some([1.0, 8.0]);
+        m.rays_per_cluster.interval = Some([4.0, 4.0]); // held fixed
+        let p = Prior::from_template(m.clone(), Path::new("p.toml")).unwrap();
+        assert_eq!(p.free.len(), 7);
+        let k = p.free.iter().position(|f| f == "ray_decay").unwrap();
+        assert_eq!((p.lo[k], p.hi[k]), (1.0, 8.0));
+        assert_eq!(p.template.rays_per_cluster.value, 4.0);
+        let x: Vec<f64> = p.lo.iter().map(|v| v.ln()).collect();
+        let at = p.model_at(&x);
+        assert!((at.ray_decay.value - 1.0).abs() < 1e-12);
+        at.check().unwrap();
+        m.cluster_decay.interval = Some([-1.0, 8.0]);
+        let e = Prior::from_template(m, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("p.toml") && e.contains("cluster_decay.interval"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn calibrated_model_round_trips() {
+        let mut m = ModelConfig::table1_defaults();
+        m.calibration = Some(CalibrationMeta {
+            method: "abc-smc".into(),
+            simulations: 10,
+            particles: 5,
+            generations: 2,
+            epsilon: 0.5,
+            seed: 1,
+            free: vec!["ray_decay".into()],
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.toml");
+        m.save(&p).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains("[calibration]") && text.contains("method = \"abc-smc\""));
+        assert_eq!(ModelConfig::load(&p).unwrap(), m);
+    }
+}

@@ -1,0 +1,162 @@
+//! Options of a calibration run: [`CalibrateParams`] (plain data) and its checked form
+//! [`CalibrateValid`], the only type [`calibrate`](super::calibrate()) takes.
+//!
+//! * `simulations` — the simulation budget (default 3000), ≥ `population`;
+//! * `population` — N, simulations of the first (prior) generation and of every later
+//!   generation (default 400), in [20, 100 000];
+//! * `alpha` — the share of the merged population kept at each generation (default 0.5),
+//!   in (0, 1); N_α = ⌊αN⌋ ≥ 10 particles carry the posterior;
+//! * `min_acceptance` — stop when fewer than this share of a generation's proposals fall
+//!   below the previous tolerance (default 0.05), in (0, 1);
+//! * `seed` — any `u64` (default: the campaign seed, hashed with its own key, so the
+//!   simulations never share a stream with a `synth` run of the same seed);
+//! * `cull` — as `synth`'s (default 1e-3), in [0, 1);
+//! * `adjust` — report the regression-adjusted particles (default) or the raw ones.
+
+use crate::error::{Error, Result};
+use crate::params::{ParamGuard, Valid};
+
+/// Options of a calibration run (builder style; [`ParamGuard::check`] gives the
+/// [`CalibrateValid`] calibrate takes).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrateParams {
+    /// Simulation budget.
+    pub simulations: usize,
+    /// Population size N (simulations per generation).
+    pub population: usize,
+    /// Share of the merged population kept at each generation.
+    pub alpha: f64,
+    /// Stop when a generation's acceptance rate falls below this.
+    pub min_acceptance: f64,
+    /// Seed (default: the campaign's).
+    pub seed: Option<u64>,
+    /// The simulator's ray cull (as `synth`).
+    pub cull: f64,
+    /// Report the regression-adjusted particles (default true) instead of the raw ones.
+    pub adjust: bool,
+}
+
+impl Default for CalibrateParams {
+    fn default() -> Self {
+        CalibrateParams {
+            simulations: 3000,
+            population: 400,
+            alpha: 0.5,
+            min_acceptance: 0.05,
+            seed: None,
+            cull: 1e-3,
+            adjust: true,
+        }
+    }
+}
+
+impl CalibrateParams {
+    /// Set the seed.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = Some(seed);
+        self
+    }
+    /// Set the simulation budget.
+    pub fn simulations(mut self, n: usize) -> Self {
+        self.simulations = n;
+        self
+    }
+    /// Set the population size.
+    pub fn population(mut self, n: usize) -> Self {
+        self.population = n;
+        self
+    }
+    /// N_α, the particles kept per generation.
+    pub fn kept(&self) -> usize {
+        (self.alpha * self.population as f64).floor() as usize
+    }
+}
+
+/// Checked calibration options.
+pub type CalibrateValid = Valid<CalibrateParams>;
+
+impl ParamGuard for CalibrateParams {
+    type Checked = CalibrateValid;
+
+    /// Every field in its range (module docs); the error names the field.
+    fn check(&self) -> Result<CalibrateValid> {
+        if !(20..=100_000).contains(&self.population) {
+            return Err(Error::param(
+                "calibrate.population",
+                format!("must be in [20, 100000], got {}", self.population),
+            ));
+        }
+        if self.simulations < self.population || self.simulations > 10_000_000 {
+            return Err(Error::param(
+                "calibrate.simulations",
+                format!(
+                    "must be in [population = {}, 1e7], got {}",
+                    self.population, self.simulations
+                ),
+            ));
+        }
+        if !(self.alpha > 0.0 && self.alpha < 1.0) {
+            return Err(Error::param(
+                "calibrate.alpha",
+                format!("must be in (0, 1), got {}", self.alpha),
+            ));
+        }
+        if self.kept() < 10 {
+            return Err(Error::param(
+                "calibrate.alpha",
+                format!(
+                    "keeps {} particles of {} (at least 10 needed)",
+                    self.kept(),
+                    self.population
+                ),
+            ));
+        }
+        if !(self.min_acceptance > 0.0 && self.min_acceptance < 1.0) {
+            return Err(Error::param(
+                "calibrate.min_acceptance",
+                format!("must be in (0, 1), got {}", self.min_acceptance),
+            ));
+        }
+        if !(self.cull.is_finite() && self.cull >= 0.0 && self.cull < 1.0) {
+            return Err(Error::param(
+                "calibrate.cull",
+                format!("must be in [0, 1), got {}", self.cull),
+            ));
+        }
+        Ok(Valid::new(self.clone()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_check() {
+        assert!(CalibrateParams::default().check().is_ok());
+        let bad = [
+            CalibrateParams::default().population(5),
+            CalibrateParams::default().simulations(10),
+            CalibrateParams {
+                alpha: 1.0,
+                ..Default::default()
+            },
+            CalibrateParams {
+                alpha: 0.01,
+                ..Default::default()
+            },
+            CalibrateParams {
+                min_acceptance: f64::NAN,
+                ..Default::default()
+            },
+            CalibrateParams {
+                cull: -1.0,
+                ..Default::default()
+            },
+        ];
+        for p in bad {
+            let e = p.check().unwrap_err().to_string();
+            assert!(e.contains("calibrate."), "{e}");
+        }
+    }
+}

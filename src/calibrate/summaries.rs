@@ -1,0 +1,507 @@
+//! The raw summary statistics of an energy matrix E[p][d][b] (positions × directions ×
+//! bins), computed the same way on the measured and on every simulated matrix. The
+//! calibration projects them onto the parameters (semi-automatic ABC, [`super::abc`]), so
+//! they need not be individually tuned: they only have to carry the information.
+//!
+//! With μ = N0·TW the mean noise-bin energy and σ_n = μ/√(TW·N_p) its standard deviation
+//! (DESIGN §2), the signal part of a bin is S = E − μ where E > μ + 3σ_n (else 0), a bin is
+//! *detected* where E > μ + 10σ_n, and a *peak* is a detected bin above its 8 neighbours in
+//! (delay, direction). τ_b = b·T_b; T_0(p) the earliest detected delay of position p after
+//! the coupling gate. The summaries ([`NAMES`], in order):
+//!
+//! * level: ln of the mean S, ln(1 + detected bins), the share of (position, direction)
+//!   profiles with a detection, the median over positions of ln(max E/μ);
+//! * temporal moments per profile with signal (Bharti, Adeogun & Pedersen 2020):
+//!   m0 = Σ_b S, m1 = Σ τ_b S/m0, m2 = (Σ (τ_b − m1)² S/m0)^½ — the mean and sd of ln m0,
+//!   the mean and sd of m1 − T_0, the mean m2;
+//! * the delay profile after T_0: ln of the share of ΣS in the windows 0–1, 1–3, 3–6, 6–10,
+//!   10–15, 15–25, 25–40, > 40 ns (Γ, γ, λ);
+//! * peaks: ln(1 + peaks per position), peaks per profile with a detection, the
+//!   least-squares slope and intercept of ln(peak power) against τ − T_0, the slope of the
+//!   per-5-ns maximum (the clusters' envelope, Γ), the median ln(peak power/μ) (σ);
+//! * peak pairs of a position within 6 ns of each other (λ, AoA): ln(pairs per peak),
+//!   the share with |Δθ| ≤ 5°, 15°, 30°, the median |Δθ| of pairs within 2 ns, the median
+//!   |Δτ| of pairs within 5°; the next peak in delay in the same direction: median ln gap
+//!   and the share of gaps under 2 ns;
+//! * depth behind the layout's wall: for each peak, R_w − cτ/2 with R_w the range to the
+//!   first wall along the direction (the layout, an input): ln of the share of peak power
+//!   with depth ≤ −0.2, −0.2–0.15, 0.15–0.4, 0.4–0.8, 0.8–1.5, > 1.5 m; the median depth
+//!   of all peaks and of each profile's first peak (d_p);
+//! * angles: the mean over positions of the normalised entropy of the angular profile
+//!   Σ_b S, and the share of detected bins whose neighbour direction at the same bin is
+//!   detected (d_c, AoA).
+//!
+//! A summary that cannot be formed (no peak, no pair) takes a fixed fallback value, so
+//! every vector is finite.
+
+use crate::campaign::layout::Layout;
+use crate::units::C0;
+use geo::Coord;
+
+/// The summaries' names, in order.
+pub const NAMES: [&str; 42] = [
+    "ln mean S",
+    "ln(1 + detected)",
+    "profiles with a detection",
+    "median ln max E/mu",
+    "mean ln m0",
+    "sd ln m0",
+    "mean m1 - T0",
+    "sd m1",
+    "mean m2",
+    "share 0-1 ns",
+    "share 1-3 ns",
+    "share 3-6 ns",
+    "share 6-10 ns",
+    "share 10-15 ns",
+    "share 15-25 ns",
+    "share 25-40 ns",
+    "share > 40 ns",
+    "ln(1 + peaks/position)",
+    "peaks per profile",
+    "peak slope",
+    "peak intercept",
+    "envelope slope",
+    "median ln peak/mu",
+    "ln pairs per peak",
+    "pairs within 5 deg",
+    "pairs within 15 deg",
+    "pairs within 30 deg",
+    "median |dtheta| (< 2 ns)",
+    "median |dtau| (< 5 deg)",
+    "median ln gap",
+    "gaps < 2 ns",
+    "depth <= -0.2 m",
+    "depth -0.2-0.15 m",
+    "depth 0.15-0.4 m",
+    "depth 0.4-0.8 m",
+    "depth 0.8-1.5 m",
+    "depth > 1.5 m",
+    "median depth",
+    "median first depth",
+    "angular entropy",
+    "neighbour detections",
+    "ln T0",
+];
+
+/// What the summaries need besides the energies: the matrix's shape and axes, the noise
+/// statistics and the walls' ranges.
+#[derive(Debug, Clone)]
+pub struct SummaryContext {
+    /// Positions, directions, bins.
+    pub np: usize,
+    /// Directions.
+    pub nd: usize,
+    /// Bins.
+    pub nb: usize,
+    /// Bin width, ns.
+    pub bin_ns: f64,
+    /// Mean noise-bin energy μ.
+    pub mu: f64,
+    /// Its standard deviation σ_n.
+    pub sdn: f64,
+    /// First bin after the coupling gate.
+    pub first_bin: usize,
+    /// Relative direction angles, degrees.
+    pub angles_deg: Vec<f64>,
+    /// Range to the first wall per (position, direction), m (NaN: none).
+    pub wall_m: Vec<f64>,
+}
+
+impl SummaryContext {
+    /// The context of a campaign's matrices: poses (x, y, heading deg), relative angles
+    /// (deg), bins, bin width (ns), noise mean μ, TW·N_p, gate (ns), layout.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        poses: &[(f64, f64, f64)],
+        angles_deg: &[f64],
+        nb: usize,
+        bin_ns: f64,
+        mu: f64,
+        tw_pulses: f64,
+        gate_ns: f64,
+        layout: &Layout,
+    ) -> SummaryContext {
+        let mut wall_m = Vec::with_capacity(poses.len() * angles_deg.len());
+        for &(x, y, h) in poses {
+            for a in angles_deg {
+                wall_m.push(
+                    layout
+                        .first_hit(Coord { x, y }, (h + a).to_radians())
+                        .map_or(f64::NAN, |w| w.0),
+                );
+            }
+        }
+        SummaryContext {
+            np: poses.len(),
+            nd: angles_deg.len(),
+            nb,
+            bin_ns,
+            mu,
+            sdn: mu / tw_pulses.max(1e-12).sqrt(),
+            first_bin: ((gate_ns / bin_ns).ceil() as usize).min(nb),
+            angles_deg: angles_deg.to_vec(),
+            wall_m,
+        }
+    }
+}
+
+fn median(v: &mut [f64], fallback: f64) -> f64 {
+    if v.is_empty() {
+        return fallback;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn mean_sd(v: &[f64], fallback: f64) -> (f64, f64) {
+    if v.is_empty() {
+        return (fallback, 0.0);
+    }
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    (
+        m,
+        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt(),
+    )
+}
+
+/// Least-squares slope and intercept of y on x (fallbacks when fewer than 3 points).
+fn line(xy: &[(f64, f64)], fallback: (f64, f64)) -> (f64, f64) {
+    if xy.len() < 3 {
+        return fallback;
+    }
+    let n = xy.len() as f64;
+    let mx = xy.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = xy.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = xy.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    if sxx <= 0.0 {
+        return fallback;
+    }
+    let sxy: f64 = xy.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let b = sxy / sxx;
+    (b, my - b * mx)
+}
+
+struct Peak {
+    d: usize,
+    tau: f64,
+    ln_p: f64,
+}
+
+/// The summaries ([`NAMES`]) of energies `e` (position-major, then direction, then bin).
+#[allow(clippy::needless_range_loop)] // (position, direction, bin) index several arrays
+pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
+    let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
+    let (mu, tb) = (ctx.mu, ctx.bin_ns);
+    let thr_low = mu + 3.0 * ctx.sdn;
+    let thr = mu + 10.0 * ctx.sdn;
+    let at = |p: usize, d: usize, b: usize| e[(p * nd + d) * nb + b];
+    let det = |p: usize, d: usize, b: usize| b >= ctx.first_bin && at(p, d, b) > thr;
+    let sig = |p: usize, d: usize, b: usize| {
+        let v = at(p, d, b);
+        if b >= ctx.first_bin && v > thr_low {
+            v - mu
+        } else {
+            0.0
+        }
+    };
+    let mut total_s = 0.0;
+    let mut n_det = 0usize;
+    let mut profiles_det = 0usize;
+    let mut ln_max = Vec::new();
+    let (mut ln_m0, mut m1s, mut m2s) = (Vec::new(), Vec::new(), Vec::new());
+    let windows = [1.0, 3.0, 6.0, 10.0, 15.0, 25.0, 40.0, f64::INFINITY];
+    let mut shares = [0.0; 8];
+    let mut peaks_all = 0usize;
+    let mut peak_xy = Vec::new();
+    let mut env: Vec<(f64, f64)> = Vec::new();
+    let mut ln_peak = Vec::new();
+    let (mut pairs, mut p5, mut p15, mut p30) = (0usize, 0usize, 0usize, 0usize);
+    let (mut dth2, mut dtau5, mut gaps) = (Vec::new(), Vec::new(), Vec::new());
+    let depth_edges = [-0.2, 0.15, 0.4, 0.8, 1.5, f64::INFINITY];
+    let mut depth_pow = [0.0; 6];
+    let (mut depths, mut first_depths) = (Vec::new(), Vec::new());
+    let mut entropy = Vec::new();
+    let (mut neigh, mut neigh_of) = (0usize, 0usize);
+    let mut t0s = Vec::new();
+    let step = if nd > 1 {
+        (ctx.angles_deg[1] - ctx.angles_deg[0]).abs()
+    } else {
+        1.0
+    };
+    for p in 0..np {
+        // T0: the earliest detection of the position
+        let t0 = (ctx.first_bin..nb)
+            .find(|&b| (0..nd).any(|d| det(p, d, b)))
+            .map(|b| b as f64 * tb);
+        let mut ang = vec![0.0; nd];
+        let mut max_e: f64 = 0.0;
+        let mut peaks: Vec<Peak> = Vec::new();
+        for d in 0..nd {
+            let (mut m0, mut m1, mut any) = (0.0, 0.0, false);
+            let mut first_peak = true;
+            for b in ctx.first_bin..nb {
+                let s = sig(p, d, b);
+                let tau = b as f64 * tb;
+                total_s += s;
+                m0 += s;
+                m1 += s * tau;
+                ang[d] += s;
+                max_e = max_e.max(at(p, d, b));
+                if let Some(t0) = t0 {
+                    let k = windows.iter().position(|w| tau - t0 < *w).unwrap_or(7);
+                    shares[k] += s;
+                }
+                if !det(p, d, b) {
+                    continue;
+                }
+                any = true;
+                n_det += 1;
+                if d + 1 < nd {
+                    neigh_of += 1;
+                    if det(p, d + 1, b) {
+                        neigh += 1;
+                    }
+                }
+                let v = at(p, d, b);
+                let mut is_peak = true;
+                'n: for dd in -1i64..=1 {
+                    for db in -1i64..=1 {
+                        if dd == 0 && db == 0 {
+                            continue;
+                        }
+                        let (d2, b2) = (d as i64 + dd, b as i64 + db);
+                        if d2 < 0 || d2 >= nd as i64 || b2 < 0 || b2 >= nb as i64 {
+                            continue;
+                        }
+                        let w = at(p, d2 as usize, b2 as usize);
+                        // ties go to the earlier (direction, bin)
+                        if w > v || (w == v && (dd, db) < (0, 0)) {
+                            is_peak = false;
+                            break 'n;
+                        }
+                    }
+                }
+                if is_peak {
+                    let pw = v - mu;
+                    peaks.push(Peak {
+                        d,
+                        tau,
+                        ln_p: (pw / mu).ln(),
+                    });
+                    let wall = ctx.wall_m[p * nd + d];
+                    if wall.is_finite() {
+                        let depth = wall - C0 * tau * 1e-9 / 2.0;
+                        let k = depth_edges.iter().position(|x| depth <= *x).unwrap_or(5);
+                        depth_pow[k] += pw;
+                        depths.push(depth);
+                        if first_peak {
+                            first_depths.push(depth);
+                        }
+                    }
+                    first_peak = false;
+                }
+            }
+            if any {
+                profiles_det += 1;
+            }
+            if m0 > 0.0 && any {
+                let m1v = m1 / m0;
+                let m2: f64 = (ctx.first_bin..nb)
+                    .map(|b| sig(p, d, b) * (b as f64 * tb - m1v).powi(2))
+                    .sum::<f64>()
+                    / m0;
+                ln_m0.push((m0 / mu).ln());
+                m1s.push(m1v - t0.unwrap_or(0.0));
+                m2s.push(m2.sqrt());
+            }
+        }
+        ln_max.push((max_e / mu).max(1e-12).ln());
+        let ta: f64 = ang.iter().sum();
+        if ta > 0.0 {
+            let h: f64 = ang
+                .iter()
+                .filter(|a| **a > 0.0)
+                .map(|a| {
+                    let q = a / ta;
+                    -q * q.ln()
+                })
+                .sum();
+            entropy.push(h / (nd.max(2) as f64).ln());
+        }
+        if let Some(t0) = t0 {
+            t0s.push(t0);
+            let mut best = std::collections::BTreeMap::new();
+            for pk in &peaks {
+                peak_xy.push((pk.tau - t0, pk.ln_p));
+                let w = ((pk.tau - t0) / 5.0).floor() as i64;
+                let slot: &mut f64 = best.entry(w).or_insert(f64::NEG_INFINITY);
+                *slot = slot.max(pk.ln_p);
+            }
+            env.extend(best.iter().map(|(w, v)| (*w as f64 * 5.0, *v)));
+        }
+        peaks_all += peaks.len();
+        ln_peak.extend(peaks.iter().map(|p| p.ln_p));
+        for (i, a) in peaks.iter().enumerate() {
+            let mut next: Option<f64> = None;
+            for (j, b) in peaks.iter().enumerate() {
+                if i == j {
+                    continue;
+                }
+                let dtau = (a.tau - b.tau).abs();
+                if a.d == b.d && b.tau > a.tau {
+                    next = Some(next.map_or(b.tau - a.tau, |x: f64| x.min(b.tau - a.tau)));
+                }
+                if j < i || dtau >= 6.0 {
+                    continue;
+                }
+                let dth = (a.d as f64 - b.d as f64).abs() * step;
+                pairs += 1;
+                p5 += usize::from(dth <= 5.0 + 1e-9);
+                p15 += usize::from(dth <= 15.0 + 1e-9);
+                p30 += usize::from(dth <= 30.0 + 1e-9);
+                if dtau < 2.0 {
+                    dth2.push(dth);
+                }
+                if dth <= 5.0 + 1e-9 {
+                    dtau5.push(dtau);
+                }
+            }
+            if let Some(g) = next {
+                gaps.push(g);
+            }
+        }
+    }
+    let cells = (np * nd * nb.saturating_sub(ctx.first_bin)).max(1) as f64;
+    let total_share: f64 = shares.iter().sum();
+    let share = |x: f64| {
+        if total_share > 0.0 {
+            (x / total_share + 1e-6).ln()
+        } else {
+            1e-6f64.ln()
+        }
+    };
+    let (m_lnm0, sd_lnm0) = mean_sd(&ln_m0, 0.0);
+    let (m_m1, sd_m1) = mean_sd(&m1s, 0.0);
+    let (m_m2, _) = mean_sd(&m2s, 0.0);
+    let (slope, icpt) = line(&peak_xy, (0.0, 0.0));
+    let (env_slope, _) = line(&env, (0.0, 0.0));
+    let npk = peaks_all.max(1) as f64;
+    let frac = |k: usize| {
+        if pairs > 0 {
+            k as f64 / pairs as f64
+        } else {
+            0.0
+        }
+    };
+    let tp: f64 = depth_pow.iter().sum();
+    let dshare = |x: f64| {
+        if tp > 0.0 {
+            (x / tp + 1e-4).ln()
+        } else {
+            1e-4f64.ln()
+        }
+    };
+    let mut lngaps: Vec<f64> = gaps.iter().map(|g| g.max(tb).ln()).collect();
+    let gaps2 = if gaps.is_empty() {
+        0.0
+    } else {
+        gaps.iter().filter(|g| **g < 2.0).count() as f64 / gaps.len() as f64
+    };
+    let mut out = vec![
+        (total_s / cells / mu + 1e-9).ln(),
+        (1.0 + n_det as f64).ln(),
+        profiles_det as f64 / (np * nd).max(1) as f64,
+        median(&mut ln_max, 0.0),
+        m_lnm0,
+        sd_lnm0,
+        m_m1,
+        sd_m1,
+        m_m2,
+    ];
+    out.extend(shares.iter().map(|s| share(*s)));
+    out.extend([
+        (1.0 + peaks_all as f64 / np.max(1) as f64).ln(),
+        peaks_all as f64 / profiles_det.max(1) as f64,
+        slope,
+        icpt,
+        env_slope,
+        median(&mut ln_peak, 0.0),
+        (pairs as f64 / npk + 0.1).ln(),
+        frac(p5),
+        frac(p15),
+        frac(p30),
+        median(&mut dth2, 90.0),
+        median(&mut dtau5, 6.0),
+        median(&mut lngaps, (nb as f64 * tb).ln()),
+        gaps2,
+    ]);
+    out.extend(depth_pow.iter().map(|x| dshare(*x)));
+    out.extend([
+        median(&mut depths, 0.0),
+        median(&mut first_depths, 0.0),
+        mean_sd(&entropy, 1.0).0,
+        if neigh_of > 0 {
+            neigh as f64 / neigh_of as f64
+        } else {
+            0.0
+        },
+        mean_sd(&t0s, nb as f64 * tb).0.max(tb).ln(),
+    ]);
+    debug_assert_eq!(out.len(), NAMES.len());
+    for v in &mut out {
+        if !v.is_finite() {
+            *v = 0.0;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_only_and_one_echo_are_finite() {
+        let layout = Layout::from_geojson(
+            r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"perimeter"},"geometry":{"type":"Polygon","coordinates":[[[-5,-5],[5,-5],[5,5],[-5,5],[-5,-5]]]}}]}"#,
+            std::path::Path::new("t.geojson"),
+        )
+        .unwrap();
+        let angles: Vec<f64> = (0..7).map(|i| -30.0 + 10.0 * i as f64).collect();
+        let ctx = SummaryContext::new(
+            &[(0.0, 0.0, 0.0)],
+            &angles,
+            200,
+            0.25,
+            1.0,
+            4.0,
+            3.0,
+            &layout,
+        );
+        assert_eq!(ctx.first_bin, 12);
+        assert!((ctx.wall_m[3] - 5.0).abs() < 1e-9);
+        let mut e = vec![1.0; 7 * 200];
+        let s0 = summaries(&ctx, &e);
+        assert_eq!(s0.len(), NAMES.len());
+        assert!(s0.iter().all(|v| v.is_finite()));
+        // one echo at 4.5 m (depth 0.5 m before the wall at 5 m) in direction 3
+        let b = (2.0 * 4.5 / C0 * 1e9 / 0.25).round() as usize;
+        e[3 * 200 + b] = 1000.0;
+        let s1 = summaries(&ctx, &e);
+        assert!(s1.iter().all(|v| v.is_finite()));
+        let i = NAMES.iter().position(|n| *n == "median depth").unwrap();
+        assert!((s1[i] - 0.5).abs() < 0.05, "{}", s1[i]);
+        let i = NAMES
+            .iter()
+            .position(|n| *n == "ln(1 + peaks/position)")
+            .unwrap();
+        assert!((s1[i] - 2f64.ln()).abs() < 1e-12);
+    }
+}
