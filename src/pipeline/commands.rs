@@ -722,7 +722,7 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
         Some(p) => crate::calibrate::Prior::load(p)?,
         None => crate::calibrate::Prior::default_prior(),
     };
-    let em = EnergyMatrix::read(&cmd.energy)?;
+    let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
     let calibration = crate::calibrate::calibrate(&c, &em, &cmd.energy, &prior, &params, progress)?;
     calibration.write_posterior_csv(&posterior)?;
     if let Some(r) = &cmd.report {
