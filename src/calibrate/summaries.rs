@@ -150,13 +150,7 @@ fn median(v: &mut [f64], fallback: f64) -> f64 {
     if v.is_empty() {
         return fallback;
     }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+    crate::fit::estimators::median(v)
 }
 
 fn mean_sd(v: &[f64], fallback: f64) -> (f64, f64) {

@@ -150,12 +150,14 @@ impl EnergyMatrix {
         if df.height() == 0 {
             return Err(Error::input(path, "energy table has no rows"));
         }
-        let pos = table::i64_column(path, &df, "position")?;
-        let dir = table::i64_column(path, &df, "direction")?;
-        let bin = table::i64_column(path, &df, "bin")?;
-        let arel = table::f64_column(path, &df, "angle_rel_deg")?;
-        let aglob = table::f64_column(path, &df, "angle_global_deg")?;
-        let energy = table::f64_column(path, &df, "energy")?;
+        let Columns {
+            pos,
+            dir,
+            bin,
+            arel,
+            aglob,
+            energy,
+        } = Columns::read(path, &df)?;
         if pos.iter().chain(&dir).chain(&bin).any(|v| *v < 0) {
             return Err(Error::input(path, "negative position/direction/bin index"));
         }
@@ -199,6 +201,30 @@ impl EnergyMatrix {
             bins: nb,
             first: 0,
             data,
+        })
+    }
+}
+
+/// The columns of an energy table (or of some of its rows) that the readers check.
+struct Columns {
+    pos: Vec<i64>,
+    dir: Vec<i64>,
+    bin: Vec<i64>,
+    arel: Vec<f64>,
+    aglob: Vec<f64>,
+    energy: Vec<f64>,
+}
+
+impl Columns {
+    /// Read them from a frame of `path` (each error names the file and column).
+    fn read(path: &Path, df: &polars::prelude::DataFrame) -> Result<Columns> {
+        Ok(Columns {
+            pos: table::i64_column(path, df, "position")?,
+            dir: table::i64_column(path, df, "direction")?,
+            bin: table::i64_column(path, df, "bin")?,
+            arel: table::f64_column(path, df, "angle_rel_deg")?,
+            aglob: table::f64_column(path, df, "angle_global_deg")?,
+            energy: table::f64_column(path, df, "energy")?,
         })
     }
 }
@@ -380,12 +406,14 @@ impl EnergyTable {
                     "energy",
                 ],
             )?;
-            let pos = table::i64_column(path, &df, "position")?;
-            let dir = table::i64_column(path, &df, "direction")?;
-            let bin = table::i64_column(path, &df, "bin")?;
-            let arel = table::f64_column(path, &df, "angle_rel_deg")?;
-            let aglob = table::f64_column(path, &df, "angle_global_deg")?;
-            let energy = table::f64_column(path, &df, "energy")?;
+            let Columns {
+                pos,
+                dir,
+                bin,
+                arel,
+                aglob,
+                energy,
+            } = Columns::read(path, &df)?;
             for i in 0..df.height() {
                 let row = off + i;
                 let (p, d, b) = (pos[i] as usize, dir[i] as usize, bin[i] as usize);
