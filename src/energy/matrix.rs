@@ -315,7 +315,17 @@ pub struct EnergyTable {
     md: polars::prelude::FileMetadataRef,
     /// The whole matrix, when the rows are not in the writer's order.
     whole: Option<EnergyMatrix>,
+    /// First row of every row group, then the row count.
+    group_starts: Vec<usize>,
+    /// The last run of positions decoded (`first` and `data` only): the whole row groups
+    /// around the positions asked for, served again without decoding (the EKF asks for
+    /// one pose at a time, and a row group may hold many).
+    cache: std::sync::Mutex<Option<std::sync::Arc<(usize, Vec<f64>)>>>,
 }
+
+/// Most rows [`EnergyTable`] decodes ahead of a request to finish a row group (2^21: 16 MB
+/// of energies); past that only the rows asked for are decoded.
+const MAX_AHEAD_ROWS: usize = 1 << 21;
 
 impl EnergyTable {
     /// Open and check an energy table: footer and page headers ([`table::open_checked`]),
@@ -327,6 +337,12 @@ impl EnergyTable {
         let meta = meta_from(path, table::key_values(&md))?;
         let groups: Vec<usize> = md.row_groups.iter().map(|g| g.num_rows()).collect();
         let rows: usize = groups.iter().sum();
+        let group_starts: Vec<usize> = std::iter::once(0)
+            .chain(groups.iter().scan(0usize, |acc, &n| {
+                *acc += n;
+                Some(*acc)
+            }))
+            .collect();
         if rows == 0 {
             return Err(Error::input(path, "energy table has no rows"));
         }
@@ -445,6 +461,8 @@ impl EnergyTable {
                 file,
                 md,
                 whole: Some(whole),
+                group_starts,
+                cache: Default::default(),
             });
         }
         Ok(EnergyTable {
@@ -461,6 +479,8 @@ impl EnergyTable {
             },
             md,
             whole: None,
+            group_starts,
+            cache: Default::default(),
         })
     }
 
@@ -492,28 +512,20 @@ impl EnergySource for EnergyTable {
                 format!("positions {p0}..{p1} outside the table's {}", h.positions),
             ));
         }
-        let per = h.directions() * h.bins;
-        let df = table::read_parquet_part(
-            &self.path,
-            &self.file,
-            &self.md,
-            (p0 * per, (p1 - p0) * per),
-            &["energy"],
-        )?;
-        let data = table::f64_column(&self.path, &df, "energy")?;
-        if data.len() != (p1 - p0) * per {
-            return Err(Error::input(
-                &self.path,
-                format!(
-                    "positions {p0}..{p1}: {} energies read, {} expected (file changed?)",
-                    data.len(),
-                    (p1 - p0) * per
-                ),
-            ));
-        }
-        for (i, &e) in data.iter().enumerate() {
-            check_energy(&self.path, p0 * per + i, e)?;
-        }
+        let per = (h.directions() * h.bins).max(1);
+        let cached = self.cache.lock().map(|c| c.clone()).unwrap_or(None);
+        let run = match cached {
+            Some(c) if c.0 <= p0 && p1 <= c.0 + c.1.len() / per => c,
+            _ => {
+                let (q0, q1) = self.decode_range(p0, p1, per);
+                let run = std::sync::Arc::new((q0, self.decode(q0, q1, per)?));
+                if let Ok(mut c) = self.cache.lock() {
+                    *c = Some(run.clone());
+                }
+                run
+            }
+        };
+        let from = (p0 - run.0) * per;
         Ok(std::borrow::Cow::Owned(EnergyMatrix {
             meta: h.meta.clone(),
             positions: h.positions,
@@ -521,8 +533,52 @@ impl EnergySource for EnergyTable {
             headings_deg: h.headings_deg.clone(),
             bins: h.bins,
             first: p0,
-            data,
+            data: run.1[from..from + (p1 - p0) * per].to_vec(),
         }))
+    }
+}
+
+impl EnergyTable {
+    /// The positions to decode for a request of `p0..p1`: the whole row groups it overlaps,
+    /// widened to whole positions, unless that is more than [`MAX_AHEAD_ROWS`] beyond it.
+    fn decode_range(&self, p0: usize, p1: usize, per: usize) -> (usize, usize) {
+        let (r0, r1) = (p0 * per, p1 * per);
+        let g = &self.group_starts;
+        // the last group start at or before r0, the first at or after r1
+        let a = g[g.partition_point(|&s| s <= r0).saturating_sub(1)];
+        let b = g[g.partition_point(|&s| s < r1).min(g.len() - 1)];
+        let (q0, q1) = (a / per, b.div_ceil(per).min(self.header.positions));
+        if (q1 - q0) * per > (p1 - p0) * per + MAX_AHEAD_ROWS || q0 > p0 || q1 < p1 {
+            (p0, p1)
+        } else {
+            (q0, q1)
+        }
+    }
+
+    /// Decode (and check) the energies of positions `q0..q1`.
+    fn decode(&self, q0: usize, q1: usize, per: usize) -> Result<Vec<f64>> {
+        let df = table::read_parquet_part(
+            &self.path,
+            &self.file,
+            &self.md,
+            (q0 * per, (q1 - q0) * per),
+            &["energy"],
+        )?;
+        let data = table::f64_column(&self.path, &df, "energy")?;
+        if data.len() != (q1 - q0) * per {
+            return Err(Error::input(
+                &self.path,
+                format!(
+                    "positions {q0}..{q1}: {} energies read, {} expected (file changed?)",
+                    data.len(),
+                    (q1 - q0) * per
+                ),
+            ));
+        }
+        for (i, &e) in data.iter().enumerate() {
+            check_energy(&self.path, q0 * per + i, e)?;
+        }
+        Ok(data)
     }
 }
 
