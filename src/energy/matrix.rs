@@ -320,8 +320,11 @@ pub struct EnergyTable {
     /// The last run of positions decoded (`first` and `data` only): the whole row groups
     /// around the positions asked for, served again without decoding (the EKF asks for
     /// one pose at a time, and a row group may hold many).
-    cache: std::sync::Mutex<Option<std::sync::Arc<(usize, Vec<f64>)>>>,
+    cache: std::sync::Mutex<Option<DecodedRun>>,
 }
+
+/// A decoded run of positions: the first position and its energies.
+type DecodedRun = std::sync::Arc<(usize, Vec<f64>)>;
 
 /// Most rows [`EnergyTable`] decodes ahead of a request to finish a row group (2^21: 16 MB
 /// of energies); past that only the rows asked for are decoded.
