@@ -212,11 +212,12 @@ fn check_footer(path: &Path, file: &File) -> Result<()> {
 /// ([`check_pages`]) checked once. The reads that follow go through this handle (clones
 /// of it), so a file renamed over the path meanwhile — how pradar's writers replace
 /// outputs — is never read with the first file's footer.
-pub fn open_checked(path: &Path) -> Result<File> {
+/// Gives the file and its parsed footer (the one the page check walked).
+pub fn open_checked(path: &Path) -> Result<(File, FileMetadataRef)> {
     let file = open(path)?;
     check_footer(path, &file)?;
-    check_pages_file(path, &file)?;
-    Ok(file)
+    let md = check_pages_file(path, &file)?;
+    Ok((file, md))
 }
 
 /// Guarded reads in progress (the panic hook is silent while this is above 0).
@@ -297,11 +298,11 @@ const MAX_PAGE_EXPANSION: usize = 4096;
 /// check runs before it.
 pub fn check_pages(path: &Path) -> Result<()> {
     let file = open_parquet(path)?;
-    check_pages_file(path, &file)
+    check_pages_file(path, &file).map(|_| ())
 }
 
-/// [`check_pages`] on an open file whose footer has been checked.
-fn check_pages_file(path: &Path, file: &File) -> Result<()> {
+/// [`check_pages`] on an open file whose footer has been checked; gives the parsed footer.
+fn check_pages_file(path: &Path, file: &File) -> Result<FileMetadataRef> {
     use polars_parquet::parquet::page::CompressedPage;
     use polars_parquet::parquet::read::{get_page_iterator, read_metadata};
     use std::io::Cursor;
@@ -363,7 +364,7 @@ fn check_pages_file(path: &Path, file: &File) -> Result<()> {
             }
         }
     }
-    Ok(())
+    Ok(std::sync::Arc::new(md))
 }
 
 /// Read a Parquet file (optionally a row slice `(offset, len)`), guarded and checked
@@ -382,12 +383,6 @@ pub type FileMetadataRef = std::sync::Arc<polars_parquet::read::FileMetadata>;
 /// Parse the footer of a Parquet file (guarded).
 pub fn parquet_file_metadata(path: &Path) -> Result<FileMetadataRef> {
     let file = open_parquet(path)?;
-    file_metadata(path, &file)
-}
-
-/// Parse the footer of a file from [`open_checked`] (guarded; `path` names it).
-pub fn file_metadata(path: &Path, file: &File) -> Result<FileMetadataRef> {
-    let file = file.try_clone().map_err(|e| Error::io(path, e))?;
     guarded(path, || {
         let mut r = ParquetReader::new(file);
         r.get_metadata().cloned()
@@ -406,8 +401,8 @@ pub fn key_values(md: &FileMetadataRef) -> Vec<(String, String)> {
         .unwrap_or_default()
 }
 
-/// Read the rows `slice = (offset, len)` of the columns `columns` of a file from
-/// [`open_checked`] whose footer `md` has been parsed: only the row groups overlapping the
+/// Read the rows `slice = (offset, len)` of the columns `columns` of a file and its footer
+/// `md` from [`open_checked`]: only the row groups overlapping the
 /// slice are decoded. A missing column is named (`path` names the file).
 pub fn read_parquet_part(
     path: &Path,

@@ -216,15 +216,26 @@ struct Columns {
 }
 
 impl Columns {
+    /// Their names, in the order of the fields.
+    const NAMES: [&'static str; 6] = [
+        "position",
+        "direction",
+        "bin",
+        "angle_rel_deg",
+        "angle_global_deg",
+        "energy",
+    ];
+
     /// Read them from a frame of `path` (each error names the file and column).
     fn read(path: &Path, df: &polars::prelude::DataFrame) -> Result<Columns> {
+        let [p, d, b, ar, ag, e] = Self::NAMES;
         Ok(Columns {
-            pos: table::i64_column(path, df, "position")?,
-            dir: table::i64_column(path, df, "direction")?,
-            bin: table::i64_column(path, df, "bin")?,
-            arel: table::f64_column(path, df, "angle_rel_deg")?,
-            aglob: table::f64_column(path, df, "angle_global_deg")?,
-            energy: table::f64_column(path, df, "energy")?,
+            pos: table::i64_column(path, df, p)?,
+            dir: table::i64_column(path, df, d)?,
+            bin: table::i64_column(path, df, b)?,
+            arel: table::f64_column(path, df, ar)?,
+            aglob: table::f64_column(path, df, ag)?,
+            energy: table::f64_column(path, df, e)?,
         })
     }
 }
@@ -335,8 +346,7 @@ impl EnergyTable {
     /// metadata, then the index columns and the values row group by row group.
     pub fn open(path: &Path) -> Result<EnergyTable> {
         // one handle for every read: a table renamed over the path meanwhile is not mixed in
-        let file = table::open_checked(path)?;
-        let md = table::file_metadata(path, &file)?;
+        let (file, md) = table::open_checked(path)?;
         let meta = meta_from(path, table::key_values(&md))?;
         let groups: Vec<usize> = md.row_groups.iter().map(|g| g.num_rows()).collect();
         let rows: usize = groups.iter().sum();
@@ -411,20 +421,7 @@ impl EnergyTable {
             if !canonical {
                 break;
             }
-            let df = table::read_parquet_part(
-                path,
-                &file,
-                &md,
-                (off, n),
-                &[
-                    "position",
-                    "direction",
-                    "bin",
-                    "angle_rel_deg",
-                    "angle_global_deg",
-                    "energy",
-                ],
-            )?;
+            let df = table::read_parquet_part(path, &file, &md, (off, n), &Columns::NAMES)?;
             let Columns {
                 pos,
                 dir,

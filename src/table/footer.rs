@@ -13,8 +13,7 @@
 //! type is not the one the decoder will read it as (the decoder does not look at the
 //! type, so a mutated type makes it read a list header out of other bytes), any list,
 //! set, map or binary claiming more elements or bytes than remain in the footer (each
-//! element takes at least one byte; a list size is also taken modulo 2^32 as the decoder
-//! does), nesting deeper than [`MAX_DEPTH`], and a footer length or magic that does not
+//! element takes at least one byte; a known list's size is taken as the decoder's i32), nesting deeper than [`MAX_DEPTH`], and a footer length or magic that does not
 //! fit the file. Unknown fields are skipped by their wire type, as the decoder does (a
 //! list of booleans, which the decoder's skipper reads as zero bytes but the protocol as
 //! one byte each, is refused: no Parquet footer holds one). Long-form field ids are
@@ -249,6 +248,17 @@ impl Walker<'_> {
         Ok(size as usize)
     }
 
+    /// A list or set header: the element type and the size as written (a long size
+    /// follows as a varint).
+    fn list_header(&mut self) -> Result<(u8, u64), String> {
+        let h = self.byte()?;
+        let size = match h >> 4 {
+            15 => self.varint()?,
+            s => u64::from(s),
+        };
+        Ok((h & 0x0f, size))
+    }
+
     fn skip_value(&mut self, ty: u8, depth: usize, in_collection: bool) -> Result<(), String> {
         if depth > MAX_DEPTH {
             return Err(format!("footer nested deeper than {MAX_DEPTH}"));
@@ -275,12 +285,7 @@ impl Walker<'_> {
                 self.skip(len)
             }
             LIST | SET => {
-                let h = self.byte()?;
-                let elem = h & 0x0f;
-                let size = match h >> 4 {
-                    15 => self.varint()?,
-                    s => u64::from(s),
-                };
+                let (elem, size) = self.list_header()?;
                 let size = self.check_size(size, 1, "list")?;
                 for _ in 0..size {
                     self.skip_value(elem, depth + 1, true)?;
@@ -372,14 +377,9 @@ impl Walker<'_> {
         match e {
             Expect::Struct(k) => self.skip_struct(k, depth + 1),
             Expect::ListVarint | Expect::ListBinary | Expect::ListStruct(_) => {
-                let h = self.byte()?;
-                let elem = h & 0x0f;
-                let size = match h >> 4 {
-                    // the decoder takes the varint as an i32
-                    15 => i64::from(self.varint()? as i32),
-                    s => i64::from(s),
-                };
-                let size = self.check_size(size.max(0) as u64, 1, "list")?;
+                let (elem, size) = self.list_header()?;
+                // the decoder takes the size as an i32 (negative: empty)
+                let size = self.check_size((size as i32).max(0) as u64, 1, "list")?;
                 if size == 0 {
                     return Ok(());
                 }
