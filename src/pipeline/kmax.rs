@@ -15,6 +15,7 @@ use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
 use crate::params::ParamGuard;
+use rayon::prelude::*;
 use std::path::Path;
 
 /// The larger caps of the K_max sensitivity table, as multiples of the default.
@@ -44,12 +45,19 @@ pub(crate) fn k_max_sensitivity(
         Cell::count(0),
         default_fit,
     ));
-    for k in K_MAX_FACTORS.into_iter().map(|f| f * params.k_max) {
-        let p = cluster::ClusterParams {
-            k_max: k,
-            ..*params
-        };
-        let c = cluster::cluster(&base.mpcs, &headings, &p.check()?)?;
+    // the refits are independent: clustered in parallel, then written and fitted in order
+    let ks: Vec<usize> = K_MAX_FACTORS.iter().map(|f| f * params.k_max).collect();
+    let clusterings: Vec<cluster::Clustering> = ks
+        .par_iter()
+        .map(|&k| {
+            let p = cluster::ClusterParams {
+                k_max: k,
+                ..*params
+            };
+            cluster::cluster(&base.mpcs, &headings, &p.check()?)
+        })
+        .collect::<Result<_>>()?;
+    for (k, c) in ks.into_iter().zip(clusterings) {
         let path = work.join(format!("clusters_kmax{k}.parquet"));
         cluster::write(&path, &c)?;
         let f = crate::fit::channel::fit_channel(&path, sc, &Default::default()).ok();

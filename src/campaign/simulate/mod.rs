@@ -40,9 +40,11 @@
 //!
 //! Layout: [`scene`] (`[scene]` parameters and the scatterers), [`draws`] (random draws
 //! shared with [`crate::model`]), [`paths`] (paths seen from a pose), [`synth`] (S21
-//! synthesis and noise), [`truth`] (ground-truth tables) and `output` (sweep writer and the
+//! synthesis and noise; `binned`, the same sum regrouped by pattern-table cell, which it uses
+//! for mechanical steering with the pattern at every point), [`truth`] (ground-truth tables) and `output` (sweep writer and the
 //! output manifest); [`simulate`] runs them in that order.
 
+mod binned;
 pub mod draws;
 mod output;
 pub mod paths;

@@ -17,6 +17,7 @@
 //!   direction, pulse) seeded by a splitmix64 hash of the indices, so the bytes do not
 //!   depend on the thread count.
 
+use super::binned::BinnedTables;
 use super::paths::Path1;
 use super::scene::SceneConfig;
 use crate::campaign::manifest::{Band, Manifest, Steering, C0};
@@ -190,6 +191,10 @@ pub(super) struct SweepSynth<'a> {
     coupling: Vec<Complex64>,
     sigma: f64,
     cull: f64,
+    /// The regrouped sum ([`super::binned`]) when it applies (mechanical steering, the
+    /// pattern at every point, directions whole table cells apart); the tables are then
+    /// dropped.
+    binned: Option<BinnedTables>,
 }
 
 impl<'a> SweepSynth<'a> {
@@ -210,9 +215,18 @@ impl<'a> SweepSynth<'a> {
                 Complex64::from_polar(coupling_amp * ripple, -2.0 * PI * (f * tau_c).fract())
             })
             .collect();
+        let binned = match m.array.steering {
+            Steering::Mechanical => tables.first().and_then(|t| {
+                let lambdas: Vec<f64> = (0..m.band.points).map(|k| C0 / m.band.freq(k)).collect();
+                BinnedTables::new(t, &lambdas, m.band.start_hz, m.band.step_hz(), &angles_deg)
+            }),
+            Steering::Electronic => None,
+        };
+        let tables = if binned.is_some() { Vec::new() } else { tables };
         SweepSynth {
             m,
             tables,
+            binned,
             angles_deg,
             coupling,
             sigma: (sigma2 / 2.0).sqrt(),
@@ -231,20 +245,28 @@ impl<'a> SweepSynth<'a> {
         let m = self.m;
         let (nd, nk, nf) = (self.directions(), m.pulses, m.band.points);
         let mut s21 = vec![Complex64::new(0.0, 0.0); nd * nk * nf];
+        let binned = (self.binned.as_ref()).map(|b| b.position(heading, paths, self.cull));
         s21.par_chunks_mut(nk * nf)
             .enumerate()
             .for_each(|(d, chunk)| {
                 let mut clean = self.coupling.clone();
-                synth_sweep(
-                    paths,
-                    &self.tables[d],
-                    heading,
-                    self.angles_deg[d].to_radians(),
-                    m.array.steering,
-                    &m.band,
-                    self.cull,
-                    &mut clean,
-                );
+                match &binned {
+                    Some(b) => {
+                        for (c, v) in clean.iter_mut().zip(&b[d * nf..(d + 1) * nf]) {
+                            *c += v;
+                        }
+                    }
+                    None => synth_sweep(
+                        paths,
+                        &self.tables[d],
+                        heading,
+                        self.angles_deg[d].to_radians(),
+                        m.array.steering,
+                        &m.band,
+                        self.cull,
+                        &mut clean,
+                    ),
+                }
                 for k in 0..nk {
                     let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(m.seed, p, d, k));
                     for (o, cv) in chunk[k * nf..(k + 1) * nf].iter_mut().zip(&clean) {

@@ -18,11 +18,12 @@ use crate::campaign::simulate::simulate;
 use crate::energy;
 use crate::error::{Error, Result};
 use crate::export::{Cell, Column, Table};
-use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, PoseNoise};
+use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
 use crate::report::{self, MapTile, Section};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -276,12 +277,8 @@ impl<'a> Lab<'a> {
         Ok(r)
     }
 
-    /// Map one case (once per process) and return its report.
-    fn map(&mut self, case: &Case) -> Result<(String, MapReport)> {
-        let key = case.key(&self.params);
-        if let Some(r) = self.map_cache.get(&key) {
-            return Ok((key, r.clone()));
-        }
+    /// The checked `pradar map` options of one case (its data made first, once per process).
+    fn map_options(&mut self, case: &Case, key: &str) -> Result<MapValid> {
         let (campaign, energy, elements) = match case.source {
             DataSource::Sweeps => {
                 let (c, e) = self.sweeps_data(case.elements)?;
@@ -297,7 +294,7 @@ impl<'a> Lab<'a> {
         let opts = MapOptions {
             method,
             runs: vec![MapRun { campaign, energy }],
-            out: self.out.join("maps").join(&key),
+            out: self.out.join("maps").join(key),
             elements,
             grid: self.params.grid,
             og: OgParams {
@@ -310,21 +307,55 @@ impl<'a> Lab<'a> {
             },
             pose_noise: case.pose_noise,
         };
-        let r = run_map(&opts.check()?, &|_, _| {})?;
-        self.map_cache.insert(key.clone(), r.clone());
-        Ok((key, r))
+        opts.check()
     }
 
-    /// Map every case with a progress bar labelled `label`.
+    /// Map every case with a progress bar labelled `label`. Each map is made once per
+    /// process: the data of the cases not yet mapped are made first (in case order), then
+    /// their maps run in parallel. A map depends only on its options, so the results do not
+    /// depend on the thread count.
     pub(super) fn map_all(&mut self, label: &str, cases: &[Case]) -> Result<Vec<Mapped>> {
         let cb = (self.progress)(label, cases.len());
-        let mut out = Vec::new();
-        for (i, c) in cases.iter().enumerate() {
-            let (key, r) = self.map(c)?;
-            out.push((CaseFigures::new(key, *c, &r), r.binary.clone()));
-            cb(i + 1, cases.len());
+        let mut todo: Vec<(String, MapValid)> = Vec::new();
+        for c in cases {
+            let key = c.key(&self.params);
+            if !self.map_cache.contains_key(&key) && todo.iter().all(|(k, _)| *k != key) {
+                let opts = self.map_options(c, &key)?;
+                todo.push((key, opts));
+            }
         }
-        Ok(out)
+        // the maps run on the pool; this thread counts them for the progress bar
+        let mut done = cases.len() - todo.len();
+        cb(done, cases.len());
+        let (tx, rx) = std::sync::mpsc::channel::<()>();
+        let reports: Vec<MapReport> = std::thread::scope(|s| {
+            let todo = &todo;
+            let worker = s.spawn(move || {
+                todo.par_iter()
+                    .map(|(_, opts)| {
+                        let r = run_map(opts, &|_, _| {});
+                        let _ = tx.send(());
+                        r
+                    })
+                    .collect::<Result<Vec<_>>>()
+            });
+            for () in rx {
+                done += 1;
+                cb(done, cases.len());
+            }
+            worker.join().expect("map worker")
+        })?;
+        for ((key, _), r) in todo.into_iter().zip(reports) {
+            self.map_cache.insert(key, r);
+        }
+        Ok(cases
+            .iter()
+            .map(|c| {
+                let key = c.key(&self.params);
+                let r = &self.map_cache[&key];
+                (CaseFigures::new(key, *c, r), r.binary.clone())
+            })
+            .collect())
     }
 
     /// A panel tile: the binary map scored against the reference.
