@@ -169,20 +169,12 @@ impl ArrayPattern {
                     return;
                 }
                 let s = th.sin();
-                // exp(j k y_m s) for evenly spaced y_m: a geometric progression in m (two
-                // sin/cos per value instead of one per column)
-                let (y0, dy) = (
-                    self.y_m[0],
-                    self.y_m.get(1).map_or(0.0, |y1| y1 - self.y_m[0]),
-                );
                 for (v, (k, cols, scale)) in row.iter_mut().zip(&per_knot) {
-                    let mut z = Complex64::from_polar(1.0, k * y0 * s);
-                    let dz = Complex64::from_polar(1.0, k * dy * s);
-                    let mut af = Complex64::new(0.0, 0.0);
-                    for c in cols {
-                        af += c * z;
-                        z *= dz;
-                    }
+                    let af: Complex64 = cols
+                        .iter()
+                        .zip(&self.y_m)
+                        .map(|(c, &y)| c * Complex64::from_polar(1.0, k * y * s))
+                        .sum();
                     *v = af * *scale * e;
                 }
             });
