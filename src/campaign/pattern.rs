@@ -169,12 +169,18 @@ impl ArrayPattern {
                     return;
                 }
                 let s = th.sin();
+                // y_{M−1−m} = −y_m exactly, so its phase factor is the conjugate: half the
+                // sin/cos, the same values
+                let m = self.y_m.len();
+                let mut z = vec![Complex64::new(0.0, 0.0); m];
                 for (v, (k, cols, scale)) in row.iter_mut().zip(&per_knot) {
-                    let af: Complex64 = cols
-                        .iter()
-                        .zip(&self.y_m)
-                        .map(|(c, &y)| c * Complex64::from_polar(1.0, k * y * s))
-                        .sum();
+                    for i in 0..m.div_ceil(2) {
+                        z[i] = Complex64::from_polar(1.0, k * self.y_m[i] * s);
+                        if m - 1 - i != i {
+                            z[m - 1 - i] = z[i].conj();
+                        }
+                    }
+                    let af: Complex64 = cols.iter().zip(&z).map(|(c, z)| c * z).sum();
                     *v = af * *scale * e;
                 }
             });

@@ -66,7 +66,7 @@ pub use io::{summary_path, write};
 pub use kmeans::{kmeans_labels, pooled_within_sd, within_ss};
 pub use metrics::adjusted_rand_index;
 pub use params::{ClusterParams, ClusterValid, Criterion};
-pub use select::cluster_position;
+pub use select::{cluster_position, cluster_position_caps};
 pub use summary::ClusterSummary;
 
 use crate::error::Result;
@@ -158,16 +158,43 @@ fn by_position(mpcs: &[Mpc], n_positions: usize) -> Vec<Vec<usize>> {
 /// Cluster every position (positions in parallel; deterministic for any thread count).
 /// `headings_deg[p]` gives the pose heading for the global centroid angle.
 pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterValid) -> Result<Clustering> {
+    let mut v = cluster_caps(mpcs, headings_deg, params, &[params.k_max])?;
+    Ok(v.pop().expect("one cap"))
+}
+
+/// [`cluster`] once for each cap in `caps` (each used as `k_max`), sharing the K-means
+/// candidates of the K the caps have in common ([`select::cluster_position_caps`]): the
+/// result for a cap equals [`cluster`] with `k_max` = cap.
+pub fn cluster_caps(
+    mpcs: &[Mpc],
+    headings_deg: &[f64],
+    params: &ClusterValid,
+    caps: &[usize],
+) -> Result<Vec<Clustering>> {
     let by_pos = by_position(mpcs, headings_deg.len());
-    let per: Vec<PositionClustering> = by_pos
+    let per: Vec<Vec<PositionClustering>> = by_pos
         .par_iter()
         .enumerate()
         .map(|(p, idx)| {
             let ms: Vec<&Mpc> = idx.iter().map(|&i| &mpcs[i]).collect();
-            cluster_position(&ms, params, p)
+            select::cluster_position_caps(&ms, params, p, caps)
         })
         .collect::<Result<_>>()?;
-    // campaign-wide ids, position by position, and the summaries
+    Ok((0..caps.len())
+        .map(|c| {
+            let per_cap: Vec<PositionClustering> = per.iter().map(|v| v[c].clone()).collect();
+            assemble(mpcs, &by_pos, per_cap, headings_deg)
+        })
+        .collect())
+}
+
+/// Campaign-wide cluster ids, position by position, and the summaries.
+fn assemble(
+    mpcs: &[Mpc],
+    by_pos: &[Vec<usize>],
+    per: Vec<PositionClustering>,
+    headings_deg: &[f64],
+) -> Clustering {
     let mut cluster_id = vec![None; mpcs.len()];
     let mut summary = Vec::new();
     for (p, (idx, pc)) in by_pos.iter().zip(&per).enumerate() {
@@ -191,10 +218,10 @@ pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterValid) -> Res
             summary.push(ClusterSummary::of(p, id, &members, heading));
         }
     }
-    Ok(Clustering {
+    Clustering {
         mpcs: mpcs.to_vec(),
         cluster_id,
         summary,
         positions: per,
-    })
+    }
 }

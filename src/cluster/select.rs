@@ -19,6 +19,7 @@ use super::params::{ClusterValid, Criterion};
 use super::PositionClustering;
 use crate::error::Result;
 use crate::mpc::Mpc;
+use rayon::prelude::*;
 
 /// Starting weights of the delay z-score against the angle z-score for the likelihood
 /// criteria's candidate partitions (the best of them per K is kept).
@@ -26,6 +27,7 @@ pub const DELAY_WEIGHTS: &[f64] = &[1.0, 0.5, 0.25, 2.0];
 
 /// The best partition so far: its score (larger is better), cluster count, labels, mean
 /// silhouette (∞ for the likelihood criteria) and the K tried.
+#[derive(Clone)]
 struct Candidate {
     score: f64,
     k: usize,
@@ -35,7 +37,7 @@ struct Candidate {
 }
 
 /// The scan over K: the per-K criterion values and the best candidate.
-#[derive(Default)]
+#[derive(Default, Clone)]
 struct Scan {
     silhouettes: Vec<(usize, f64)>,
     ch: Vec<(usize, f64)>,
@@ -174,19 +176,56 @@ pub fn cluster_position(
     params: &ClusterValid,
     position: usize,
 ) -> Result<PositionClustering> {
+    let mut v = cluster_position_caps(mpcs, params, position, &[params.k_max])?;
+    Ok(v.pop().expect("one cap"))
+}
+
+/// One K's candidate: labels, and the criterion values it adds to the scan.
+enum KCandidate {
+    Likelihood(Vec<usize>, f64),
+    Index(Vec<usize>, f64, f64),
+}
+
+/// Cluster the MPCs of one position once for each cap in `caps` (each used as `k_max`; the
+/// other parameters from `params`). The candidates of K = 2..max(caps) are made once (in
+/// parallel: each is seeded from (seed, position, K) alone) and scanned in order of K; the
+/// result for a cap is the scan stopped at that cap, the same as [`cluster_position`] with
+/// `k_max` = cap. The gap statistic's choice depends on the whole range, so it is run per
+/// cap.
+pub fn cluster_position_caps(
+    mpcs: &[&Mpc],
+    params: &ClusterValid,
+    position: usize,
+    caps: &[usize],
+) -> Result<Vec<PositionClustering>> {
     let n = mpcs.len();
     if n == 0 {
-        return Ok(no_mpcs());
+        return Ok(caps.iter().map(|_| no_mpcs()).collect());
     }
     let x = standardise(mpcs);
-    let kmax = params.k_max.min(n.saturating_sub(1));
+    let cap_of = |k_max: usize| k_max.min(n.saturating_sub(1));
     let pos_seed = params.seed ^ (position as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     if params.criterion == Criterion::Gap {
         // the gap statistic uses its own K-means runs on the z-scores: no silhouette scan
-        return by_gap(&x, kmax, params, pos_seed);
+        return (caps.iter())
+            .map(|&c| by_gap(&x, cap_of(c), params, pos_seed))
+            .collect();
     }
     let raw: Vec<[f64; 2]> = mpcs.iter().map(|m| [m.delay_ns, m.angle_rel_deg]).collect();
     let like = params.criterion.is_likelihood();
+    let top = caps.iter().map(|&c| cap_of(c)).max().unwrap_or(0);
+    let candidates: Vec<KCandidate> = (2..=top.max(1))
+        .into_par_iter()
+        .map(|k| {
+            Ok(if like {
+                let (l, v) = likelihood_candidate(&x, &raw, k, pos_seed, params)?;
+                KCandidate::Likelihood(l, v)
+            } else {
+                let (l, s, c) = index_candidate(&x, k, pos_seed, params)?;
+                KCandidate::Index(l, s, c)
+            })
+        })
+        .collect::<Result<_>>()?;
     let mut scan = Scan::default();
     if like {
         let ones = vec![0; n];
@@ -194,22 +233,32 @@ pub fn cluster_position(
         scan.likelihood.push((1, v));
         scan.offer(-v, ones, f64::INFINITY, 1);
     }
-    for k in 2..=kmax {
-        if like {
-            let (l, v) = likelihood_candidate(&x, &raw, k, pos_seed, params)?;
-            scan.likelihood.push((k, v));
-            scan.offer(-v, l, f64::INFINITY, k);
-        } else {
-            let (l, s, c) = index_candidate(&x, k, pos_seed, params)?;
-            scan.silhouettes.push((k, s));
-            scan.ch.push((k, c));
-            let score = if params.criterion == Criterion::Silhouette {
-                s
-            } else {
-                c
-            };
-            scan.offer(score, l, s, k);
+    // the scan as it stands after each K (index: K − 1; K = 1 before any candidate)
+    let mut after: Vec<Scan> = vec![scan.clone()];
+    for (k, cand) in (2..).zip(candidates) {
+        match cand {
+            KCandidate::Likelihood(l, v) => {
+                scan.likelihood.push((k, v));
+                scan.offer(-v, l, f64::INFINITY, k);
+            }
+            KCandidate::Index(l, s, c) => {
+                scan.silhouettes.push((k, s));
+                scan.ch.push((k, c));
+                let score = if params.criterion == Criterion::Silhouette {
+                    s
+                } else {
+                    c
+                };
+                scan.offer(score, l, s, k);
+            }
         }
+        after.push(scan.clone());
     }
-    Ok(scan.finish(like, n, params.min_silhouette))
+    Ok(caps
+        .iter()
+        .map(|&c| {
+            let k = cap_of(c).max(1);
+            after[k - 1].clone().finish(like, n, params.min_silhouette)
+        })
+        .collect())
 }

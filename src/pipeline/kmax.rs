@@ -15,7 +15,6 @@ use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
 use crate::params::ParamGuard;
-use rayon::prelude::*;
 use std::path::Path;
 
 /// The larger caps of the K_max sensitivity table, as multiples of the default.
@@ -45,18 +44,16 @@ pub(crate) fn k_max_sensitivity(
         Cell::count(0),
         default_fit,
     ));
-    // the refits are independent: clustered in parallel, then written and fitted in order
+    // both refits from one scan per position (the candidates of K <= 32 are shared)
     let ks: Vec<usize> = K_MAX_FACTORS.iter().map(|f| f * params.k_max).collect();
-    let clusterings: Vec<cluster::Clustering> = ks
-        .par_iter()
-        .map(|&k| {
-            let p = cluster::ClusterParams {
-                k_max: k,
-                ..*params
-            };
-            cluster::cluster(&base.mpcs, &headings, &p.check()?)
-        })
-        .collect::<Result<_>>()?;
+    for &k in &ks {
+        cluster::ClusterParams {
+            k_max: k,
+            ..*params
+        }
+        .check()?;
+    }
+    let clusterings = cluster::cluster_caps(&base.mpcs, &headings, &params.check()?, &ks)?;
     for (k, c) in ks.into_iter().zip(clusterings) {
         let path = work.join(format!("clusters_kmax{k}.parquet"));
         cluster::write(&path, &c)?;
