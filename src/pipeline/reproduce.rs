@@ -122,27 +122,50 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
     // the geometry-only chain is independent of the main one (its own files): it runs on
     // its own thread beside simulate → fit report, without progress bars (one bar at a
     // time on the terminal)
-    let (main, (geometry, geometry_s)) = std::thread::scope(|scope| {
+    // the experiments' sweeps at other N need only the simulated campaign (fig6 would
+    // make them the same way); the side thread makes them after the geometry-only chain
+    let own = c.manifest.array.elements;
+    let sizes: Vec<usize> = match opts.experiments {
+        true => (opts.experiment_params.compare_elements.iter())
+            .copied()
+            .filter(|&n| n != own)
+            .collect(),
+        false => Vec::new(),
+    };
+    let (to_side, simulated) = std::sync::mpsc::channel::<PathBuf>();
+    let (main, (geometry, geometry_s, presim)) = std::thread::scope(|scope| {
         let (c, work) = (&c, &work);
+        let exp_dir = out.join("experiments");
         let side = scope.spawn(move || {
             let t = Instant::now();
             let quiet = |_: &str, _: usize| -> Box<dyn Fn(usize, usize)> { Box::new(|_, _| {}) };
             let html = geometry_only_table(c, &work.join("geometry"), out, &quiet)
                 .unwrap_or_else(|e| page::failed("geometry-only fit", &e));
-            (html, t.elapsed().as_secs_f64())
+            let secs = t.elapsed().as_secs_f64();
+            let presim: Vec<(usize, Result<(PathBuf, PathBuf)>)> = match simulated.recv() {
+                Ok(manifest) => (sizes.into_iter())
+                    .map(|n| (n, experiment::lab::simulate_sweeps(&manifest, &exp_dir, n)))
+                    .collect(),
+                Err(_) => Vec::new(),
+            };
+            (html, secs, presim)
         });
-        let main = (|| -> Result<_> {
+        let main = (move || -> Result<_> {
             let s = simulate_campaign(c, work, progress, &mut timings)?;
+            if opts.experiments {
+                let _ = to_side.send(s.sim.manifest.clone());
+            }
+            drop(to_side);
             let mut a = analyse(&s.campaign, &s.em, work, true)?;
             timings.0.append(&mut a.timings);
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
             })?;
-            Ok((s, a, table1))
+            Ok((s, a, table1, timings))
         })();
         (main, side.join().expect("geometry-only thread"))
     });
-    let (s, a, table1) = main?;
+    let (s, a, table1, mut timings) = main?;
     timings.0.push((
         "geometry-only Table 1 (simulate → fit; beside the stages above)".into(),
         geometry_s,
@@ -154,7 +177,7 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
     let experiments = if opts.experiments {
         timings.time(
             "experiments (fig5, fig6, prior-sensitivity, pose-noise)",
-            || run_experiments(opts, &s, &a.fit, progress),
+            || run_experiments(opts, &s, &a.fit, presim, progress),
         )?
     } else {
         Vec::new()
@@ -332,6 +355,7 @@ fn run_experiments(
     opts: &ReproduceValid,
     s: &Simulated,
     fit: &Result<ChannelFit>,
+    presim: Vec<(usize, Result<(PathBuf, PathBuf)>)>,
     progress: Progress,
 ) -> Result<Vec<Section>> {
     match fit {
@@ -354,6 +378,12 @@ fn run_experiments(
         &opts.out.join("experiments"),
         progress,
     )?;
+    // sweeps made beside the fit (one that failed is left to the lab, which reports it)
+    for (n, r) in presim {
+        if let Ok(r) = r {
+            lab.preset_sweeps(n, r);
+        }
+    }
     let mut sections = Vec::new();
     for e in experiment::Experiment::ALL {
         let r = lab.run(e)?;

@@ -265,16 +265,15 @@ impl<'a> Lab<'a> {
         if let Some(p) = self.sweeps_cache.get(&elements) {
             return Ok(p.clone());
         }
-        let mut c = Campaign::load(&self.inputs.campaign)?;
-        c.set_elements(elements)?;
-        let dir = self.out.join("work").join(format!("sweeps_n{elements}"));
-        let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
-        let sc = Campaign::load(&sim.manifest)?;
-        let e = dir.join("energy.parquet");
-        energy::run(&sc, &e, &|_, _| {})?;
-        let r = (sim.manifest, e);
+        let r = simulate_sweeps(&self.inputs.campaign, &self.out, elements)?;
         self.sweeps_cache.insert(elements, r.clone());
         Ok(r)
+    }
+
+    /// Take sweeps at N elements made beforehand by [`simulate_sweeps`] (same campaign,
+    /// same folder): the lab then does not simulate them again.
+    pub fn preset_sweeps(&mut self, elements: usize, made: (PathBuf, PathBuf)) {
+        self.sweeps_cache.insert(elements, made);
     }
 
     /// The checked `pradar map` options of one case (its data made first, once per process).
@@ -447,6 +446,20 @@ impl<'a> Lab<'a> {
     pub fn section(r: &ExperimentResult, prefix: &str) -> Section {
         report::experiments::section(r, prefix)
     }
+}
+
+/// The campaign `campaign` simulated again at N elements into `out/work/sweeps_n<N>`, with
+/// its energy table: (manifest, energy table). What [`Lab`] does for sweeps at another N;
+/// `reproduce` runs it early, beside the fit.
+pub fn simulate_sweeps(campaign: &Path, out: &Path, elements: usize) -> Result<(PathBuf, PathBuf)> {
+    let mut c = Campaign::load(campaign)?;
+    c.set_elements(elements)?;
+    let dir = out.join("work").join(format!("sweeps_n{elements}"));
+    let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
+    let sc = Campaign::load(&sim.manifest)?;
+    let e = dir.join("energy.parquet");
+    energy::run(&sc, &e, &|_, _| {})?;
+    Ok((sim.manifest, e))
 }
 
 /// The mean of `v` (NaN when empty).
