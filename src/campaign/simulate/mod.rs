@@ -147,8 +147,8 @@ pub fn simulate(
     );
     let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
     let angles = m.directions.angles_deg();
-    let tables = pattern.tables(&angles, &m.band, knots);
-    let synth = synth::SweepSynth::new(m, &scene_cfg, tables, angles);
+    let tables = || pattern.tables(&angles, &m.band, knots);
+    let synth = synth::SweepSynth::new(m, &scene_cfg, knots, &tables, angles.clone());
     let nd = synth.directions();
     let (np, nk, nf) = (m.positions(), m.pulses, m.band.points);
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;

@@ -20,7 +20,7 @@
 use super::binned::BinnedTables;
 use super::paths::Path1;
 use super::scene::SceneConfig;
-use crate::campaign::manifest::{Band, Manifest, Steering, C0};
+use crate::campaign::manifest::{ArrayConfig, Band, Manifest, Steering, C0};
 use crate::campaign::pattern::PatternTable;
 use num_complex::Complex64;
 use rand::SeedableRng;
@@ -28,7 +28,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, Weak};
 
 /// The frequency grid of one sweep and the pattern's knot segments on it.
 struct Grid {
@@ -193,16 +193,68 @@ pub(super) struct SweepSynth<'a> {
     cull: f64,
     /// The regrouped sum ([`super::binned`]) when it applies (mechanical steering, the
     /// pattern at every point, directions whole table cells apart); the tables are then
-    /// dropped.
-    binned: Option<BinnedTables>,
+    /// dropped. Shared with the other simulations of this process that use the same
+    /// array, band and directions while any of them runs ([`shared_binned`]).
+    binned: Option<Arc<BinnedTables>>,
+}
+
+/// What the binned products depend on besides the pattern step: the array, the band and
+/// the directions.
+#[derive(PartialEq)]
+struct BinnedKey {
+    array: ArrayConfig,
+    band: Band,
+    angles_deg: Vec<f64>,
+}
+
+/// The binned products in use in this process: `reproduce` simulates the corridor and its
+/// geometry-only copy at once, and they share one (93 MB at 801 points).
+static SHARED_BINNED: Mutex<Vec<(BinnedKey, Weak<BinnedTables>)>> = Mutex::new(Vec::new());
+
+/// The binned products of `m` (built from `tables()` when no running simulation holds
+/// them), None when the binned sum does not apply. Built under the lock, so a second
+/// simulation of the same array waits and shares them; the values are the same either way.
+fn shared_binned(
+    m: &Manifest,
+    angles_deg: &[f64],
+    tables: &dyn Fn() -> Vec<Arc<PatternTable>>,
+) -> Option<Arc<BinnedTables>> {
+    let key = BinnedKey {
+        array: m.array,
+        band: m.band,
+        angles_deg: angles_deg.to_vec(),
+    };
+    let mut shared = SHARED_BINNED.lock().unwrap_or_else(|e| e.into_inner());
+    shared.retain(|(_, w)| w.strong_count() > 0);
+    if let Some(b) = shared
+        .iter()
+        .find(|(k, _)| *k == key)
+        .and_then(|(_, w)| w.upgrade())
+    {
+        return Some(b);
+    }
+    let t = tables();
+    let lambdas: Vec<f64> = (0..m.band.points).map(|k| C0 / m.band.freq(k)).collect();
+    let b = BinnedTables::new(
+        t.first()?,
+        &lambdas,
+        m.band.start_hz,
+        m.band.step_hz(),
+        angles_deg,
+    )
+    .map(Arc::new)?;
+    shared.push((key, Arc::downgrade(&b)));
+    Some(b)
 }
 
 impl<'a> SweepSynth<'a> {
-    /// Set up for manifest `m` with the direction tables `tables` of `angles_deg`.
+    /// Set up for manifest `m` with the direction tables of `angles_deg` (made by `tables`,
+    /// with `knots` frequency knots, when needed).
     pub(super) fn new(
         m: &'a Manifest,
         scene: &SceneConfig,
-        tables: Vec<Arc<PatternTable>>,
+        knots: usize,
+        tables: &dyn Fn() -> Vec<Arc<PatternTable>>,
         angles_deg: Vec<f64>,
     ) -> SweepSynth<'a> {
         let sigma2 = m.noise.s21_variance();
@@ -216,13 +268,14 @@ impl<'a> SweepSynth<'a> {
             })
             .collect();
         let binned = match m.array.steering {
-            Steering::Mechanical => tables.first().and_then(|t| {
-                let lambdas: Vec<f64> = (0..m.band.points).map(|k| C0 / m.band.freq(k)).collect();
-                BinnedTables::new(t, &lambdas, m.band.start_hz, m.band.step_hz(), &angles_deg)
-            }),
-            Steering::Electronic => None,
+            Steering::Mechanical if knots == m.band.points => shared_binned(m, &angles_deg, tables),
+            _ => None,
         };
-        let tables = if binned.is_some() { Vec::new() } else { tables };
+        let tables = if binned.is_some() {
+            Vec::new()
+        } else {
+            tables()
+        };
         SweepSynth {
             m,
             tables,
