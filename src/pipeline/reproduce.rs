@@ -4,6 +4,13 @@
 //! cluster plots, the maps, the experiments, and the report page
 //! ([`crate::report::reproduce`]).
 //!
+//! Scheduling: the geometry-only chain has its own files, so it runs on a side thread
+//! beside simulate → energy → analysis → fit report, and then makes the experiments' sweeps
+//! at the other N of fig6 once the main simulation has written its campaign (the lab takes
+//! them instead of simulating them again). Every output is a pure function of its inputs,
+//! so the files are the same whatever runs beside what; the page's stage timings say which
+//! stage ran beside the others and its total is the job's wall time.
+//!
 //! Options are checked once ([`ReproduceOptions`] → [`ReproduceValid`]). A failed fit, K_max
 //! table or geometry-only table is reported on the page, not raised: the rest of the report
 //! still stands; any other error stops the job. A partial fit (a quantity not estimable) is
