@@ -365,14 +365,23 @@ fn run_experiments(
     presim: Vec<(usize, Result<(PathBuf, PathBuf)>)>,
     progress: Progress,
 ) -> Result<Vec<Section>> {
-    match fit {
-        Err(e) => return Ok(vec![page::experiments_not_run(e)]),
+    let not_run = match fit {
+        Err(e) => Some(page::experiments_not_run(e)),
         Ok(f) if !f.model.not_estimable().is_empty() => {
-            return Ok(vec![page::experiments_not_run_partial(
-                &f.model.not_estimable(),
-            )])
+            Some(page::experiments_not_run_partial(&f.model.not_estimable()))
         }
-        Ok(_) => {}
+        Ok(_) => None,
+    };
+    if let Some(section) = not_run {
+        // the sweeps made beside the fit are not the report's: removed with their folders
+        let dir = opts.out.join("experiments");
+        for (n, _) in &presim {
+            let sweeps = dir.join("work").join(format!("sweeps_n{n}"));
+            std::fs::remove_dir_all(&sweeps).map_err(|e| Error::io(&sweeps, e))?;
+        }
+        let _ = std::fs::remove_dir(dir.join("work"));
+        let _ = std::fs::remove_dir(&dir);
+        return Ok(vec![section]);
     }
     let inputs = experiment::ExperimentInputs {
         campaign: s.sim.manifest.clone(),

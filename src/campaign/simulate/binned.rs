@@ -108,7 +108,7 @@ impl BinnedTables {
         let mut offsets = Vec::with_capacity(angles_deg.len());
         for &a in angles_deg {
             let o = (a - ref_deg) / step;
-            if (o - o.round()).abs() > 1e-6 || (a - ref_deg).abs() > 90.0 + 1e-9 {
+            if (o - o.round()).abs() > 1e-9 || (a - ref_deg).abs() > 90.0 + 1e-9 {
                 return None;
             }
             offsets.push(o.round() as isize);

@@ -212,13 +212,15 @@ struct BinnedKey {
 static SHARED_BINNED: Mutex<Vec<(BinnedKey, Weak<BinnedTables>)>> = Mutex::new(Vec::new());
 
 /// The binned products of `m` (built from `tables()` when no running simulation holds
-/// them), None when the binned sum does not apply. Built under the lock, so a second
-/// simulation of the same array waits and shares them; the values are the same either way.
+/// them), or the tables themselves when the binned sum does not apply. Built under the lock,
+/// so a second simulation of the same array waits and shares them; the values are the same
+/// either way. (`simulate` runs on plain threads, never inside a rayon task, so waiting on
+/// the lock cannot hold up the pool that builds the tables.)
 fn shared_binned(
     m: &Manifest,
     angles_deg: &[f64],
     tables: &dyn Fn() -> Vec<Arc<PatternTable>>,
-) -> Option<Arc<BinnedTables>> {
+) -> std::result::Result<Arc<BinnedTables>, Vec<Arc<PatternTable>>> {
     let key = BinnedKey {
         array: m.array,
         band: m.band,
@@ -231,20 +233,21 @@ fn shared_binned(
         .find(|(k, _)| *k == key)
         .and_then(|(_, w)| w.upgrade())
     {
-        return Some(b);
+        return Ok(b);
     }
     let t = tables();
     let lambdas: Vec<f64> = (0..m.band.points).map(|k| C0 / m.band.freq(k)).collect();
-    let b = BinnedTables::new(
-        t.first()?,
-        &lambdas,
-        m.band.start_hz,
-        m.band.step_hz(),
-        angles_deg,
-    )
-    .map(Arc::new)?;
-    shared.push((key, Arc::downgrade(&b)));
-    Some(b)
+    let band = &m.band;
+    let built = (t.first())
+        .and_then(|t0| BinnedTables::new(t0, &lambdas, band.start_hz, band.step_hz(), angles_deg));
+    match built {
+        Some(b) => {
+            let b = Arc::new(b);
+            shared.push((key, Arc::downgrade(&b)));
+            Ok(b)
+        }
+        None => Err(t),
+    }
 }
 
 impl<'a> SweepSynth<'a> {
@@ -267,14 +270,14 @@ impl<'a> SweepSynth<'a> {
                 Complex64::from_polar(coupling_amp * ripple, -2.0 * PI * (f * tau_c).fract())
             })
             .collect();
-        let binned = match m.array.steering {
-            Steering::Mechanical if knots == m.band.points => shared_binned(m, &angles_deg, tables),
-            _ => None,
-        };
-        let tables = if binned.is_some() {
-            Vec::new()
-        } else {
-            tables()
+        let (binned, tables) = match m.array.steering {
+            Steering::Mechanical if knots == m.band.points => {
+                match shared_binned(m, &angles_deg, tables) {
+                    Ok(b) => (Some(b), Vec::new()),
+                    Err(t) => (None, t),
+                }
+            }
+            _ => (None, tables()),
         };
         SweepSynth {
             m,
