@@ -331,6 +331,23 @@ fn energy_parquet_is_read_by_pandas() {
     }
 }
 
+/// A point-target room: the fit leaves quantities not estimable, so the experiments do not
+/// run, and the sweeps `reproduce` makes for them beside the fit are removed again.
+#[test]
+fn reproduce_without_experiments_leaves_no_experiment_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("rep");
+    let m = concat!(env!("CARGO_MANIFEST_DIR"), "/data/tests/point_target.toml");
+    let o = run(&["reproduce", "--out", s(&out), "--campaign", m], None);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("not run"),
+        "the experiments should not run here"
+    );
+    assert!(!out.join("experiments").exists());
+}
+
 #[test]
 fn reproduce_writes_the_report() {
     let tmp = tempfile::tempdir().unwrap();

@@ -377,7 +377,9 @@ fn run_experiments(
         let dir = opts.out.join("experiments");
         for (n, _) in &presim {
             let sweeps = dir.join("work").join(format!("sweeps_n{n}"));
-            std::fs::remove_dir_all(&sweeps).map_err(|e| Error::io(&sweeps, e))?;
+            if sweeps.exists() {
+                std::fs::remove_dir_all(&sweeps).map_err(|e| Error::io(&sweeps, e))?;
+            }
         }
         let _ = std::fs::remove_dir(dir.join("work"));
         let _ = std::fs::remove_dir(&dir);
