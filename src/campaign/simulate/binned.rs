@@ -454,22 +454,33 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn binned_sum_is_the_per_path_sum() {
+    /// The band (57.5–63.5 GHz, `points`), a mechanically steered array's pattern table
+    /// at every point and the wavelengths.
+    fn setup(
+        points: usize,
+        elements: usize,
+        one_bit: bool,
+    ) -> (Band, ArrayPattern, PatternTable, Vec<f64>) {
         let band = Band {
             start_hz: 57.5e9,
             stop_hz: 63.5e9,
-            points: 101,
+            points,
         };
         let cfg = ArrayConfig {
-            elements: 100,
-            one_bit: true,
+            elements,
+            one_bit,
             element_q: 1.0,
             steering: Steering::Mechanical,
         };
         let pattern = ArrayPattern::new(cfg, band.center_hz()).unwrap();
         let table = pattern.table(0.0, &band, band.points, TABLE_STEP_DEG);
         let lambdas: Vec<f64> = (0..band.points).map(|k| C0 / band.freq(k)).collect();
+        (band, pattern, table, lambdas)
+    }
+
+    #[test]
+    fn binned_sum_is_the_per_path_sum() {
+        let (band, _, table, lambdas) = setup(101, 100, true);
         let angles: Vec<f64> = (0..37).map(|d| -90.0 + 5.0 * d as f64).collect();
         let b = BinnedTables::new(&table, &lambdas, band.start_hz, band.step_hz(), &angles)
             .expect("5° steps are whole cells");
@@ -524,20 +535,7 @@ mod tests {
 
     #[test]
     fn directions_off_the_table_grid_fall_back() {
-        let band = Band {
-            start_hz: 57.5e9,
-            stop_hz: 63.5e9,
-            points: 11,
-        };
-        let cfg = ArrayConfig {
-            elements: 16,
-            one_bit: false,
-            element_q: 1.0,
-            steering: Steering::Mechanical,
-        };
-        let pattern = ArrayPattern::new(cfg, band.center_hz()).unwrap();
-        let table = pattern.table(0.0, &band, band.points, TABLE_STEP_DEG);
-        let lambdas: Vec<f64> = (0..band.points).map(|k| C0 / band.freq(k)).collect();
+        let (band, pattern, table, lambdas) = setup(11, 16, false);
         let new = |a: &[f64]| BinnedTables::new(&table, &lambdas, band.start_hz, band.step_hz(), a);
         assert!(new(&[-90.0, 0.0, 90.0]).is_some());
         assert!(new(&[0.0, 0.025]).is_none(), "half a cell apart");
