@@ -12,6 +12,10 @@
 //!   separated in angle are found from the lower weights). The best over K = 1..K_max wins.
 //! * Gap: the statistic picks K with its own K-means runs; K's partition is then K-means on
 //!   the z-scores.
+//!
+//! The candidates of different K are independent (each seeded from its own K), so they are
+//! made in parallel and scanned in order of K; [`cluster_position_caps`] stops one scan at
+//! several caps, which is how the K_max refits share their K-means runs.
 
 use super::criteria::{calinski_harabasz, gap::gap_k, likelihood_criterion, silhouette};
 use super::kmeans::{kmeans_labels, n_clusters, partition, standardise};

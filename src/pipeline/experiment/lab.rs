@@ -8,6 +8,10 @@
 //! (`metrics.json`), and so does the interior (the map's building region: inside the
 //! perimeter or on a wall). A wrong-cell count is the metric's rate times the region's
 //! cells, rounded.
+//!
+//! Parallelism: an experiment's maps not yet made run in parallel once their data exist
+//! (model data and sweeps are made first, in case order); a map depends only on its
+//! options, so the files do not depend on the thread count or on what ran beside it.
 
 use super::super::Progress;
 use super::{Experiment, ExperimentInputs, ExperimentValid};
