@@ -111,27 +111,61 @@ pub fn run(
             ),
         ));
     }
-    let mut writer = EnergyWriter::create(out, m, nb)?;
-    let mut energies = Vec::with_capacity(nd * nb);
+    let writer = EnergyWriter::create(out, m, nb)?;
     let (mut noise_sum, mut noise_n) = (0.0, 0usize);
     let chunk = reader.chunk_positions();
-    let mut p0 = 0;
-    while p0 < np {
-        for mut sw in reader.read_positions(p0, chunk)? {
-            cal.apply(&mut sw);
-            let e = proc.position_energy(&sw);
-            energies.clear();
-            for d in 0..nd {
-                let prof = &e[d * nbf..(d + 1) * nbf];
-                energies.extend_from_slice(&prof[..nb]);
-                noise_sum += prof[noise_from..noise_to].iter().sum::<f64>();
-                noise_n += noise_to - noise_from;
+    // three stages in flight: the next chunk of sweeps is read on one thread and the
+    // previous positions' rows encoded on another while this one computes (bounded
+    // channels: at most two chunks read ahead, four positions queued for writing); the
+    // rows go to the writer in position order, so the file is the same
+    let (writer, computed) = std::thread::scope(|scope| -> Result<_> {
+        let (to_main, chunks) = std::sync::mpsc::sync_channel(1);
+        let reading = scope.spawn(move || {
+            let mut p0 = 0;
+            while p0 < np {
+                let r = reader.read_positions(p0, chunk);
+                let failed = r.is_err();
+                if to_main.send(r).is_err() || failed {
+                    break;
+                }
+                p0 += chunk;
             }
-            writer.push(&energies)?;
-            progress(sw.position + 1, np);
-        }
-        p0 += chunk;
-    }
+        });
+        let (to_writer, rows) = std::sync::mpsc::sync_channel::<Vec<f64>>(4);
+        let writing = scope.spawn(move || -> Result<EnergyWriter> {
+            let mut writer = writer;
+            for energies in rows {
+                writer.push(&energies)?;
+            }
+            Ok(writer)
+        });
+        let computed = (|| -> Result<()> {
+            for sweeps in chunks {
+                for mut sw in sweeps? {
+                    cal.apply(&mut sw);
+                    let e = proc.position_energy(&sw);
+                    let mut energies = Vec::with_capacity(nd * nb);
+                    for d in 0..nd {
+                        let prof = &e[d * nbf..(d + 1) * nbf];
+                        energies.extend_from_slice(&prof[..nb]);
+                        noise_sum += prof[noise_from..noise_to].iter().sum::<f64>();
+                        noise_n += noise_to - noise_from;
+                    }
+                    if to_writer.send(energies).is_err() {
+                        return Ok(()); // the writer stopped: its error is reported below
+                    }
+                    progress(sw.position + 1, np);
+                }
+            }
+            Ok(())
+        })();
+        drop(to_writer);
+        let writer = writing.join().expect("energy writer thread");
+        reading.join().expect("sweep reader thread");
+        Ok((writer, computed))
+    })?;
+    computed?;
+    let writer = writer?;
     let noise_bin_mean = noise_sum / noise_n as f64;
     let n0 = noise_bin_mean / proc.tw();
     let mut meta = table_metadata(m, &proc, n0, noise_bin_mean);
