@@ -71,6 +71,7 @@ pub use summary::ClusterSummary;
 
 use crate::error::Result;
 use crate::mpc::{Component, Mpc};
+use crate::params::ParamGuard;
 use rayon::prelude::*;
 
 /// Result of clustering one position.
@@ -162,7 +163,7 @@ pub fn cluster(mpcs: &[Mpc], headings_deg: &[f64], params: &ClusterValid) -> Res
     Ok(v.pop().expect("one cap"))
 }
 
-/// [`cluster`] once for each cap in `caps` (each used as `k_max`), sharing the K-means
+/// [`cluster`] once for each cap in `caps` (each used as `k_max` and checked as one), sharing the K-means
 /// candidates of the K the caps have in common ([`select::cluster_position_caps`]): the
 /// result for a cap equals [`cluster`] with `k_max` = cap.
 pub fn cluster_caps(
@@ -171,6 +172,9 @@ pub fn cluster_caps(
     params: &ClusterValid,
     caps: &[usize],
 ) -> Result<Vec<Clustering>> {
+    for &k_max in caps {
+        ClusterParams { k_max, ..**params }.check()?;
+    }
     let by_pos = by_position(mpcs, headings_deg.len());
     let per: Vec<Vec<PositionClustering>> = by_pos
         .par_iter()
@@ -180,11 +184,16 @@ pub fn cluster_caps(
             select::cluster_position_caps(&ms, params, p, caps)
         })
         .collect::<Result<_>>()?;
-    Ok((0..caps.len())
-        .map(|c| {
-            let per_cap: Vec<PositionClustering> = per.iter().map(|v| v[c].clone()).collect();
-            assemble(mpcs, &by_pos, per_cap, headings_deg)
-        })
+    // [position][cap] → [cap][position]
+    let mut per_cap: Vec<Vec<PositionClustering>> = caps.iter().map(|_| Vec::new()).collect();
+    for at_caps in per {
+        for (v, pc) in per_cap.iter_mut().zip(at_caps) {
+            v.push(pc);
+        }
+    }
+    Ok(per_cap
+        .into_iter()
+        .map(|per| assemble(mpcs, &by_pos, per, headings_deg))
         .collect())
 }
 

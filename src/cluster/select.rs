@@ -237,8 +237,15 @@ pub fn cluster_position_caps(
         scan.likelihood.push((1, v));
         scan.offer(-v, ones, f64::INFINITY, 1);
     }
-    // the scan as it stands after each K (index: K − 1; K = 1 before any candidate)
-    let mut after: Vec<Scan> = vec![scan.clone()];
+    // the scan as it stands at each cap (K = 1: before any candidate)
+    let stops: Vec<usize> = caps.iter().map(|&c| cap_of(c).max(1)).collect();
+    let mut at: Vec<Option<Scan>> = vec![None; caps.len()];
+    let mut keep = |k: usize, scan: &Scan| {
+        for (slot, _) in at.iter_mut().zip(&stops).filter(|(_, &s)| s == k) {
+            *slot = Some(scan.clone());
+        }
+    };
+    keep(1, &scan);
     for (k, cand) in (2..).zip(candidates) {
         match cand {
             KCandidate::Likelihood(l, v) => {
@@ -256,13 +263,10 @@ pub fn cluster_position_caps(
                 scan.offer(score, l, s, k);
             }
         }
-        after.push(scan.clone());
+        keep(k, &scan);
     }
-    Ok(caps
-        .iter()
-        .map(|&c| {
-            let k = cap_of(c).max(1);
-            after[k - 1].clone().finish(like, n, params.min_silhouette)
-        })
+    Ok(at
+        .into_iter()
+        .map(|s| (s.expect("every cap is scanned up to")).finish(like, n, params.min_silhouette))
         .collect())
 }

@@ -74,7 +74,11 @@ struct Entry {
     j: isize,
     t: f64,
     amp: Complex64,
-    tau_s: f64,
+    /// frac(f₀·τ) and frac(Δf·τ), cycles.
+    f0_cycles: f64,
+    df_cycles: f64,
+    /// e^{−j2π·frac(Δf·τ)}: the phase step from one point to the next.
+    step: Complex64,
 }
 
 impl Entry {
@@ -82,6 +86,15 @@ impl Entry {
     fn weights(&self) -> [f64; 3] {
         let (t, u) = (self.t, 1.0 - self.t);
         [u * u, t * u, t * t]
+    }
+
+    /// The phase at point `k`: the per-path code's f₀·τ + k·Δf·τ, each part reduced to its
+    /// fraction first (f·τ itself is thousands of cycles).
+    fn phase_at(&self, k: usize) -> Complex64 {
+        Complex64::from_polar(
+            1.0,
+            -2.0 * PI * (self.f0_cycles + k as f64 * self.df_cycles).fract(),
+        )
     }
 }
 
@@ -154,10 +167,16 @@ impl BinnedTables {
         self.offsets.len()
     }
 
+    /// The heading-frame cells j a direction with offset `o` sees: table cells
+    /// i = j − o from 0 to n − 2.
+    fn seen(&self, o: isize) -> std::ops::RangeInclusive<isize> {
+        o..=o + self.n_ang as isize - 2
+    }
+
     /// The table cell of entry `e` in direction `d`, None when not visible there.
     fn cell(&self, e: &Entry, d: usize) -> Option<usize> {
-        let i = e.j - self.offsets[d];
-        (i >= 0 && (i as usize) + 2 <= self.n_ang).then_some(i as usize)
+        let o = self.offsets[d];
+        self.seen(o).contains(&e.j).then(|| (e.j - o) as usize)
     }
 
     /// Whether the per-path code culls entry `e` in direction `d` (cell `i`).
@@ -177,7 +196,7 @@ impl BinnedTables {
         let (nd, nf) = (self.directions(), self.nf);
         let o_lo = *self.offsets.iter().min().expect("directions");
         let o_hi = *self.offsets.iter().max().expect("directions");
-        let j_hi = o_hi + self.n_ang as isize - 2;
+        let any = *self.seen(o_lo).start()..=*self.seen(o_hi).end();
         let mut entries: Vec<Entry> = paths
             .iter()
             .filter_map(|p| {
@@ -185,11 +204,14 @@ impl BinnedTables {
                 let x = (rel.to_degrees() + 90.0) / self.step_deg;
                 let jf = x.floor();
                 let j = jf as isize;
-                (j >= o_lo && j <= j_hi).then_some(Entry {
+                let df_cycles = (self.df_hz * p.tau_s).fract();
+                any.contains(&j).then(|| Entry {
                     j,
                     t: x - jf,
                     amp: p.amp,
-                    tau_s: p.tau_s,
+                    f0_cycles: (self.f0_hz * p.tau_s).fract(),
+                    df_cycles,
+                    step: Complex64::from_polar(1.0, -2.0 * PI * df_cycles),
                 })
             })
             .collect();
@@ -210,12 +232,21 @@ impl BinnedTables {
                     .collect()
             })
             .collect();
+        // the cells each direction sees: a contiguous run of the sorted cells
+        let ranges: Vec<(usize, usize)> = (self.offsets.iter())
+            .map(|&o| {
+                let seen = self.seen(o);
+                let lo = cells.partition_point(|c| c.0 < *seen.start());
+                let hi = cells.partition_point(|c| c.0 <= *seen.end());
+                (lo, hi)
+            })
+            .collect();
         let nb = nf.div_ceil(BLOCK);
         let tasks: Vec<Vec<Complex64>> = (0..nb.div_ceil(TASK_BLOCKS))
             .into_par_iter()
             .map(|g| {
                 let bs = g * TASK_BLOCKS..((g + 1) * TASK_BLOCKS).min(nb);
-                self.task(bs, &entries, &cells, &culled)
+                self.task(bs, &entries, &cells, &ranges, &culled)
             })
             .collect();
         // each task gives [block][direction][BLOCK]
@@ -240,31 +271,12 @@ impl BinnedTables {
         bs: std::ops::Range<usize>,
         entries: &[Entry],
         cells: &[(isize, usize, usize)],
+        ranges: &[(usize, usize)],
         culled: &[Vec<usize>],
     ) -> Vec<Complex64> {
         let (nd, n_ang) = (self.directions(), self.n_ang);
-        // the phase at point k0 as the per-path code's f0·τ + k0·(df·τ), each part reduced
-        // to its fraction first (f·τ itself is thousands of cycles)
-        let k0 = (bs.start * BLOCK) as f64;
         let mut ph: Vec<Complex64> = (entries.iter())
-            .map(|e| {
-                let (a, b) = (
-                    (self.f0_hz * e.tau_s).fract(),
-                    (self.df_hz * e.tau_s).fract(),
-                );
-                Complex64::from_polar(1.0, -2.0 * PI * (a + k0 * b).fract())
-            })
-            .collect();
-        let steps: Vec<Complex64> = (entries.iter())
-            .map(|e| Complex64::from_polar(1.0, -2.0 * PI * (self.df_hz * e.tau_s).fract()))
-            .collect();
-        // the cells each direction sees: a contiguous run of the sorted cells
-        let ranges: Vec<(usize, usize)> = (self.offsets.iter())
-            .map(|&o| {
-                let lo = cells.partition_point(|c| c.0 < o);
-                let hi = cells.partition_point(|c| c.0 <= o + n_ang as isize - 2);
-                (lo, hi)
-            })
+            .map(|e| e.phase_at(bs.start * BLOCK))
             .collect();
         let mut out = Vec::with_capacity(bs.len() * nd * BLOCK);
         let mut c = vec![[0.0f64; 6 * BLOCK]; cells.len()];
@@ -274,36 +286,21 @@ impl BinnedTables {
             // per cell: C0, C1, C2 as (re, im) rows of BLOCK
             for (cc, &(_, a, z)) in c.iter_mut().zip(cells) {
                 *cc = [0.0; 6 * BLOCK];
-                for (n, e) in entries[a..z].iter().enumerate() {
-                    let h = phasors(e.amp, &mut ph[a + n], steps[a + n]);
-                    let w = e.weights();
-                    for (m, &wm) in w.iter().enumerate() {
-                        for k in 0..BLOCK {
-                            cc[2 * m * BLOCK + k] += wm * h[k];
-                            cc[(2 * m + 1) * BLOCK + k] += wm * h[BLOCK + k];
-                        }
-                    }
+                for (e, p) in entries[a..z].iter().zip(&mut ph[a..z]) {
+                    spread(cc, e.weights(), &phasors(e.amp, p, e.step));
                 }
             }
             for a in acc.iter_mut() {
                 *a = [0.0; 2 * BLOCK];
             }
             let tab = &self.tab[b * n_ang * 4 * BLOCK..(b + 1) * n_ang * 4 * BLOCK];
-            add_cells(&mut acc, tab, &c, cells, &self.offsets, &ranges);
+            add_cells(&mut acc, tab, &c, cells, &self.offsets, ranges);
             for (d, a) in acc.iter_mut().enumerate() {
                 for &n in &culled[d] {
                     let e = &entries[n];
                     let i = self.cell(e, d).expect("culled entries are visible");
-                    let mut p = start[n];
-                    let h = phasors(e.amp, &mut p, steps[n]);
-                    let w = e.weights();
-                    let mut cc = [0.0f64; 6 * BLOCK];
-                    for (m, &wm) in w.iter().enumerate() {
-                        for k in 0..BLOCK {
-                            cc[2 * m * BLOCK + k] = wm * h[k];
-                            cc[(2 * m + 1) * BLOCK + k] = wm * h[BLOCK + k];
-                        }
-                    }
+                    let (mut p, mut cc) = (start[n], [0.0f64; 6 * BLOCK]);
+                    spread(&mut cc, e.weights(), &phasors(e.amp, &mut p, e.step));
                     add_cell(a, &tab[i * 4 * BLOCK..][..6 * BLOCK], &cc, -1.0);
                 }
                 out.extend((0..BLOCK).map(|k| Complex64::new(a[k], a[BLOCK + k])));
@@ -323,6 +320,17 @@ fn phasors(amp: Complex64, ph: &mut Complex64, step: Complex64) -> [f64; 2 * BLO
         *ph *= step;
     }
     h
+}
+
+/// `c += (w₀·h, w₁·h, w₂·h)`: a path's phasors `h` (re then im) added to its cell's sums
+/// C0, C1, C2 with its weights.
+fn spread(c: &mut [f64; 6 * BLOCK], w: [f64; 3], h: &[f64; 2 * BLOCK]) {
+    for (m, wm) in w.into_iter().enumerate() {
+        for k in 0..BLOCK {
+            c[2 * m * BLOCK + k] += wm * h[k];
+            c[(2 * m + 1) * BLOCK + k] += wm * h[BLOCK + k];
+        }
+    }
 }
 
 /// Every cell's rows added to every direction that sees it (`acc[d]`; direction d sees the
