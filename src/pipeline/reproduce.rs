@@ -127,10 +127,9 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
     let c = load_campaign(opts, &work)?;
     let np = c.manifest.positions();
     // the geometry-only chain is independent of the main one (its own files): it runs on
-    // its own thread beside simulate → fit report, without progress bars (one bar at a
-    // time on the terminal)
-    // the experiments' sweeps at other N need only the simulated campaign (fig6 would
-    // make them the same way); the side thread makes them after the geometry-only chain
+    // a side thread beside simulate → fit report, without progress bars (one bar at a time
+    // on the terminal); then that thread makes the experiments' sweeps at the other N,
+    // which need only the simulated campaign (fig6 would make them the same way)
     let own = c.manifest.array.elements;
     let sizes: Vec<usize> = match opts.experiments {
         true => (opts.experiment_params.compare_elements.iter())
@@ -376,7 +375,7 @@ fn run_experiments(
         // the sweeps made beside the fit are not the report's: removed with their folders
         let dir = opts.out.join("experiments");
         for (n, _) in &presim {
-            let sweeps = dir.join("work").join(format!("sweeps_n{n}"));
+            let sweeps = experiment::lab::sweeps_dir(&dir, *n);
             if sweeps.exists() {
                 std::fs::remove_dir_all(&sweeps).map_err(|e| Error::io(&sweeps, e))?;
             }

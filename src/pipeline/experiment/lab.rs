@@ -452,13 +452,18 @@ impl<'a> Lab<'a> {
     }
 }
 
-/// The campaign `campaign` simulated again at N elements into `out/work/sweeps_n<N>`, with
+/// Where [`simulate_sweeps`] puts the sweeps at N elements: `out/work/sweeps_n<N>`.
+pub fn sweeps_dir(out: &Path, elements: usize) -> PathBuf {
+    out.join("work").join(format!("sweeps_n{elements}"))
+}
+
+/// The campaign `campaign` simulated again at N elements into [`sweeps_dir`], with
 /// its energy table: (manifest, energy table). What [`Lab`] does for sweeps at another N;
 /// `reproduce` runs it early, beside the fit.
 pub fn simulate_sweeps(campaign: &Path, out: &Path, elements: usize) -> Result<(PathBuf, PathBuf)> {
     let mut c = Campaign::load(campaign)?;
     c.set_elements(elements)?;
-    let dir = out.join("work").join(format!("sweeps_n{elements}"));
+    let dir = sweeps_dir(out, elements);
     let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
     let sc = Campaign::load(&sim.manifest)?;
     let e = dir.join("energy.parquet");
