@@ -2,11 +2,12 @@
 //! compute energy matrices, characterise the channel and map.
 //!
 //! Data flows one way: [`campaign`] (manifest, formats, simulator) → [`energy`] →
-//! [`mpc`] → [`cluster`] → [`fit`] → [`model`] → [`mapping`] → [`report`].
+//! [`mpc`] → [`cluster`] → [`fit`] → [`model`] → [`check`] → [`mapping`] → [`report`].
 #![deny(missing_docs)]
 
 pub mod calibrate;
 pub mod campaign;
+pub mod check;
 pub mod cluster;
 pub mod energy;
 pub mod error;

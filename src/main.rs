@@ -15,8 +15,8 @@ use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::Parser;
 use cli::{
-    CalibrateArgs, Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs,
-    ImportArgs, MapArgs, ReproduceArgs, SimulateArgs, SynthArgs,
+    CalibrateArgs, CheckArgs, Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs,
+    FitArgs, ImportArgs, MapArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use pradar::params::ParamGuard;
@@ -69,6 +69,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Cluster(a) => cluster(a, quiet),
         Cmd::Fit(a) => fit(a, quiet),
         Cmd::Calibrate(a) => calibrate(a, quiet),
+        Cmd::Check(a) => check(a, quiet),
         Cmd::Reproduce(a) => reproduce(a, quiet),
         Cmd::Experiment(a) => experiment(a, quiet),
     }
@@ -232,6 +233,29 @@ fn calibrate(a: CalibrateArgs, quiet: bool) -> Result<()> {
         quiet,
         with_bar(quiet, "calibrate", |p| commands::calibrate(&cmd, p))?,
     );
+    Ok(())
+}
+
+fn check(a: CheckArgs, quiet: bool) -> Result<()> {
+    let cmd = commands::Check {
+        model: a.model,
+        campaign: a.campaign,
+        energy: a.energy,
+        out: a.out,
+        params: pradar::check::CheckParams {
+            draws: a.draws,
+            seed: a.seed,
+            ..Default::default()
+        },
+    };
+    let summary = with_bar(quiet, "check", |p| commands::check(&cmd, p))?;
+    let r = &summary.result;
+    report(quiet, &summary);
+    if let Some(p) = a.fail_below {
+        if r.corrected_p() < p || r.max_ratio() > pradar::check::MAX_RATIO {
+            anyhow::bail!("check failed (--fail-below {p}): {}", r.verdict());
+        }
+    }
     Ok(())
 }
 

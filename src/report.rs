@@ -17,6 +17,7 @@ use std::path::Path;
 use std::sync::Once;
 
 pub mod calibrate;
+pub mod check;
 pub mod experiments;
 pub mod reproduce;
 

@@ -51,6 +51,8 @@ pub enum Cmd {
     Fit(FitArgs),
     /// Calibrate the channel model without clustering (ABC-SMC, synth as the simulator).
     Calibrate(CalibrateArgs),
+    /// Posterior-predictive check: does `synth` from a model give channels like the table's?
+    Check(CheckArgs),
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce(ReproduceArgs),
     /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
@@ -188,6 +190,32 @@ pub struct CalibrateArgs {
     /// Seed (default: the campaign's).
     #[arg(long)]
     pub seed: Option<u64>,
+}
+
+// `pradar check`
+#[derive(Args)]
+pub struct CheckArgs {
+    /// Model file (fitted, calibrated or hand-made).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Campaign manifest (poses, directions, band, array, noise, processing, layout).
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// The campaign's measured energy table (Parquet).
+    #[arg(long)]
+    pub energy: PathBuf,
+    /// synth draws of the model.
+    #[arg(long, default_value_t = 20, value_parser = ranges::draws)]
+    pub draws: usize,
+    /// Seed of the draws (default: the campaign's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Output folder: check.csv, check.md, check_cdfs.png, index.html.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Exit 1 when the Bonferroni-corrected p-value is below P or a KS ratio is over 1.5.
+    #[arg(long, value_name = "P", value_parser = ranges::probability)]
+    pub fail_below: Option<f64>,
 }
 
 // `pradar map`

@@ -65,6 +65,16 @@ pub fn population(s: &str) -> Result<usize, String> {
     whole_in(s, 20, 100_000, "particles per generation")
 }
 
+/// `check --draws`: in [2, 1000] (`CheckParams` draws).
+pub fn draws(s: &str) -> Result<usize, String> {
+    whole_in(s, 2, 1000, "synth draws of the model")
+}
+
+/// `check --fail-below`: in [0, 1] (a p-value).
+pub fn probability(s: &str) -> Result<f64, String> {
+    checked(s, |v| (0.0..=1.0).contains(&v), "in [0, 1]")
+}
+
 /// `--cell-m`: in [0.005, 10] m (`GridParams` cell_m).
 pub fn cell_m(s: &str) -> Result<f64, String> {
     checked(s, |v| (0.005..=10.0).contains(&v), "in [0.005, 10] m")

@@ -739,6 +739,82 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
     })
 }
 
+/// `pradar check`: the posterior-predictive check of a model against an energy table.
+#[derive(Debug, Clone)]
+pub struct Check {
+    /// Model file (fitted, calibrated or hand-made).
+    pub model: PathBuf,
+    /// Campaign manifest (poses, directions, band, array, noise, processing, layout).
+    pub campaign: PathBuf,
+    /// The measured energy table of the campaign.
+    pub energy: PathBuf,
+    /// Output folder (`check.csv`, `check.md`, `check_cdfs.png`, `index.html`), if any.
+    pub out: Option<PathBuf>,
+    /// Draws, seed, cull.
+    pub params: crate::check::CheckParams,
+}
+
+/// What `check` found.
+#[derive(Debug, Clone)]
+pub struct CheckSummary {
+    /// The result.
+    pub result: crate::check::CheckResult,
+    /// The output folder, if any.
+    pub out: Option<PathBuf>,
+}
+
+impl fmt::Display for CheckSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.result.table().to_markdown())?;
+        write!(
+            f,
+            "{} ({} draws, {:.1} s)",
+            self.result.verdict(),
+            self.result.draws.len(),
+            self.result.wall_s
+        )?;
+        if let Some(o) = &self.out {
+            write!(f, " -> {}", o.display())?;
+        }
+        Ok(())
+    }
+}
+
+/// Run `pradar check` ([`crate::check::check()`]); writes the table and plots when `out`
+/// is set.
+pub fn check(cmd: &Check, progress: StepProgress) -> Result<CheckSummary> {
+    let c = Campaign::load(&cmd.campaign)?;
+    if let Some(o) = &cmd.out {
+        let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+        inputs.push((cmd.model.clone(), "--model"));
+        inputs.push((cmd.energy.clone(), "--energy"));
+        let outputs: Vec<(PathBuf, &str)> =
+            ["check.csv", "check.md", "check_cdfs.png", "index.html"]
+                .iter()
+                .map(|n| (o.join(n), "--out"))
+                .collect();
+        refuse(&outputs, &inputs)?;
+    }
+    let model = ModelConfig::load(&cmd.model)?
+        .require_estimable(&Default::default())
+        .map_err(|e| crate::error::Error::input(&cmd.model, e.to_string()))?;
+    let params = cmd.params.check()?;
+    let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
+    let result = crate::check::check(&c, &em, &cmd.energy, &model, &params, progress)?;
+    if let Some(o) = &cmd.out {
+        let what = format!(
+            "model {} against {}",
+            cmd.model.display(),
+            cmd.energy.display()
+        );
+        crate::report::check::write(o, &what, &result)?;
+    }
+    Ok(CheckSummary {
+        result,
+        out: cmd.out.clone(),
+    })
+}
+
 /// `pradar experiment`: the paper's mapping experiments.
 #[derive(Debug, Clone)]
 pub struct Experiments {

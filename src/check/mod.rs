@@ -1,0 +1,426 @@
+//! `pradar check`: the posterior-predictive check of a channel model against a measured
+//! energy table, cluster-free (DESIGN §2 "Model check", issue 29).
+//!
+//! Takes a model file (fitted, calibrated or hand-made), the campaign (poses, directions,
+//! band, array, noise, processing, layout — never its `[scene]`/`[clutter]` truth) and
+//! the campaign's energy table; gives, for each statistic of [`stats`], how far the
+//! measured table is from R `synth` draws of the model over the campaign's poses compared
+//! with how far the draws are from each other.
+//!
+//! * **Draws**: R matrices y_r = synth(model, seed_r), r = 1..R, in memory
+//!   ([`EnergySimulator`]: the same draws and detector as `synth`), seed_r from a ChaCha
+//!   stream keyed by (seed, "Check", r): never the data's own seed, so a model checked
+//!   against its own `synth` output at the campaign seed does not replay it. The draws
+//!   run in parallel and are collected in order (same bytes with any thread count).
+//! * **Distances**, per statistic s: the measured distances D_r = KS(s(y_obs), s(y_r))
+//!   and the reference distances d_ij = KS(s(y_i), s(y_j)), i < j (R(R−1)/2 of them;
+//!   the KS distance of [`stats::ks_distance`]). Under the model the measured table is
+//!   one more draw, so D_r and d_ij have the same law.
+//! * **Summaries**: D = median_r D_r, d = median_ij d_ij, the ratio D/d, and the
+//!   predictive p-value p = (1 + #{d_ij ≥ D}) / (1 + R(R−1)/2) (the Monte Carlo p-value of
+//!   D against the reference distances; D, a median of R distances, varies less than one
+//!   d_ij, so p is conservative: under the model it falls below 0.05 less often than 5 %).
+//! * **Rule**: the model passes when every statistic's ratio D/d ≤ 1.5 and the smallest
+//!   p-value times the number of statistics (Bonferroni) is ≥ 0.05. The ratio guards
+//!   against a model whose draws are all far from the data but also far from each other;
+//!   the p-value against a miss larger than the draws' own spread.
+//!
+//! Layout: [`stats`] (the statistics and the KS distance); the table and plots are in
+//! [`crate::report::check`].
+
+pub mod stats;
+
+use crate::campaign::manifest::Campaign;
+use crate::campaign::modelfile::ModelConfig;
+use crate::energy::EnergyMatrix;
+use crate::error::{Error, Result};
+use crate::export::{Cell, Column, Table};
+use crate::model::{EnergySimulator, SynthParams};
+use crate::params::{ParamGuard, Valid};
+use rand::{RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use stats::{ks_distance, StatContext, Statistics, NAMES};
+use std::path::Path;
+
+/// Key of the draws' seed stream (xor-ed into the seed): "Check\0\0\0".
+const STREAM: u64 = 0x4368_6563_6b00_0000;
+
+/// The largest KS ratio D/d a passing model may have.
+pub const MAX_RATIO: f64 = 1.5;
+
+/// The smallest Bonferroni-corrected p-value a passing model may have.
+pub const MIN_P: f64 = 0.05;
+
+/// Options of a check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckParams {
+    /// Draws R, in [2, 1000] (default 20).
+    pub draws: usize,
+    /// Seed (default: the campaign's).
+    pub seed: Option<u64>,
+    /// synth's ray cull (default 1e-3, as synth).
+    pub cull: f64,
+}
+
+impl Default for CheckParams {
+    fn default() -> Self {
+        CheckParams {
+            draws: 20,
+            seed: None,
+            cull: 1e-3,
+        }
+    }
+}
+
+/// Checked check options.
+pub type CheckValid = Valid<CheckParams>;
+
+impl ParamGuard for CheckParams {
+    type Checked = CheckValid;
+
+    fn check(&self) -> Result<CheckValid> {
+        if !(2..=1000).contains(&self.draws) {
+            return Err(Error::param(
+                "--draws",
+                format!("must be in [2, 1000], got {}", self.draws),
+            ));
+        }
+        if !(0.0..1.0).contains(&self.cull) {
+            return Err(Error::param(
+                "check.cull",
+                format!("must be in [0, 1), got {}", self.cull),
+            ));
+        }
+        Ok(Valid::new(self.clone()))
+    }
+}
+
+/// One statistic's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StatResult {
+    /// Name ([`NAMES`]).
+    pub name: &'static str,
+    /// Unit.
+    pub unit: &'static str,
+    /// Measured distances D_r, one per draw.
+    pub measured_ks: Vec<f64>,
+    /// Reference distances d_ij, i < j.
+    pub reference_ks: Vec<f64>,
+    /// Median of the measured statistic.
+    pub measured_median: f64,
+    /// Median over draws of each draw's median.
+    pub draws_median: f64,
+    /// Values in the measured sample (bins of the curve).
+    pub measured_n: usize,
+}
+
+impl StatResult {
+    /// D: the median measured distance.
+    pub fn ks(&self) -> f64 {
+        median_of(&self.measured_ks)
+    }
+    /// d: the median reference distance.
+    pub fn reference(&self) -> f64 {
+        median_of(&self.reference_ks)
+    }
+    /// D/d (0 when both are 0, infinite when only d is).
+    pub fn ratio(&self) -> f64 {
+        let (a, b) = (self.ks(), self.reference());
+        if a == 0.0 {
+            0.0
+        } else if b == 0.0 {
+            f64::INFINITY
+        } else {
+            a / b
+        }
+    }
+    /// The predictive p-value (1 + #{d_ij ≥ D}) / (1 + #pairs).
+    pub fn p_value(&self) -> f64 {
+        let d = self.ks();
+        let k = self.reference_ks.iter().filter(|&&x| x >= d).count();
+        (1 + k) as f64 / (1 + self.reference_ks.len()) as f64
+    }
+}
+
+/// The result of a check: per statistic, plus the measured and drawn statistics (for the
+/// CDF plots).
+#[derive(Debug, Clone)]
+pub struct CheckResult {
+    /// One per statistic, in the order of [`NAMES`].
+    pub stats: Vec<StatResult>,
+    /// The measured table's statistics.
+    pub measured: Statistics,
+    /// Each draw's statistics.
+    pub draws: Vec<Statistics>,
+    /// The seed the draws' seeds came from.
+    pub seed: u64,
+    /// Wall time, s.
+    pub wall_s: f64,
+}
+
+impl CheckResult {
+    /// The smallest p-value times the number of statistics (capped at 1).
+    pub fn corrected_p(&self) -> f64 {
+        let min = self
+            .stats
+            .iter()
+            .map(StatResult::p_value)
+            .fold(1.0, f64::min);
+        (min * self.stats.len() as f64).min(1.0)
+    }
+
+    /// The largest ratio D/d.
+    pub fn max_ratio(&self) -> f64 {
+        self.stats.iter().map(StatResult::ratio).fold(0.0, f64::max)
+    }
+
+    /// Whether the model passes (module docs' rule).
+    pub fn passes(&self) -> bool {
+        self.max_ratio() <= MAX_RATIO && self.corrected_p() >= MIN_P
+    }
+
+    /// The statistics that miss: ratio over [`MAX_RATIO`] or p·n below [`MIN_P`].
+    pub fn misses(&self) -> Vec<&'static str> {
+        let n = self.stats.len() as f64;
+        self.stats
+            .iter()
+            .filter(|s| s.ratio() > MAX_RATIO || s.p_value() * n < MIN_P)
+            .map(|s| s.name)
+            .collect()
+    }
+
+    /// The table: per statistic the medians side by side, D, d, D/d, p and the verdict.
+    pub fn table(&self) -> Table {
+        let mut t = Table::new(vec![
+            Column::new("statistic", "statistic"),
+            Column::new("unit", "unit"),
+            Column::new("measured median", "measured_median"),
+            Column::new("draws' median", "draws_median"),
+            Column::new("KS measured↔draws (median)", "ks"),
+            Column::new("KS draw↔draw (median)", "ks_reference"),
+            Column::new("ratio", "ratio"),
+            Column::new("p-value", "p_value"),
+            Column::new("verdict", "verdict"),
+        ]);
+        let n = self.stats.len() as f64;
+        for s in &self.stats {
+            let ok = s.ratio() <= MAX_RATIO && s.p_value() * n >= MIN_P;
+            let num = |v: f64| {
+                if v.is_finite() {
+                    Cell::num(v, format!("{v:.3}"))
+                } else {
+                    Cell::Missing("—".into())
+                }
+            };
+            t.push(vec![
+                Cell::text(s.name),
+                Cell::text(s.unit),
+                num(s.measured_median),
+                num(s.draws_median),
+                Cell::fixed(s.ks(), 3),
+                Cell::fixed(s.reference(), 3),
+                num(s.ratio()),
+                Cell::num(s.p_value(), format!("{:.4}", s.p_value())),
+                Cell::text(if ok { "pass" } else { "miss" }),
+            ]);
+        }
+        t
+    }
+
+    /// One line: pass or fail, the corrected p-value and the largest ratio.
+    pub fn verdict(&self) -> String {
+        let misses = self.misses();
+        format!(
+            "{}: Bonferroni p = {:.4} (pass ≥ {MIN_P}), largest KS ratio {:.2} (pass ≤ {MAX_RATIO}){}",
+            if self.passes() { "PASS" } else { "FAIL" },
+            self.corrected_p(),
+            self.max_ratio(),
+            if misses.is_empty() {
+                String::new()
+            } else {
+                format!("; misses: {}", misses.join(", "))
+            }
+        )
+    }
+}
+
+fn median_of(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// The statistics' context of a campaign's energy table.
+pub fn context(energy: &EnergyMatrix) -> StatContext {
+    let bin_ns = energy.meta.bin_width_ns;
+    StatContext {
+        np: energy.positions,
+        nd: energy.directions(),
+        nb: energy.bins,
+        bin_ns,
+        first_bin: ((energy.meta.gate_ns() / bin_ns).ceil() as usize).min(energy.bins),
+        mu: energy.meta.noise_mean(),
+        angles_deg: energy.angles_rel_deg.clone(),
+    }
+}
+
+/// The seed of draw r.
+fn draw_seed(seed: u64, r: usize) -> u64 {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
+    rng.set_stream(r as u64 + 1);
+    rng.next_u64()
+}
+
+/// Check `model` against the energy table `energy` (read from `energy_path`) of campaign
+/// `c`. `progress(done, R)` after each draw.
+pub fn check(
+    c: &Campaign,
+    energy: &EnergyMatrix,
+    energy_path: &Path,
+    model: &ModelConfig,
+    params: &CheckValid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<CheckResult> {
+    let t0 = std::time::Instant::now();
+    crate::energy::matrix::check_campaign(c, energy, energy_path)?;
+    energy.meta.check_noise(energy_path)?;
+    let sim = EnergySimulator::new(
+        c,
+        &SynthParams {
+            cull: params.cull,
+            ..Default::default()
+        }
+        .check()?,
+    )?;
+    let shape = sim.shape();
+    if shape != (energy.positions, energy.directions(), energy.bins) {
+        return Err(Error::input(
+            energy_path,
+            format!(
+                "{} x {} x {} bins, but campaign {} gives {} x {} x {} (other processing settings?)",
+                energy.positions,
+                energy.directions(),
+                energy.bins,
+                c.path.display(),
+                shape.0,
+                shape.1,
+                shape.2
+            ),
+        ));
+    }
+    let ctx = context(energy);
+    let measured = Statistics::of(&ctx, &energy.data);
+    let seed = params.seed.unwrap_or(c.manifest.seed);
+    let r = params.draws;
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    progress(0, r);
+    let draws: Vec<Statistics> = (0..r)
+        .into_par_iter()
+        .map(|i| -> Result<Statistics> {
+            let e = sim.energies(model, draw_seed(seed, i))?;
+            let s = Statistics::of(&ctx, &e);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            progress(n, r);
+            Ok(s)
+        })
+        .collect::<Result<_>>()?;
+    let stats = (0..NAMES.len())
+        .map(|k| {
+            let measured_ks = draws
+                .iter()
+                .map(|d| ks_distance(&measured.values[k], &d.values[k]))
+                .collect();
+            let mut reference_ks = Vec::with_capacity(r * (r - 1) / 2);
+            for i in 0..r {
+                for j in i + 1..r {
+                    reference_ks.push(ks_distance(&draws[i].values[k], &draws[j].values[k]));
+                }
+            }
+            let draw_medians: Vec<f64> = draws
+                .iter()
+                .map(|d| d.values[k].median(ctx.bin_ns))
+                .filter(|v| v.is_finite())
+                .collect();
+            StatResult {
+                name: NAMES[k].0,
+                unit: NAMES[k].1,
+                measured_ks,
+                reference_ks,
+                measured_median: measured.values[k].median(ctx.bin_ns),
+                draws_median: median_of(&draw_medians),
+                measured_n: match &measured.values[k] {
+                    stats::Stat::Sample(v) => v.len(),
+                    stats::Stat::Curve(v) => v.len(),
+                },
+            }
+        })
+        .collect();
+    Ok(CheckResult {
+        stats,
+        measured,
+        draws,
+        seed,
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(measured_ks: Vec<f64>, reference_ks: Vec<f64>) -> StatResult {
+        StatResult {
+            name: "x",
+            unit: "u",
+            measured_ks,
+            reference_ks,
+            measured_median: 0.0,
+            draws_median: 0.0,
+            measured_n: 1,
+        }
+    }
+
+    #[test]
+    fn p_value_and_ratio() {
+        let r = result(vec![0.2, 0.3, 0.4], vec![0.1, 0.2, 0.3, 0.4]);
+        assert_eq!(r.ks(), 0.3);
+        assert_eq!(r.reference(), 0.25);
+        assert!((r.ratio() - 1.2).abs() < 1e-12);
+        // d_ij ≥ 0.3: two of four
+        assert!((r.p_value() - 3.0 / 5.0).abs() < 1e-12);
+        let far = result(vec![0.9; 3], vec![0.1; 10]);
+        assert!((far.p_value() - 1.0 / 11.0).abs() < 1e-12);
+        assert_eq!(result(vec![0.0], vec![0.0]).ratio(), 0.0);
+        assert!(result(vec![0.1], vec![0.0]).ratio().is_infinite());
+    }
+
+    #[test]
+    fn params_checked() {
+        assert!(CheckParams {
+            draws: 1,
+            ..Default::default()
+        }
+        .check()
+        .is_err());
+        assert!(CheckParams::default().check().is_ok());
+    }
+
+    #[test]
+    fn draw_seeds_differ() {
+        let s: Vec<u64> = (0..5).map(|r| draw_seed(7, r)).collect();
+        let mut u = s.clone();
+        u.sort();
+        u.dedup();
+        assert_eq!(u.len(), 5);
+        assert_ne!(draw_seed(7, 0), 7);
+    }
+}
