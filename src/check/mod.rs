@@ -288,7 +288,7 @@ pub fn check(
     energy_path: &Path,
     model: &ModelConfig,
     params: &CheckValid,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &dyn Fn(usize, usize),
 ) -> Result<CheckResult> {
     let t0 = std::time::Instant::now();
     crate::energy::matrix::check_campaign(c, energy, energy_path)?;
@@ -321,18 +321,22 @@ pub fn check(
     let measured = Statistics::of(&ctx, &energy.data);
     let seed = params.seed.unwrap_or(c.manifest.seed);
     let r = params.draws;
-    let done = std::sync::atomic::AtomicUsize::new(0);
     progress(0, r);
-    let draws: Vec<Statistics> = (0..r)
-        .into_par_iter()
-        .map(|i| -> Result<Statistics> {
-            let e = sim.energies(model, draw_seed(seed, i))?;
-            let s = Statistics::of(&ctx, &e);
-            let n = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
-            progress(n, r);
-            Ok(s)
-        })
-        .collect::<Result<_>>()?;
+    // draws in parallel, a thread's worth at a time, so progress is called from this
+    // thread only (and needs not be Sync)
+    let chunk = rayon::current_num_threads().max(1);
+    let mut draws: Vec<Statistics> = Vec::with_capacity(r);
+    for start in (0..r).step_by(chunk) {
+        let part: Vec<Statistics> = (start..(start + chunk).min(r))
+            .into_par_iter()
+            .map(|i| -> Result<Statistics> {
+                let e = sim.energies(model, draw_seed(seed, i))?;
+                Ok(Statistics::of(&ctx, &e))
+            })
+            .collect::<Result<_>>()?;
+        draws.extend(part);
+        progress(draws.len(), r);
+    }
     let stats = (0..NAMES.len())
         .map(|k| {
             let measured_ks = draws

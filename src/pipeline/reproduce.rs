@@ -167,11 +167,14 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
             })?;
-            Ok((s, a, table1, timings))
+            let check = timings.time("check (fitted model, 20 synth draws)", || {
+                Ok(check_section(&s, &a, out, progress))
+            })?;
+            Ok((s, a, table1, check, timings))
         })();
         (main, side.join().expect("geometry-only thread"))
     });
-    let (s, a, table1, mut timings) = main?;
+    let (s, a, table1, check, mut timings) = main?;
     timings.0.push((
         "geometry-only Table 1 (simulate → fit; beside the stages above)".into(),
         geometry_s,
@@ -193,6 +196,7 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
         title: format!("pradar report: {}", s.campaign.manifest.name),
         campaign: campaign_summary(&s, np),
         positions: s.em.positions,
+        check,
         table1,
         geometry,
         mpcs: mpc_summary(&a, s.em.positions),
@@ -247,6 +251,34 @@ fn simulate_campaign(
         energy_path,
         energy,
         em,
+    })
+}
+
+/// The predictive check of the fitted model against the campaign's energy table
+/// (`out/check/`: table, CDF panels): the section, or why it did not run.
+fn check_section(s: &Simulated, a: &Analysis, out: &Path, progress: Progress) -> Section {
+    let title = "Does the fitted model reproduce the channel?";
+    let run = || -> Result<Section> {
+        let f = a
+            .fit
+            .as_ref()
+            .map_err(|e| Error::param("fit", e.to_string()))?;
+        let model = f.model.require_estimable(&Default::default())?;
+        let params = crate::check::CheckParams::default().check()?;
+        let cb = progress("check", params.draws);
+        let r = crate::check::check(&s.campaign, &s.em, &s.energy_path, &model, &params, &*cb)?;
+        let what = "the fitted model (fitted_model.toml) against the corridor's energy table";
+        crate::report::check::write(&out.join("check"), what, &r)?;
+        Ok(crate::report::check::section(
+            title,
+            what,
+            &r,
+            "check/check_cdfs.png",
+        ))
+    };
+    run().unwrap_or_else(|e| Section {
+        title: title.into(),
+        html: page::failed("check", &e),
     })
 }
 

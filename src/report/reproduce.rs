@@ -16,6 +16,8 @@ pub struct ReproducePage {
     pub campaign: Vec<(String, String)>,
     /// Positions (one heat map and one cluster plot each).
     pub positions: usize,
+    /// The predictive check of the fitted model (above Table 1).
+    pub check: Section,
     /// Table 1 section body ([`table1_html`]).
     pub table1: String,
     /// Geometry-only Table 1 section body ([`geometry_html`]).
@@ -44,6 +46,7 @@ pub fn write_index(path: &Path, page: &ReproducePage) -> Result<()> {
             title: "Energy matrices (range vs direction, dB re position peak)".into(),
             html: heat_maps_html(page.positions),
         },
+        page.check.clone(),
         Section {
             title: "Table 1 (corridor)".into(),
             html: page.table1.clone(),
