@@ -344,6 +344,7 @@ fn fit(a: FitArgs, quiet: bool) -> Result<()> {
         out: a.out,
         table: a.table,
         truth: a.truth,
+        energy: a.energy,
         params: pradar::fit::channel::FitParams {
             bootstrap: a.bootstrap,
             seed: a.seed,

@@ -64,6 +64,7 @@ fn base() -> &'static Path {
             out: d.join("model.toml"),
             table: d.join("t.md"),
             truth: None,
+            energy: None,
             params: pradar::fit::channel::FitParams {
                 bootstrap: 40,
                 seed: 1,

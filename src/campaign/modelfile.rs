@@ -19,6 +19,12 @@
 //!   diffuse share of the extracted MPC power) and `decay` (ns, −10·log10(e)/slope of the
 //!   diffuse MPCs' power against delay). `synth` draws walls from the first two; the other
 //!   two describe the fitted data.
+//! * `[walls]` (optional; [`WallModel`]): the layout's specular returns —
+//!   `specular_gamma` (1, the magnitude |Γ| of the walls' reflection at normal incidence,
+//!   one value for every wall of the layout). `synth` adds, per pose, the image-method
+//!   return of every wall whose normal-incidence point it sees (`model::walls`). It
+//!   follows from the layout (an input) once |Γ| is known, so a model with it is
+//!   quasi-deterministic (geometry rays plus stochastic clusters).
 //!
 //! A quantity the fit could not estimate (too few clusters, no decaying trend) carries
 //! `not_estimable = "<reason>"` and no `value` (read back as NaN); [`ModelConfig::check`]
@@ -148,6 +154,14 @@ pub struct DiffuseModel {
     pub decay: Quantity,
 }
 
+/// The layout's specular returns (image method) in a channel model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallModel {
+    /// |Γ| of every wall at normal incidence (1).
+    pub specular_gamma: Quantity,
+}
+
 /// Bin settings the model was fitted with.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -194,6 +208,9 @@ pub struct ModelConfig {
     /// The dense (diffuse) component (absent: no walls are drawn).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diffuse: Option<DiffuseModel>,
+    /// The layout's specular returns (absent: none are drawn).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub walls: Option<WallModel>,
     /// How the values were obtained when not by the cluster fit (`pradar calibrate`
     /// writes it; absent in fitted and hand-written models, which read as before).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -241,6 +258,7 @@ impl ModelConfig {
             rays_per_cluster: Quantity::new(6.0, "count", "poisson"),
             cluster_rrcs: Quantity::new(0.01, "m2", "lognormal"),
             diffuse: None,
+            walls: None,
             calibration: None,
         }
     }
@@ -341,6 +359,7 @@ impl ModelConfig {
             ),
             "diffuse.wall_rcs_per_m" => (0.0, 1e3, "a wall's diffuse return per metre"),
             "diffuse.lambert_exponent" => (0.0, 100.0, "cos^n of the incidence angle"),
+            "walls.specular_gamma" => (0.0, 1.0, "a passive wall reflects at most all of the power"),
             _ => return None,
         })
     }
@@ -378,6 +397,9 @@ impl ModelConfig {
                 ("diffuse.power_share", &d.power_share, "1"),
                 ("diffuse.decay", &d.decay, "ns"),
             ]);
+        }
+        if let Some(w) = &self.walls {
+            v.push(("walls.specular_gamma", &w.specular_gamma, "1"));
         }
         v
     }
@@ -430,6 +452,7 @@ impl ModelConfig {
             "ray_decay" => &mut self.ray_decay,
             "rays_per_cluster" => &mut self.rays_per_cluster,
             "cluster_rrcs" => &mut self.cluster_rrcs,
+            "walls.specular_gamma" => &mut self.walls.as_mut()?.specular_gamma,
             _ => {
                 let d = self.diffuse.as_mut()?;
                 match name {

@@ -360,6 +360,10 @@ pub struct FitArgs {
     /// A simulator's truth/ folder: add the same estimators on its true clusters.
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// The campaign's energy table: read the model's levels from it (the walls' specular
+    /// |Γ|, the diffuse σ′, the clusters' σ; see `model::levels`).
+    #[arg(long)]
+    pub energy: Option<PathBuf>,
 }
 
 // `pradar reproduce`

@@ -268,6 +268,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         rays_per_cluster,
         cluster_rrcs,
         diffuse: None,
+        walls: None,
         calibration: None,
     };
     model.check()?;

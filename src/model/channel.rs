@@ -188,6 +188,8 @@ pub enum RaySource {
     Cluster(usize),
     /// A diffuse point scatterer of wall `w` (index into the layout's walls).
     Wall(usize),
+    /// The specular (image-method) return of wall `w` ([`super::walls`]).
+    Specular(usize),
 }
 
 /// A ray seen from a pose.

@@ -130,6 +130,38 @@ impl DiffuseWalls {
         })
     }
 
+    /// The walls' mean draw for σ′ = 1 m²/m: one point at the centre of every cell with
+    /// its expected |x|² = ℓ_k (cell length), phase 0 — with the rays added in power
+    /// ([`super::EnergySimulator::expected_profiles`]) it gives the expected energy of a
+    /// unit wall, which the level estimator ([`super::levels`]) scales.
+    pub fn unit_mean(layout: &Layout, lambert_exponent: f64, bandwidth_hz: f64) -> DiffuseWalls {
+        let cell = C0 / (2.0 * bandwidth_hz);
+        let mut points = Vec::new();
+        for (i, w) in layout.walls.iter().enumerate() {
+            let len = w.length();
+            if len <= 0.0 {
+                continue;
+            }
+            let n = ((len / cell) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+            for k in 0..n {
+                let a = k as f64 * cell;
+                let l = (len - a).min(cell);
+                points.push(DiffusePoint {
+                    wall: i,
+                    pos: w.line.start + w.line.delta() * ((a + 0.5 * l) / len),
+                    normal: w.normal(),
+                    sigma_m2: l,
+                    phase: 0.0,
+                });
+            }
+        }
+        DiffuseWalls {
+            points,
+            lambert_exponent,
+            cell_m: cell,
+        }
+    }
+
     /// The diffuse rays seen from `at`, in point order: free side, ≥ 5 cm, not occluded,
     /// and |A|² ≥ `min_amp2` (the caller's cull·N0·TW / ḡ_max²).
     pub fn rays_from(&self, layout: &Layout, at: Coord<f64>, min_amp2: f64) -> Vec<SeenRay> {

@@ -64,9 +64,11 @@
 
 pub mod channel;
 pub mod diffuse;
+pub mod levels;
 pub mod params;
 pub mod response;
 pub mod synth;
+pub mod walls;
 
 pub use channel::{ChannelModel, ModelCluster, ModelRay, RaySource, SeenRay};
 pub use diffuse::{DiffusePoint, DiffuseWalls};

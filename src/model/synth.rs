@@ -142,6 +142,13 @@ pub fn synth_channel(
             diffuse_total += diffuse.len();
             rays.extend(diffuse);
         }
+        if let Some(w) = &channel.config.walls {
+            rays.extend(super::walls::specular_rays(
+                &layout,
+                at,
+                w.specular_gamma.value,
+            ));
+        }
         let profiles = &mut energies[p * nd * nb..(p + 1) * nd * nb];
         resp.position(p, pose.heading_deg.to_radians(), &rays, seed, profiles);
         let rows = resp.truth_rows(&rays);
@@ -240,6 +247,13 @@ impl EnergySimulator {
             if let Some(w) = &walls {
                 rays.extend(w.rays_from(&self.layout, at, min_amp2));
             }
+            if let Some(w) = &channel.config.walls {
+                rays.extend(super::walls::specular_rays(
+                    &self.layout,
+                    at,
+                    w.specular_gamma.value,
+                ));
+            }
             // a ray arriving after the last sample plus the kernel's reach (and the group
             // delay, clamped to ±1 ns) adds nothing to any profile: dropped before the
             // per-direction loop (the same energies, far fewer pattern look-ups in a
@@ -248,6 +262,31 @@ impl EnergySimulator {
             resp.position(p, heading.to_radians(), &rays, seed, profiles);
         }
         Ok(energies)
+    }
+}
+
+impl EnergySimulator {
+    /// Pose `p`'s position and heading (deg).
+    pub fn pose(&self, p: usize) -> (Coord<f64>, f64) {
+        (self.poses[p], self.headings_deg[p])
+    }
+
+    /// The expected noise-free signal energy E_s of every (direction, bin) of pose `p`
+    /// (directions × bins) from `rays` added in power (the mean over their phases: exact
+    /// for one ray, the mean of a Rayleigh sum for many), through the same pattern, kernel
+    /// and gate as [`EnergySimulator::energies`]; no cull.
+    pub fn expected_profiles(&self, p: usize, rays: &[SeenRay]) -> Vec<f64> {
+        let resp = &self.resp;
+        let heading = self.headings_deg[p].to_radians();
+        let nb = resp.proc.nbins();
+        let mut out = vec![0.0; resp.angles.len() * nb];
+        out.par_chunks_mut(nb).enumerate().for_each(|(d, prof)| {
+            let h = resp.power(d, heading, rays);
+            for (b, e) in prof.iter_mut().enumerate() {
+                *e = h[b * resp.l..(b + 1) * resp.l].iter().sum::<f64>() / resp.l as f64;
+            }
+        });
+        out
     }
 }
 
@@ -393,6 +432,10 @@ impl Response {
             let tau = r.tau_s + tau_g;
             let (phase, reach) = match r.source {
                 RaySource::Cluster(_) => (-2.0 * PI * (self.fc * tau).fract(), self.kernel_reach),
+                RaySource::Specular(_) => (
+                    r.phase - 2.0 * PI * (self.fc * tau).fract(),
+                    self.kernel_reach,
+                ),
                 // a diffuse point: its own phase, and its kernel only where it matters
                 RaySource::Wall(_) => (
                     r.phase - 2.0 * PI * (self.fc * tau).fract(),
@@ -410,6 +453,42 @@ impl Response {
                     continue;
                 }
                 h[(n + half) as usize] += a * self.kernel.at(t - tau);
+            }
+        }
+        h
+    }
+
+    /// The CIR's expected power |h(t_n)|² of direction `d` with the rays added in power
+    /// (grid as [`Response::cir`], no cull).
+    fn power(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<f64> {
+        let nb = self.proc.nbins();
+        let (l, half, dt) = (self.l, self.half, self.dt);
+        let bp = &self.bands[if self.bands.len() == 1 { 0 } else { d }];
+        let theta_s = self.angles[d].to_radians();
+        let mut h = vec![0.0; nb * l];
+        for r in rays {
+            let th = match self.steering {
+                Steering::Mechanical => r.theta - heading - theta_s,
+                Steering::Electronic => r.theta - heading,
+            };
+            let Some((g, tau_g)) = bp.at(wrap_rad(th)) else {
+                continue;
+            };
+            let a2 = g * g * r.amp2;
+            if a2 <= 0.0 {
+                continue;
+            }
+            let tau = r.tau_s + tau_g;
+            let reach = self.kernel_reach;
+            let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
+            let hi = ((tau + reach) / dt).floor() as i64;
+            let hi = hi.min((nb * l) as i64 - half - 1);
+            for n in lo..=hi {
+                let t = n as f64 * dt;
+                if t.abs() < self.gate {
+                    continue;
+                }
+                h[(n + half) as usize] += a2 * self.kernel.at(t - tau).powi(2);
             }
         }
         h
@@ -446,6 +525,9 @@ impl Response {
                     }
                     RaySource::Wall(w) => {
                         TruthRay::diffuse_wall(w, r.pos, delay_ns, angle, power_db)
+                    }
+                    RaySource::Specular(w) => {
+                        TruthRay::specular_wall(w, r.pos, delay_ns, angle, power_db)
                     }
                 }
             })

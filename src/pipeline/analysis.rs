@@ -66,6 +66,15 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let t = Instant::now();
     let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());
     timings.push(("fit (Table 1)".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let fit = fit.and_then(|mut f| {
+        f.model = crate::model::levels::fit_levels(sc, em, &f.model)?.0;
+        Ok(f)
+    });
+    timings.push((
+        "levels (walls, diffuse, clusters)".into(),
+        t.elapsed().as_secs_f64(),
+    ));
     Ok(Analysis {
         mpcs,
         clustering,

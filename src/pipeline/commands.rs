@@ -56,6 +56,7 @@
 //!     out: "fitted_model.toml".into(),
 //!     table: "table1.md".into(),
 //!     truth: Some("sim/truth".into()),
+//!     energy: Some("energy.parquet".into()),
 //!     params: pradar::fit::channel::FitParams::default(),
 //! })?;
 //! println!("{fit}");
@@ -545,6 +546,9 @@ pub struct Fit {
     pub table: PathBuf,
     /// A simulator's `truth/` folder: the same estimators on its true clusters.
     pub truth: Option<PathBuf>,
+    /// The campaign's energy table: the model's levels (`[walls]`, σ′, σ) are then read
+    /// from it ([`crate::model::levels`]); without it they are the cluster chain's.
+    pub energy: Option<PathBuf>,
     /// Bootstrap resamples and seed.
     pub params: FitParams,
 }
@@ -609,8 +613,17 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
         ],
         &inputs,
     )?;
+    if let Some(e) = &cmd.energy {
+        inputs.push((e.clone(), "--energy"));
+    }
+    refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
     let params = cmd.params.check()?;
-    let fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
+    let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
+    if let Some(e) = &cmd.energy {
+        let em = crate::energy::EnergyMatrix::read(e)?;
+        crate::energy::matrix::check_campaign(&c, &em, e)?;
+        fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+    }
     let truth = match &cmd.truth {
         Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),
         None => None,

@@ -73,6 +73,22 @@ impl TruthRay {
         }
     }
 
+    /// The specular return of wall `wall` (`synth`'s `[walls]`): kind `specular`, no
+    /// scatterer row and no cluster (`cluster_id` = `truth_cluster` = −1), `source_id` =
+    /// `wall_id` = `wall`.
+    pub fn specular_wall(
+        wall: usize,
+        pos: Coord<f64>,
+        delay_ns: f64,
+        angle_global_deg: f64,
+        power_db: f64,
+    ) -> TruthRay {
+        TruthRay {
+            kind: ScattererKind::Specular.name(),
+            ..TruthRay::diffuse_wall(wall, pos, delay_ns, angle_global_deg, power_db)
+        }
+    }
+
     /// A diffuse return of wall `wall` (index into the layout's `walls`) without a
     /// scatterer row (`synth`'s diffuse draws): kind `diffuse`, `source_id` = `wall_id` =
     /// `wall`, `truth_cluster` −1 (the dense component).
