@@ -20,8 +20,11 @@
 //!   diffuse MPCs' power against delay). `synth` draws walls from the first two; the other
 //!   two describe the fitted data.
 //! * `[walls]` (optional; [`WallModel`]): the layout's specular returns —
-//!   `specular_gamma` (1, the magnitude |Γ| of the walls' reflection at normal incidence,
-//!   one value for every wall of the layout). `synth` adds, per pose, the image-method
+//!   `specular_gamma` (1, the magnitude |Γ| of the walls' reflection at normal incidence)
+//!   and `[walls.material_gamma.<material>]` (1, the same for the walls of one layout
+//!   material, where the data had enough of them; the others take `specular_gamma`),
+//!   `corner_rcs` (m², σ of every concave corner of the perimeter, a dihedral) and
+//!   `edge_rcs` (m², σ of every other ring vertex: door frames, pillar and cabinet edges). `synth` adds, per pose, the image-method
 //!   return of every wall whose normal-incidence point it sees (`model::walls`). It
 //!   follows from the layout (an input) once |Γ| is known, so a model with it is
 //!   quasi-deterministic (geometry rays plus stochastic clusters).
@@ -158,8 +161,27 @@ pub struct DiffuseModel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WallModel {
-    /// |Γ| of every wall at normal incidence (1).
+    /// |Γ| at normal incidence (1) of every wall whose material has no entry of its own.
     pub specular_gamma: Quantity,
+    /// |Γ| of the walls of one layout material (the GeoJSON's `properties.material`), by
+    /// material name, where the table had enough of its walls to read it.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub material_gamma: std::collections::BTreeMap<String, Quantity>,
+    /// σ of the layout's concave perimeter corners (dihedrals), m².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub corner_rcs: Option<Quantity>,
+    /// σ of every other ring vertex (convex edges: door frames, pillars, cabinets), m².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge_rcs: Option<Quantity>,
+}
+
+impl WallModel {
+    /// |Γ| of a wall of `material`.
+    pub fn gamma(&self, material: &str) -> f64 {
+        self.material_gamma
+            .get(material)
+            .map_or(self.specular_gamma.value, |q| q.value)
+    }
 }
 
 /// Bin settings the model was fitted with.
@@ -327,6 +349,21 @@ impl ModelConfig {
                 }
             }
         }
+        if let Some(w) = &self.walls {
+            for (mat, q) in &w.material_gamma {
+                let name = format!("walls.material_gamma.{mat}");
+                if q.unit != "1" {
+                    return Err(Error::param(
+                        format!("{name}.unit"),
+                        format!("`{}` (expected `1`)", q.unit),
+                    ));
+                }
+                check_diagnostics(&name, q)?;
+                if !(q.value > 0.0 && q.value <= 1.0) {
+                    return Err(Error::param(format!("{name}.value"), "must be in (0, 1]"));
+                }
+            }
+        }
         if self.rays_per_cluster.value < 1.0 {
             return Err(Error::param("rays_per_cluster.value", "must be >= 1"));
         }
@@ -360,6 +397,7 @@ impl ModelConfig {
             "diffuse.wall_rcs_per_m" => (0.0, 1e3, "a wall's diffuse return per metre"),
             "diffuse.lambert_exponent" => (0.0, 100.0, "cos^n of the incidence angle"),
             "walls.specular_gamma" => (0.0, 1.0, "a passive wall reflects at most all of the power"),
+            "walls.corner_rcs" | "walls.edge_rcs" => (0.0, 1e6, "as cluster_rrcs"),
             _ => return None,
         })
     }
@@ -400,6 +438,12 @@ impl ModelConfig {
         }
         if let Some(w) = &self.walls {
             v.push(("walls.specular_gamma", &w.specular_gamma, "1"));
+            if let Some(q) = &w.corner_rcs {
+                v.push(("walls.corner_rcs", q, "m2"));
+            }
+            if let Some(q) = &w.edge_rcs {
+                v.push(("walls.edge_rcs", q, "m2"));
+            }
         }
         v
     }
@@ -453,6 +497,8 @@ impl ModelConfig {
             "rays_per_cluster" => &mut self.rays_per_cluster,
             "cluster_rrcs" => &mut self.cluster_rrcs,
             "walls.specular_gamma" => &mut self.walls.as_mut()?.specular_gamma,
+            "walls.corner_rcs" => self.walls.as_mut()?.corner_rcs.as_mut()?,
+            "walls.edge_rcs" => self.walls.as_mut()?.edge_rcs.as_mut()?,
             _ => {
                 let d = self.diffuse.as_mut()?;
                 match name {

@@ -190,6 +190,8 @@ pub enum RaySource {
     Wall(usize),
     /// The specular (image-method) return of wall `w` ([`super::walls`]).
     Specular(usize),
+    /// Layout vertex `i` (a corner or an edge, [`super::walls::vertices`]).
+    Vertex(usize),
 }
 
 /// A ray seen from a pose.

@@ -21,7 +21,9 @@
 //!    bearing and the bins within ±2 of its delay 2d/c: r = max S / max U, U the expected
 //!    energy of that wall's specular return alone with |Γ| = 1
 //!    ([`EnergySimulator::expected_profiles`]). |Γ|² = median r (robust to the other
-//!    echoes that share the cell). Not estimable without such a (pose, wall) pair.
+//!    echoes that share the cell), over every pair (`specular_gamma`) and, when the layout
+//!    names more than one material among them, over each material's pairs where it has
+//!    at least [`MIN_MATERIAL_PAIRS`] (`material_gamma`). Not estimable without a pair.
 //! 2. **Diffuse σ′** (`diffuse.wall_rcs_per_m`, when the model has `[diffuse]`): for
 //!    every (pose, direction) whose first wall along the beam (the layout's) is not within
 //!    10° of a visible normal-incidence point (those cells are the specular return's) and
@@ -30,13 +32,22 @@
 //!    Lambert exponent ([`super::DiffuseWalls::unit_mean`]) plus the specular returns at
 //!    the |Γ| of step 1. σ′ = median r / ln 2: a Rayleigh cell's energy is exponential, whose
 //!    median is ln 2 times its mean. Cells where W is below the noise mean are left out.
-//! 3. **Cluster σ** (`cluster_rrcs`), by the method of moments: with the walls fixed at
-//!    steps 1–2, σ such that the median of the signal energy 10·log10 Σ_b S (bins 10 dB
-//!    above μ, after the coupling gate) over the profiles whose beam is not within 10° of
-//!    a visible normal-incidence point (where the specular return does not set the level)
-//!    of the model's draws equals the table's. The draws are 8 `synth` draws at fixed
-//!    seeds (common random numbers, so the median moves monotonically with σ), σ found by
-//!    regula falsi (Illinois) in ln σ on [1e-6, 10] m², stopped within 0.05 dB or after
+//! 2b. **Vertices' σ** (`walls.corner_rcs`, `walls.edge_rcs`): for every pose and every
+//!    layout vertex it sees (`walls::vertices`) inside the sector and not within 10° of a
+//!    visible normal-incidence point, the bin of the vertex's delay (±1, where the unit
+//!    response U of a σ = 1 m² point there peaks): r = (S − σ′·W_d − W_s)/U, W_d and W_s
+//!    the expected energies there of the diffuse walls at σ′ = 1 and of the specular
+//!    returns. σ = median r over the corners and over the edges (at least 1e-9 m²); a
+//!    class no pose sees is left out of the model.
+//! 3. **Cluster σ** (`cluster_rrcs`), by the method of moments on what the clusters add
+//!    to the geometry: the mean number of signal bins per profile (E > 10μ, after the
+//!    coupling gate). With the geometry fixed at steps 1–2b, more cluster power lifts more
+//!    bins above the threshold; σ is the value at which the model's draws give the table's
+//!    mean. (The profiles' signal energy was tried first: the geometry sets its median, so
+//!    it pinned σ at its lower end and left the clusters' delay spread out; docs/model.md.)
+//!    The draws are 8 `synth` draws at fixed seeds (common random numbers, so the mean
+//!    moves monotonically with σ), σ found by regula falsi (Illinois) in ln σ on
+//!    [1e-6, 10] m², stopped within 0.1 % of the table's mean or after
 //!    16 steps; at either end the end is kept and the report says so.
 //!
 //! Choices: one |Γ| for every wall (module [`super::walls`]); the medians make each
@@ -47,7 +58,7 @@
 
 use super::channel::{RaySource, SeenRay};
 use super::diffuse::DiffuseWalls;
-use super::walls::{feet, specular_amp2, WallModel};
+use super::walls::{feet, specular_amp2, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{ModelConfig, Quantity};
@@ -63,38 +74,36 @@ pub struct LevelReport {
     pub specular_pairs: usize,
     /// On-wall cells behind σ′ (0 without `[diffuse]`).
     pub diffuse_cells: usize,
-    /// The table's median profile signal energy, dB (NaN: no profile with signal).
-    pub measured_level_db: f64,
-    /// The model's at the σ found, dB.
-    pub model_level_db: f64,
+    /// (pose, vertex) pairs behind the corners' and edges' σ.
+    pub vertex_cells: usize,
+    /// The table's mean signal bins per profile.
+    pub measured_bins: f64,
+    /// The model's at the σ found.
+    pub model_bins: f64,
     /// Whether σ stopped at an end of its range.
     pub sigma_at_bound: bool,
 }
 
+/// (pose, wall) pairs a material needs for a |Γ| of its own.
+pub const MIN_MATERIAL_PAIRS: usize = 3;
+
 /// Seeds of the moment-matching draws.
 const LEVEL_SEEDS: [u64; 8] = [11, 12, 13, 14, 15, 16, 17, 18];
 
-/// Median of the signal energy (dB) of the profiles of energies `e` (one or more matrices
-/// of `keep.len()` profiles each) whose `keep` entry is true (module docs, step 3); NaN
-/// without such a profile with signal.
-pub fn median_signal_db(e: &[f64], nb: usize, first_bin: usize, mu: f64, keep: &[bool]) -> f64 {
-    let mut v: Vec<f64> = e
+/// The mean number of signal bins (E > 10μ, after the gate) per profile of energies `e`
+/// (one or more matrices of `nb`-bin profiles; module docs, step 3).
+pub fn mean_signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> f64 {
+    let profiles = (e.len() / nb.max(1)).max(1);
+    let n: usize = e
         .chunks(nb)
-        .enumerate()
-        .filter(|(i, _)| keep[i % keep.len()])
-        .filter_map(|(_, prof)| {
-            let s: f64 = prof[first_bin.min(nb)..]
+        .map(|prof| {
+            prof[first_bin.min(nb)..]
                 .iter()
                 .filter(|&&x| x > 10.0 * mu)
-                .map(|x| x - mu)
-                .sum();
-            (s > 0.0).then(|| 10.0 * s.log10())
+                .count()
         })
-        .collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    crate::fit::estimators::median(&mut v)
+        .sum();
+    n as f64 / profiles as f64
 }
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -159,15 +168,34 @@ pub fn fit_levels(
             let umax = (lo..=hi).map(|k| u[d * nb + k]).fold(0.0, f64::max);
             let smax = (lo..=hi).map(|k| sig(p, d, k)).fold(0.0, f64::max);
             if umax > 0.0 {
-                ratios.push(smax / umax);
+                ratios.push((layout.walls[foot.wall].material.clone(), smax / umax));
             }
         }
         feet_at.push(f);
     }
     let specular_pairs = ratios.len();
     let mut out = model.clone();
-    let gamma = median(ratios).map(|r| r.sqrt().clamp(1e-6, 1.0));
+    let gamma = median(ratios.iter().map(|r| r.1).collect()).map(|r| r.sqrt().clamp(1e-6, 1.0));
+    let mut material_gamma = std::collections::BTreeMap::new();
+    let materials: std::collections::BTreeSet<&String> = ratios.iter().map(|r| &r.0).collect();
+    if materials.len() > 1 {
+        for mat in materials {
+            let v: Vec<f64> = ratios.iter().filter(|r| &r.0 == mat).map(|r| r.1).collect();
+            let n = v.len();
+            if n >= MIN_MATERIAL_PAIRS {
+                let g = median(v).expect("non-empty").sqrt().clamp(1e-6, 1.0);
+                material_gamma.insert(
+                    mat.clone(),
+                    Quantity {
+                        n: Some(n),
+                        ..Quantity::new(g, "1", "constant")
+                    },
+                );
+            }
+        }
+    }
     out.walls = Some(WallModel {
+        material_gamma,
         specular_gamma: match gamma {
             Some(g) => Quantity {
                 n: Some(specular_pairs),
@@ -182,75 +210,145 @@ pub fn fit_levels(
                 )
             },
         },
+        corner_rcs: None,
+        edge_rcs: None,
     });
     let g = gamma.unwrap_or(0.0);
+    // the walls' expected energies per pose: specular at |Γ|, diffuse at σ′ = 1 (zero
+    // without [diffuse])
+    let wm = out.walls.clone().expect("set above");
+    let unit = out
+        .diffuse
+        .as_ref()
+        .filter(|d| d.lambert_exponent.value.is_finite())
+        .map(|d| {
+            DiffuseWalls::unit_mean(
+                &layout,
+                d.lambert_exponent.value,
+                c.manifest.band.bandwidth_hz(),
+            )
+        });
+    let mut ws = Vec::with_capacity(np);
+    let mut wd = Vec::with_capacity(np);
+    for (p, pose_feet) in feet_at.iter().enumerate() {
+        let (at, _) = sim.pose(p);
+        let spec: Vec<SeenRay> = pose_feet
+            .iter()
+            .filter(|_| g > 0.0)
+            .map(|f| SeenRay {
+                source: RaySource::Specular(f.wall),
+                tau_s: crate::units::delay_s(f.d_m),
+                theta: f.bearing,
+                amp2: specular_amp2(wm.gamma(&layout.walls[f.wall].material), f.d_m),
+                pos: f.pos,
+                phase: 0.0,
+            })
+            .collect();
+        ws.push(sim.expected_profiles(p, &spec));
+        wd.push(match &unit {
+            Some(u) => sim.expected_profiles(p, &u.rays_from(&layout, at, 0.0)),
+            None => vec![0.0; nd * nb],
+        });
+    }
+    let near_foot = |p: usize, ang: f64| {
+        feet_at[p]
+            .iter()
+            .any(|f| wrap_rad(f.bearing - ang).abs() < 10f64.to_radians())
+    };
     // 2. diffuse σ′
     let mut diffuse_cells = 0;
-    if let Some(dm) = out.diffuse.as_mut() {
-        let n_exp = dm.lambert_exponent.value;
-        if n_exp.is_finite() {
-            let unit = DiffuseWalls::unit_mean(&layout, n_exp, c.manifest.band.bandwidth_hz());
-            let mut r = Vec::new();
-            for (p, pose_feet) in feet_at.iter().enumerate() {
-                let (at, heading) = sim.pose(p);
-                let mut rays = unit.rays_from(&layout, at, 0.0);
-                rays.extend(pose_feet.iter().map(|f| SeenRay {
-                    source: RaySource::Specular(f.wall),
-                    tau_s: crate::units::delay_s(f.d_m),
-                    theta: f.bearing,
-                    amp2: specular_amp2(g, f.d_m),
-                    pos: f.pos,
-                    phase: 0.0,
-                }));
-                let w = sim.expected_profiles(p, &rays);
-                for d in 0..nd {
-                    let ang = heading.to_radians() + em.angles_rel_deg[d].to_radians();
-                    let near_foot = pose_feet
-                        .iter()
-                        .any(|f| wrap_rad(f.bearing - ang).abs() < 10f64.to_radians());
-                    if near_foot {
-                        continue;
-                    }
-                    let Some((range, _, _)) = layout.first_hit(at, ang) else {
-                        continue;
-                    };
-                    let b = bin_of(crate::units::delay_s(range));
-                    if b < first_bin as isize || b >= nb as isize {
-                        continue;
-                    }
-                    let b = b as usize;
-                    let wv = w[d * nb + b];
-                    if wv < mu {
-                        continue;
-                    }
-                    r.push(sig(p, d, b) / wv);
+    let mut sigma_d = 0.0;
+    if let (Some(dm), Some(_)) = (out.diffuse.as_mut(), unit.as_ref()) {
+        let mut r = Vec::new();
+        for p in 0..np {
+            let (at, heading) = sim.pose(p);
+            for d in 0..nd {
+                let ang = heading.to_radians() + em.angles_rel_deg[d].to_radians();
+                if near_foot(p, ang) {
+                    continue;
                 }
-            }
-            diffuse_cells = r.len();
-            if let Some(m) = median(r) {
-                dm.wall_rcs_per_m = Quantity {
-                    value: (m / std::f64::consts::LN_2).max(1e-9),
-                    n: Some(diffuse_cells),
-                    interval: None,
-                    ks: None,
-                    ks_p: None,
-                    ..dm.wall_rcs_per_m.clone()
+                let Some((range, _, _)) = layout.first_hit(at, ang) else {
+                    continue;
                 };
+                let b = bin_of(crate::units::delay_s(range));
+                if b < first_bin as isize || b >= nb as isize {
+                    continue;
+                }
+                let k = d * nb + b as usize;
+                let wv = wd[p][k] + ws[p][k];
+                if wv < mu {
+                    continue;
+                }
+                r.push(sig(p, d, b as usize) / wv);
             }
         }
+        diffuse_cells = r.len();
+        if let Some(m) = median(r) {
+            sigma_d = (m / std::f64::consts::LN_2).max(1e-9);
+            dm.wall_rcs_per_m = Quantity {
+                value: sigma_d,
+                n: Some(diffuse_cells),
+                interval: None,
+                ks: None,
+                ks_p: None,
+                ..dm.wall_rcs_per_m.clone()
+            };
+        }
+    }
+    // 2b. the vertices' σ: corners and edges
+    let verts = vertices(&layout);
+    let mut by_kind: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    for p in 0..np {
+        let (at, heading) = sim.pose(p);
+        for (i, v) in verts.iter().enumerate() {
+            let Some((r, bearing)) = vertex_seen(&layout, at, v) else {
+                continue;
+            };
+            let rel = wrap_rad(bearing - heading.to_radians()).to_degrees();
+            let Some(d) = nearest(rel) else { continue };
+            if near_foot(p, bearing) {
+                continue;
+            }
+            let b = bin_of(crate::units::delay_s(r));
+            if b < first_bin as isize + 1 || b + 1 >= nb as isize {
+                continue;
+            }
+            let ray = SeenRay {
+                source: RaySource::Vertex(i),
+                tau_s: crate::units::delay_s(r),
+                theta: bearing,
+                amp2: 1.0 / ((4.0 * std::f64::consts::PI).powi(3) * r.powi(4)),
+                pos: v.pos,
+                phase: 0.0,
+            };
+            let u = sim.expected_profiles(p, &[ray]);
+            let (lo, hi) = ((b - 1) as usize, (b + 1) as usize);
+            let (k, umax) = (lo..=hi)
+                .map(|k| (k, u[d * nb + k]))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .expect("three bins");
+            if umax <= 0.0 {
+                continue;
+            }
+            let kk = d * nb + k;
+            let excess = sig(p, d, k) - sigma_d * wd[p][kk] - ws[p][kk];
+            by_kind[(v.kind == VertexKind::Edge) as usize].push(excess / umax);
+        }
+    }
+    let vertex_cells = by_kind[0].len() + by_kind[1].len();
+    let walls = out.walls.as_mut().expect("set above");
+    for (slot, samples) in [&mut walls.corner_rcs, &mut walls.edge_rcs]
+        .into_iter()
+        .zip(by_kind)
+    {
+        let n = samples.len();
+        *slot = median(samples).map(|m| Quantity {
+            n: Some(n),
+            ..Quantity::new(m.max(1e-9), "m2", "constant")
+        });
     }
     // 3. cluster σ by the method of moments
-    // the profiles whose beam is not on a visible normal-incidence point
-    let keep: Vec<bool> = (0..np * nd)
-        .map(|i| {
-            let (p, d) = (i / nd, i % nd);
-            let ang = sim.pose(p).1.to_radians() + em.angles_rel_deg[d].to_radians();
-            !feet_at[p]
-                .iter()
-                .any(|f| wrap_rad(f.bearing - ang).abs() < 10f64.to_radians())
-        })
-        .collect();
-    let measured = median_signal_db(&em.data, nb, first_bin, mu, &keep);
+    let measured = mean_signal_bins(&em.data, nb, first_bin, mu);
     let mut base = out.clone();
     if !g.is_finite() || gamma.is_none() {
         base.walls = None;
@@ -267,11 +365,11 @@ pub fn fit_levels(
         for s in LEVEL_SEEDS {
             e.extend(sim.energies(&m, s)?);
         }
-        Ok(median_signal_db(&e, nb, first_bin, mu, &keep))
+        Ok(mean_signal_bins(&e, nb, first_bin, mu))
     };
     let (lo, hi) = (1e-6f64.ln(), 10f64.ln());
     let mut at_bound = false;
-    let mut model_level_db = f64::NAN;
+    let mut model_bins = f64::NAN;
     let sigma = if !usable || !measured.is_finite() || !out.cluster_rrcs.value.is_finite() {
         at_bound = true;
         out.cluster_rrcs.value
@@ -282,11 +380,11 @@ pub fn fit_levels(
         let (mut ga, mut gb) = (level(a.exp())? - measured, level(b.exp())? - measured);
         if ga >= 0.0 {
             at_bound = true;
-            model_level_db = ga + measured;
+            model_bins = ga + measured;
             a.exp()
         } else if gb <= 0.0 {
             at_bound = true;
-            model_level_db = gb + measured;
+            model_bins = gb + measured;
             b.exp()
         } else {
             let mut side = 0i8;
@@ -294,8 +392,8 @@ pub fn fit_levels(
             for _ in 0..16 {
                 x = (a * gb - b * ga) / (gb - ga);
                 let gx = level(x.exp())? - measured;
-                model_level_db = gx + measured;
-                if gx.abs() < 0.05 || (b - a) < 1e-3 {
+                model_bins = gx + measured;
+                if gx.abs() < 1e-3 * measured.max(1.0) || (b - a) < 1e-3 {
                     break;
                 }
                 if gx < 0.0 {
@@ -331,8 +429,9 @@ pub fn fit_levels(
         LevelReport {
             specular_pairs,
             diffuse_cells,
-            measured_level_db: measured,
-            model_level_db,
+            vertex_cells,
+            measured_bins: measured,
+            model_bins,
             sigma_at_bound: at_bound,
         },
     ))

@@ -143,11 +143,7 @@ pub fn synth_channel(
             rays.extend(diffuse);
         }
         if let Some(w) = &channel.config.walls {
-            rays.extend(super::walls::specular_rays(
-                &layout,
-                at,
-                w.specular_gamma.value,
-            ));
+            rays.extend(super::walls::geometry_rays(&layout, at, w, seed));
         }
         let profiles = &mut energies[p * nd * nb..(p + 1) * nd * nb];
         resp.position(p, pose.heading_deg.to_radians(), &rays, seed, profiles);
@@ -248,11 +244,7 @@ impl EnergySimulator {
                 rays.extend(w.rays_from(&self.layout, at, min_amp2));
             }
             if let Some(w) = &channel.config.walls {
-                rays.extend(super::walls::specular_rays(
-                    &self.layout,
-                    at,
-                    w.specular_gamma.value,
-                ));
+                rays.extend(super::walls::geometry_rays(&self.layout, at, w, seed));
             }
             // a ray arriving after the last sample plus the kernel's reach (and the group
             // delay, clamped to ±1 ns) adds nothing to any profile: dropped before the
@@ -432,7 +424,7 @@ impl Response {
             let tau = r.tau_s + tau_g;
             let (phase, reach) = match r.source {
                 RaySource::Cluster(_) => (-2.0 * PI * (self.fc * tau).fract(), self.kernel_reach),
-                RaySource::Specular(_) => (
+                RaySource::Specular(_) | RaySource::Vertex(_) => (
                     r.phase - 2.0 * PI * (self.fc * tau).fract(),
                     self.kernel_reach,
                 ),
@@ -529,6 +521,7 @@ impl Response {
                     RaySource::Specular(w) => {
                         TruthRay::specular_wall(w, r.pos, delay_ns, angle, power_db)
                     }
+                    RaySource::Vertex(i) => TruthRay::vertex(i, r.pos, delay_ns, angle, power_db),
                 }
             })
             .collect()

@@ -89,6 +89,22 @@ impl TruthRay {
         }
     }
 
+    /// Layout vertex `i` of `synth`'s `[walls]` (a corner or edge point): kind `edge`, no
+    /// scatterer row, no cluster, `source_id` = `i`.
+    pub fn vertex(
+        i: usize,
+        pos: Coord<f64>,
+        delay_ns: f64,
+        angle_global_deg: f64,
+        power_db: f64,
+    ) -> TruthRay {
+        TruthRay {
+            kind: ScattererKind::Edge.name(),
+            wall_id: -1,
+            ..TruthRay::diffuse_wall(i, pos, delay_ns, angle_global_deg, power_db)
+        }
+    }
+
     /// A diffuse return of wall `wall` (index into the layout's `walls`) without a
     /// scatterer row (`synth`'s diffuse draws): kind `diffuse`, `source_id` = `wall_id` =
     /// `wall`, `truth_cluster` −1 (the dense component).
