@@ -45,8 +45,8 @@
 //!    bins above the threshold; σ is the value at which the model's draws give the table's
 //!    mean. (The profiles' signal energy was tried first: the geometry sets its median, so
 //!    it pinned σ at its lower end and left the clusters' delay spread out; docs/model.md.)
-//!    The draws are 8 `synth` draws at fixed seeds (common random numbers, so the mean
-//!    moves monotonically with σ), σ found by regula falsi (Illinois) in ln σ on
+//!    The draws are ⌈384 / poses⌉ `synth` draws (4 to 8) at fixed seeds (common random
+//!    numbers, so the mean moves monotonically with σ), σ found by regula falsi (Illinois) in ln σ on
 //!    [1e-6, 10] m², stopped within 0.1 % of the table's mean or after
 //!    16 steps; at either end the end is kept and the report says so.
 //!
@@ -87,8 +87,11 @@ pub struct LevelReport {
 /// (pose, wall) pairs a material needs for a |Γ| of its own.
 pub const MIN_MATERIAL_PAIRS: usize = 3;
 
+/// Pose-draws the moment matching averages over (draws = ⌈this / poses⌉, in [4, 8]).
+pub const LEVEL_POSES: usize = 384;
+
 /// Seeds of the moment-matching draws.
-const LEVEL_SEEDS: [u64; 8] = [11, 12, 13, 14, 15, 16, 17, 18];
+pub const LEVEL_SEEDS: [u64; 8] = [11, 12, 13, 14, 15, 16, 17, 18];
 
 /// The mean number of signal bins (E > 10μ, after the gate) per profile of energies `e`
 /// (one or more matrices of `nb`-bin profiles; module docs, step 3).
@@ -163,9 +166,9 @@ pub fn fit_levels(
                 pos: foot.pos,
                 phase: 0.0,
             };
-            let u = sim.expected_profiles(p, &[ray]);
+            let u = sim.expected_profile(p, d, &[ray]);
             let (lo, hi) = ((b - 2) as usize, (b + 2) as usize);
-            let umax = (lo..=hi).map(|k| u[d * nb + k]).fold(0.0, f64::max);
+            let umax = (lo..=hi).map(|k| u[k]).fold(0.0, f64::max);
             let smax = (lo..=hi).map(|k| sig(p, d, k)).fold(0.0, f64::max);
             if umax > 0.0 {
                 ratios.push((layout.walls[foot.wall].material.clone(), smax / umax));
@@ -321,10 +324,10 @@ pub fn fit_levels(
                 pos: v.pos,
                 phase: 0.0,
             };
-            let u = sim.expected_profiles(p, &[ray]);
+            let u = sim.expected_profile(p, d, &[ray]);
             let (lo, hi) = ((b - 1) as usize, (b + 1) as usize);
             let (k, umax) = (lo..=hi)
-                .map(|k| (k, u[d * nb + k]))
+                .map(|k| (k, u[k]))
                 .max_by(|a, b| a.1.total_cmp(&b.1))
                 .expect("three bins");
             if umax <= 0.0 {
@@ -358,11 +361,13 @@ pub fn fit_levels(
         m.cluster_rrcs.value = 1.0;
         m.require_estimable(&Default::default()).is_ok()
     };
+    // enough draws for LEVEL_POSES pose-draws (at least 4, at most the seeds)
+    let draws = LEVEL_POSES.div_ceil(np.max(1)).clamp(4, LEVEL_SEEDS.len());
     let level = |sigma: f64| -> Result<f64> {
         let mut m = base.clone();
         m.cluster_rrcs.value = sigma;
-        let mut e = Vec::with_capacity(LEVEL_SEEDS.len() * np * nd * nb);
-        for s in LEVEL_SEEDS {
+        let mut e = Vec::with_capacity(draws * np * nd * nb);
+        for &s in &LEVEL_SEEDS[..draws] {
             e.extend(sim.energies(&m, s)?);
         }
         Ok(mean_signal_bins(&e, nb, first_bin, mu))

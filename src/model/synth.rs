@@ -268,17 +268,22 @@ impl EnergySimulator {
     /// for one ray, the mean of a Rayleigh sum for many), through the same pattern, kernel
     /// and gate as [`EnergySimulator::energies`]; no cull.
     pub fn expected_profiles(&self, p: usize, rays: &[SeenRay]) -> Vec<f64> {
+        let nb = self.resp.proc.nbins();
+        let mut out = vec![0.0; self.resp.angles.len() * nb];
+        out.par_chunks_mut(nb)
+            .enumerate()
+            .for_each(|(d, prof)| prof.copy_from_slice(&self.expected_profile(p, d, rays)));
+        out
+    }
+
+    /// [`EnergySimulator::expected_profiles`] of direction `d` alone (bins).
+    pub fn expected_profile(&self, p: usize, d: usize, rays: &[SeenRay]) -> Vec<f64> {
         let resp = &self.resp;
         let heading = self.headings_deg[p].to_radians();
-        let nb = resp.proc.nbins();
-        let mut out = vec![0.0; resp.angles.len() * nb];
-        out.par_chunks_mut(nb).enumerate().for_each(|(d, prof)| {
-            let h = resp.power(d, heading, rays);
-            for (b, e) in prof.iter_mut().enumerate() {
-                *e = h[b * resp.l..(b + 1) * resp.l].iter().sum::<f64>() / resp.l as f64;
-            }
-        });
-        out
+        let h = resp.power(d, heading, rays);
+        (0..resp.proc.nbins())
+            .map(|b| h[b * resp.l..(b + 1) * resp.l].iter().sum::<f64>() / resp.l as f64)
+            .collect()
     }
 }
 
