@@ -27,6 +27,14 @@
 //!
 //! `[noise]` from the base, else `floor_dbm = -100`, `tx_power_dbm = 0`: only `simulate` and
 //! `synth` read it (a measured campaign's N0 is estimated from its signal-free bins).
+//!
+//! Refused before any sweep is read: an `--out` (or, with `to_parquet`, its
+//! `sweeps.parquet`) that is one of the inputs — the poses CSV, the index CSV, the base,
+//! the layout, a sweep file — by path or by inode ([`crate::io::refuse_overwrite`]); a
+//! poses CSV of more than [`MAX_POSES`] rows, an index of more than [`MAX_INDEX_ROWS`]; a
+//! poses or index CSV that is a device or FIFO. A sweep file that is not a regular file
+//! (device, FIFO, dangling link, symlink loop; [`crate::io::regular_input`]) is an
+//! `unreadable:` problem, never opened.
 
 use crate::campaign::manifest::{Campaign, Directions};
 use crate::campaign::sweeps::{parquet_batch, SweepReader};

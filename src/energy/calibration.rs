@@ -19,7 +19,12 @@
 //!   response, so delays are measured from the reference plane of the thru and amplitudes
 //!   are relative to it (a thru of unit gain keeps the radar equation's scale). A reference
 //!   with |R| = 0 (or not finite) at a point is refused, naming the file and the point: the
-//!   division would be undefined there.
+//!   division would be undefined there; a calibrated value that is not finite (a reference
+//!   so small the division overflows) is refused naming the file, the step and the sweep
+//!   ([`Calibration::apply`]).
+//!
+//! Every calibration file must be a regular file ([`crate::io::regular_input`]), and
+//! `energy` refuses an `--out` that is one of them ([`Calibration::files`]).
 //!
 //! The order (subtract, then divide) follows the measurement model S = H·(scene) + B with
 //! the background measured through the same system: (S − B)/R is the scene when R = H.

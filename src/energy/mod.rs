@@ -30,6 +30,11 @@
 //! the circular IFFT, where the coupling's kernel tail wraps to).
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 //!
+//! Refused, naming the manifest and the step: an energy that is not finite (a calibration
+//! or sweep value that overflows), and an N0 of 0 or not finite (nothing in the noise bins:
+//! e.g. a `[calibration] background` that is the measurement itself leaves an all-zero
+//! table).
+//!
 //! Layout: [`processor`] (window, IFFT, bins, TW/ENBW), [`matrix`] (the table read back,
 //! campaign check), [`writer`] (table and metadata); [`run`] streams a campaign through them
 //! and estimates N0.
