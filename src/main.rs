@@ -4,10 +4,11 @@
 //! Each `fn <subcommand>` turns its arguments into the library's parameter structs, runs the
 //! library entry with a progress bar (none with `--quiet`) and prints the returned summary.
 //! Errors are printed as one line `error: …` with exit status 1: the library's (whose
-//! `Display` names the file, line or field) and clap's invalid, out-of-range or missing
-//! flag values (naming the flag; clap reports `--out` given without its value as an invalid
-//! value). Other usage errors (unknown flag or subcommand, a required flag absent) keep
-//! clap's text, usage and exit status 2.
+//! `Display` names the file, line or field) and every usage error clap reports (invalid,
+//! out-of-range or missing flag values, conflicting flags, a required flag absent, an
+//! unknown flag or subcommand: its message up to the usage, joined into one line, naming
+//! the flags). Only `--help` and `--version` keep clap's output and status 0. Seeds accept
+//! a leading `-` as a value, so `--seed -1` is refused as an invalid value of `--seed`.
 
 mod cli;
 
@@ -34,27 +35,39 @@ fn main() {
     }
 }
 
-/// Parse the command line; a bad flag value is one `error:` line and exit status 1.
+/// Parse the command line; a usage error (a bad flag value, a conflict, a missing or
+/// unknown flag) is one `error:` line and exit status 1. `--help` and `--version` print
+/// as clap prints them.
 fn parse_args() -> Cli {
     match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e)
             if matches!(
                 e.kind(),
-                ErrorKind::InvalidValue | ErrorKind::ValueValidation | ErrorKind::InvalidUtf8
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
             ) =>
         {
-            let text = e.render().to_string();
-            let line: Vec<&str> = text
-                .lines()
-                .map(str::trim)
-                .filter(|l| !l.is_empty() && !l.starts_with("For more information"))
-                .collect();
-            eprintln!("{}", line.join(" "));
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("{}", one_line(&e.render().to_string()));
             std::process::exit(1);
         }
-        Err(e) => e.exit(),
     }
+}
+
+/// clap's message in one line: its text up to the usage (the `error:` line, a conflict's
+/// or a missing flag's names, a tip), joined.
+fn one_line(text: &str) -> String {
+    let lines: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .take_while(|l| !l.starts_with("Usage:"))
+        .filter(|l| !l.is_empty() && !l.starts_with("For more information"))
+        .collect();
+    lines.join(" ")
 }
 
 fn run(cli: Cli) -> Result<()> {

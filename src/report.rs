@@ -49,8 +49,6 @@ pub fn energy_heatmap(
     marks: &[(f64, f64)],
 ) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
-    let tmp = crate::io::temp_path(path).with_extension("png");
     let nd = em.directions();
     let nb = em.bins;
     let peak = (0..nd)
@@ -66,8 +64,8 @@ pub fn energy_heatmap(
         em.angles_rel_deg[nd - 1] + step / 2.0,
     );
     let rmax = crate::units::range_m(em.delay_ns(nb - 1));
-    {
-        let root = BitMapBackend::new(&tmp, (640, 480)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (640, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
@@ -116,8 +114,8 @@ pub fn energy_heatmap(
             )
             .map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// A distinct colour for cluster `i`.
@@ -147,10 +145,8 @@ pub fn mpc_clusters_plot(
     max_delay_ns: f64,
 ) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
-    let tmp = crate::io::temp_path(path).with_extension("png");
-    {
-        let root = BitMapBackend::new(&tmp, (560, 420)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (560, 420)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 16))
@@ -177,8 +173,8 @@ pub fn mpc_clusters_plot(
             }))
             .map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// MPCs (dots, coloured by campaign-wide cluster id; diffuse ones grey) and cluster
@@ -192,8 +188,6 @@ pub fn global_map_plot(
     centroids: &[(f64, f64, usize)],
 ) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
-    let tmp = crate::io::temp_path(path).with_extension("png");
     let bb = layout.bbox();
     let (x0, x1, y0, y1) = (
         bb.min().x - 1.0,
@@ -203,8 +197,8 @@ pub fn global_map_plot(
     );
     let w = 1000u32;
     let h = ((w as f64) * (y1 - y0) / (x1 - x0)).clamp(250.0, 1000.0) as u32 + 60;
-    {
-        let root = BitMapBackend::new(&tmp, (w, h)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
@@ -259,8 +253,8 @@ pub fn global_map_plot(
             )
             .map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// Escape text for HTML.
@@ -354,11 +348,9 @@ pub fn fit_plot(
     fitted: &crate::fit::Fitted,
 ) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
     if samples.len() < 2 {
         return Err(Error::input(path, "fewer than 2 samples to plot"));
     }
-    let tmp = crate::io::temp_path(path).with_extension("png");
     let mut v = samples.to_vec();
     v.sort_by(f64::total_cmp);
     let hist = Histogram::of(&v);
@@ -368,16 +360,16 @@ pub fn fit_plot(
         .collect();
     let pdf: Vec<(f64, f64)> = grid.iter().map(|&x| (x, fitted.pdf(x))).collect();
     let cdf: Vec<(f64, f64)> = grid.iter().map(|&x| (x, fitted.cdf(x))).collect();
-    {
-        let root = BitMapBackend::new(&tmp, (900, 360)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (900, 360)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let (left, right) = root.split_horizontally(450);
         let caption = format!("{title}: histogram, fitted {}", fitted.family.name());
         draw_histogram(&left, path, &caption, unit, &hist, &pdf)?;
         draw_cdfs(&right, path, unit, (lo, hi), &v, &cdf)?;
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// A density-normalised histogram of sorted samples.
@@ -537,7 +529,6 @@ pub fn map_panel(
     columns: usize,
 ) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
     if tiles.is_empty() || columns == 0 || rows == 0 || cols == 0 {
         return Err(plot_err(path, "empty map panel"));
     }
@@ -551,7 +542,6 @@ pub fn map_panel(
             ),
         ));
     }
-    let tmp = crate::io::temp_path(path).with_extension("png");
     let scale = (420 / cols).clamp(1, 6) as i32;
     let (tw, th) = (cols as i32 * scale, rows as i32 * scale);
     let (pad, head) = (10, 24);
@@ -559,8 +549,8 @@ pub fn map_panel(
     let nrow = tiles.len().div_ceil(columns) as i32;
     let w = (ncol * (tw + pad) + pad) as u32;
     let h = (nrow * (th + head + pad) + pad) as u32;
-    {
-        let root = BitMapBackend::new(&tmp, (w, h)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         for (k, t) in tiles.iter().enumerate() {
             let (gx, gy) = ((k % columns) as i32, (k / columns) as i32);
@@ -590,8 +580,8 @@ pub fn map_panel(
             .map_err(|e| plot_err(path, e))?;
         }
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// One chart of [`line_plots`]: named series of (x, y) points.
@@ -611,13 +601,11 @@ pub struct LineChart {
 /// per chart. Written atomically.
 pub fn line_plots(path: &Path, charts: &[LineChart]) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
     if charts.is_empty() {
         return Err(plot_err(path, "no chart"));
     }
-    let tmp = crate::io::temp_path(path).with_extension("png");
-    {
-        let root = BitMapBackend::new(&tmp, (480 * charts.len() as u32, 380)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (480 * charts.len() as u32, 380)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let areas = root.split_evenly((1, charts.len()));
         for (area, ch) in areas.iter().zip(charts) {
@@ -672,6 +660,6 @@ pub fn line_plots(path: &Path, charts: &[LineChart]) -> Result<()> {
                 .map_err(|e| plot_err(path, e))?;
         }
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }

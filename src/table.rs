@@ -12,7 +12,7 @@
 mod footer;
 
 use crate::error::{Error, Result};
-use crate::io::{ensure_parent, temp_path};
+use crate::io::OutputFile;
 use polars::prelude::*;
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -33,7 +33,8 @@ pub fn frame(path: &Path, cols: Vec<Column>) -> Result<DataFrame> {
 
 /// A streaming Parquet writer: every frame written becomes row groups (one per chunk) as
 /// it comes; the file-level key-value metadata may be set at any time before
-/// [`ParquetStream::finish`], which writes the footer and renames the temp file into place.
+/// [`ParquetStream::finish`], which writes the footer and renames the temp file into place
+/// (through [`OutputFile`]: a device or FIFO output is written straight into).
 ///
 /// Written over polars-parquet's `FileWriter` rather than polars' `BatchedWriter`, whose
 /// metadata is fixed when the first batch is written: a stage that learns its metadata
@@ -42,10 +43,10 @@ pub fn frame(path: &Path, cols: Vec<Column>) -> Result<DataFrame> {
 /// metadata), except that floating-point columns are written plain, not dictionary-encoded.
 pub struct ParquetStream {
     path: PathBuf,
-    tmp: PathBuf,
+    /// The output, opened with the first frame (dropped unfinished: its temp is removed).
+    out: Option<OutputFile>,
     writer: Option<StreamWriter>,
     meta: Vec<(String, String)>,
-    done: bool,
 }
 
 /// The open file of a [`ParquetStream`].
@@ -61,14 +62,13 @@ struct StreamWriter {
 impl ParquetStream {
     /// Start writing `path`.
     pub fn create(path: &Path) -> Result<Self> {
-        ensure_parent(path)?;
-        crate::io::clean_stale_temps(path);
+        // refused now (a directory or socket), before any work is done for it
+        crate::io::destination(path)?;
         Ok(ParquetStream {
             path: path.to_path_buf(),
-            tmp: temp_path(path),
+            out: None,
             writer: None,
             meta: Vec::new(),
-            done: false,
         })
     }
 
@@ -83,7 +83,8 @@ impl ParquetStream {
         let path = self.path.clone();
         let terr = |e: PolarsError| Error::table(&path, e);
         if self.writer.is_none() {
-            let file = File::create(&self.tmp).map_err(|e| Error::io(&self.path, e))?;
+            let (out, file) = OutputFile::create(&self.path)?;
+            self.out = Some(out);
             let schema = df.schema().to_arrow(CompatLevel::newest());
             // floating-point columns plain: measured values (energies, positions) are
             // nearly all distinct, and polars' dictionary attempt (a cardinality estimate
@@ -103,8 +104,7 @@ impl ParquetStream {
                 version: pw::Version::V1,
                 data_page_size: None,
             };
-            let file = pw::FileWriter::try_new(std::io::BufWriter::new(file), schema, options)
-                .map_err(terr)?;
+            let file = pw::FileWriter::try_new(file, schema, options).map_err(terr)?;
             let fields = file.parquet_schema().fields().to_vec();
             self.writer = Some(StreamWriter {
                 file,
@@ -152,21 +152,8 @@ impl ParquetStream {
         w.file
             .end(Some(kv))
             .map_err(|e| Error::table(&self.path, e))?;
-        let mut buf = w.file.into_inner();
-        std::io::Write::flush(&mut buf).map_err(|e| Error::io(&self.path, e))?;
-        drop(buf);
-        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
-        self.done = true;
-        Ok(())
-    }
-}
-
-impl Drop for ParquetStream {
-    fn drop(&mut self) {
-        if !self.done {
-            self.writer.take();
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+        let out = self.out.take().expect("opened with the writer");
+        out.commit(w.file.into_inner())
     }
 }
 

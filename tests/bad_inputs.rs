@@ -4,6 +4,16 @@
 //! `error: ` line naming the file and the field at fault, never panic, leave every file of
 //! the folder byte-identical (hash before and after) and add no file (no partial output,
 //! no temp file).
+//!
+//! Issue 33 added the import, calibration and calibrate surfaces: outputs that are inputs
+//! (also by hard link, and files inputs name: index rows, `[calibration]` files, the base,
+//! the layout, `--to-parquet`'s table), outputs that are folders, sockets or a full
+//! device, sweep files that are FIFOs, devices, folders, dangling links or loops, bounded
+//! sizes (poses, population, simulations), overflowing values and calibrations that leave
+//! NaN or no noise, and clap's usage errors. The snapshot records every entry by kind (a
+//! FIFO or device is never read), so the harness checks those too. The FIFO and
+//! character-device outputs that must be written into, not replaced, are
+//! [`device_and_fifo_outputs_are_written_into_not_replaced`].
 
 use crate::common::{corridor, set};
 use polars::prelude::*;
@@ -13,7 +23,9 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 /// The base folder: `in/` (the scene manifest), `sim/` (simulated, Touchstone), `e.parquet`,
-/// `m.parquet`, `c.parquet` (+ summary), `model.toml`, `t.md`.
+/// `m.parquet`, `c.parquet` (+ summary), `model.toml`, `t.md`; for `import`, `poses.csv`
+/// (the 3 poses), `index.csv` (every sweep file of `sim/`) and `base.toml` (name, seed,
+/// array, noise, processing of `sim/campaign.toml`).
 fn base() -> &'static Path {
     static BASE: OnceLock<tempfile::TempDir> = OnceLock::new();
     BASE.get_or_init(|| {
@@ -71,12 +83,45 @@ fn base() -> &'static Path {
             },
         })
         .unwrap();
+        import_inputs(d);
         dir
     })
     .path()
 }
 
-fn copy_tree(from: &Path, to: &Path) {
+/// `poses.csv`, `index.csv` and `base.toml` of the simulated campaign (see [`base`]).
+fn import_inputs(d: &Path) {
+    let sim: toml::Table =
+        toml::from_str(&std::fs::read_to_string(d.join("sim/campaign.toml")).unwrap()).unwrap();
+    let mut poses = String::from("position,x,y,heading\n");
+    for (p, q) in sim["poses"].as_array().unwrap().iter().enumerate() {
+        let f = |k: &str| q[k].as_float().unwrap();
+        poses += &format!("{p},{},{},{}\n", f("x_m"), f("y_m"), f("heading_deg"));
+    }
+    std::fs::write(d.join("poses.csv"), poses).unwrap();
+    let mut index = String::from("position,direction,pulse,path\n");
+    let mut names: Vec<String> = std::fs::read_dir(d.join("sim/sweeps"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    for n in names {
+        // p000_d00_k00.s2p
+        let (p, dd, k) = (&n[1..4], &n[6..8], &n[10..12]);
+        let num = |x: &str| x.parse::<usize>().unwrap();
+        index += &format!("{},{},{},sim/sweeps/{n}\n", num(p), num(dd), num(k));
+    }
+    std::fs::write(d.join("index.csv"), index).unwrap();
+    let mut base = toml::Table::new();
+    for k in ["name", "seed", "array", "noise", "processing"] {
+        if let Some(v) = sim.get(k) {
+            base.insert(k.into(), v.clone());
+        }
+    }
+    std::fs::write(d.join("base.toml"), toml::to_string(&base).unwrap()).unwrap();
+}
+
+pub(crate) fn copy_tree(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
         let e = e.unwrap();
@@ -89,18 +134,34 @@ fn copy_tree(from: &Path, to: &Path) {
     }
 }
 
-/// Every file under `dir` (relative path → hash of its bytes).
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, u64> {
+/// Every entry under `dir` (relative path → hash of what it is): a regular file by its
+/// bytes, a symbolic link by its target, a FIFO, socket or device by its kind and inode
+/// (never opened: reading a FIFO would block), a folder by its kind (and its entries).
+pub(crate) fn snapshot(dir: &Path) -> BTreeMap<PathBuf, u64> {
+    use std::os::unix::fs::{FileTypeExt, MetadataExt};
     fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, u64>) {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
-            if p.is_dir() {
+            let m = std::fs::symlink_metadata(&p).unwrap();
+            let t = m.file_type();
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            if t.is_dir() {
+                "dir".hash(&mut h);
                 walk(root, &p, out);
-            } else {
-                let mut h = std::collections::hash_map::DefaultHasher::new();
+            } else if t.is_file() {
                 std::fs::read(&p).unwrap().hash(&mut h);
-                out.insert(p.strip_prefix(root).unwrap().to_path_buf(), h.finish());
+            } else if t.is_symlink() {
+                ("link", std::fs::read_link(&p).unwrap()).hash(&mut h);
+            } else {
+                let kind = (
+                    t.is_fifo(),
+                    t.is_socket(),
+                    t.is_char_device(),
+                    t.is_block_device(),
+                );
+                ("special", kind, m.ino(), m.rdev()).hash(&mut h);
             }
+            out.insert(p.strip_prefix(root).unwrap().to_path_buf(), h.finish());
         }
     }
     let mut out = BTreeMap::new();
@@ -176,6 +237,8 @@ struct Case {
     setup: Setup,
     args: &'static [&'static str],
     want: &'static [&'static str],
+    /// Lines before the `error:` line: import lists its problems one a line first.
+    problems: usize,
 }
 
 fn case(
@@ -189,7 +252,62 @@ fn case(
         setup: Box::new(setup),
         args,
         want,
+        problems: 0,
     }
+}
+
+/// A case of `import` that lists `problems` lines before its `error:` line.
+fn import_case(
+    name: &'static str,
+    problems: usize,
+    args: &'static [&'static str],
+    want: &'static [&'static str],
+    setup: impl Fn(&Path) + 'static,
+) -> Case {
+    Case {
+        problems,
+        ..case(name, args, want, setup)
+    }
+}
+
+/// Replace `file` of the case folder (a sweep file) by what `make` puts at its path.
+fn replace_with(dir: &Path, file: &str, make: impl FnOnce(&Path)) {
+    let p = dir.join(file);
+    std::fs::remove_file(&p).unwrap();
+    make(&p);
+}
+
+/// Make a FIFO at `p` (with the `mkfifo` command: no extra crate).
+pub(crate) fn mkfifo(p: &Path) {
+    let ok = std::process::Command::new("mkfifo")
+        .arg(p)
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok, "mkfifo {}", p.display());
+}
+
+/// Rewrite the data lines of a Touchstone file of the case folder: every number after the
+/// frequency becomes `value` (on every data line, or only the first when `first_only`),
+/// written to `to` (the same file when equal).
+fn touchstone_values(dir: &Path, from: &str, to: &str, value: &str, first_only: bool) {
+    let text = std::fs::read_to_string(dir.join(from)).unwrap();
+    let mut done = false;
+    let mut out = String::new();
+    for l in text.lines() {
+        let t = l.trim();
+        if t.is_empty() || t.starts_with('!') || t.starts_with('#') || (first_only && done) {
+            out += l;
+        } else {
+            let mut toks = t.split_whitespace();
+            let f = toks.next().unwrap().to_string();
+            let rest: Vec<&str> = toks.map(|_| value).collect();
+            out += &format!("{f} {}", rest.join(" "));
+            done = true;
+        }
+        out.push('\n');
+    }
+    std::fs::write(dir.join(to), out).unwrap();
 }
 
 const ENERGY: &[&str] = &[
@@ -231,6 +349,43 @@ const SYNTH: &[&str] = &[
     "--out",
     "s.parquet",
 ];
+
+const IMPORT: &[&str] = &[
+    "import",
+    "--poses",
+    "poses.csv",
+    "--index",
+    "index.csv",
+    "--directions",
+    "-90:90:5",
+    "--layout",
+    "sim/layout.geojson",
+    "--base",
+    "base.toml",
+    "--out",
+    "imp/campaign.toml",
+];
+
+/// `import` of [`IMPORT`] with another `--out`.
+macro_rules! import_out {
+    ($out:expr) => {
+        &[
+            "import",
+            "--poses",
+            "poses.csv",
+            "--index",
+            "index.csv",
+            "--directions",
+            "-90:90:5",
+            "--layout",
+            "sim/layout.geojson",
+            "--base",
+            "base.toml",
+            "--out",
+            $out,
+        ]
+    };
+}
 
 fn nothing(_: &Path) {}
 
@@ -725,6 +880,363 @@ fn cases() -> Vec<Case> {
             &["nowhere.toml"],
             nothing,
         ),
+        // ---- issue 33: outputs that are not regular files
+        case(
+            "energy --out is a folder",
+            &["energy", "--campaign", M, "--out", "sim/sweeps"],
+            &["sim/sweeps", "is a directory", "refusing"],
+            nothing,
+        ),
+        case(
+            "energy --out is a socket",
+            &["energy", "--campaign", M, "--out", "sock"],
+            &["sock", "is a socket", "refusing"],
+            |d| {
+                // the socket file stays after the listener is dropped
+                drop(std::os::unix::net::UnixListener::bind(d.join("sock")).unwrap());
+            },
+        ),
+        case(
+            "energy --out a full device",
+            &["energy", "--campaign", M, "--out", "/dev/full"],
+            &["/dev/full", "No space left on device"],
+            nothing,
+        ),
+        case(
+            "import --out a full device",
+            import_out!("/dev/full"),
+            &["/dev/full", "No space left on device"],
+            nothing,
+        ),
+        // ---- issue 33: an output that is an input, also one an input names
+        case(
+            "energy --out = a hard link of its manifest",
+            &["energy", "--campaign", M, "--out", "link.toml"],
+            &["link.toml", "input --campaign", M],
+            |d| std::fs::hard_link(d.join(M), d.join("link.toml")).unwrap(),
+        ),
+        case(
+            "energy --out = its calibration reference",
+            &["energy", "--campaign", M, "--out", "sim/ref.s2p"],
+            &["sim/ref.s2p", "input calibration.reference", "--out"],
+            |d| {
+                std::fs::copy(d.join("sim/sweeps/p000_d00_k00.s2p"), d.join("sim/ref.s2p"))
+                    .unwrap();
+                toml_set(d, M, "calibration.reference", "ref.s2p");
+            },
+        ),
+        case(
+            "energy --out = its calibration background",
+            &["energy", "--campaign", M, "--out", "sim/bg.s2p"],
+            &["sim/bg.s2p", "input calibration.background"],
+            |d| {
+                std::fs::copy(d.join("sim/sweeps/p000_d00_k00.s2p"), d.join("sim/bg.s2p")).unwrap();
+                toml_set(d, M, "calibration.background", "bg.s2p");
+            },
+        ),
+        case(
+            "import --out = its poses",
+            import_out!("poses.csv"),
+            &["poses.csv", "input --poses", "--out"],
+            nothing,
+        ),
+        case(
+            "import --out = its index",
+            import_out!("index.csv"),
+            &["index.csv", "input --index"],
+            nothing,
+        ),
+        case(
+            "import --out = its base",
+            import_out!("./base.toml"),
+            &["base.toml", "input --base"],
+            nothing,
+        ),
+        case(
+            "import --out = its layout",
+            import_out!("sim/layout.geojson"),
+            &["sim/layout.geojson", "input --layout"],
+            nothing,
+        ),
+        case(
+            "import --out = a sweep file of its index",
+            import_out!("sim/sweeps/p002_d36_k00.s2p"),
+            &["p002_d36_k00.s2p", "sweep file (of --index)"],
+            nothing,
+        ),
+        case(
+            "import --to-parquet over an input named sweeps.parquet",
+            &[
+                "import",
+                "--poses",
+                "imp/sweeps.parquet",
+                "--index",
+                "index.csv",
+                "--directions",
+                "-90:90:5",
+                "--layout",
+                "sim/layout.geojson",
+                "--base",
+                "base.toml",
+                "--out",
+                "imp/campaign.toml",
+                "--to-parquet",
+            ],
+            &["imp/sweeps.parquet", "--to-parquet", "input --poses"],
+            |d| {
+                std::fs::create_dir(d.join("imp")).unwrap();
+                std::fs::copy(d.join("poses.csv"), d.join("imp/sweeps.parquet")).unwrap();
+            },
+        ),
+        // ---- issue 33: sweep files and index entries that are not regular files
+        case(
+            "sweep file is a FIFO",
+            ENERGY,
+            &["p001_d03_k00.s2p", "is a FIFO"],
+            |d| replace_with(d, "sim/sweeps/p001_d03_k00.s2p", mkfifo),
+        ),
+        case(
+            "sweep file is a folder",
+            ENERGY,
+            &["p001_d03_k00.s2p", "is a directory"],
+            |d| {
+                replace_with(d, "sim/sweeps/p001_d03_k00.s2p", |p| {
+                    std::fs::create_dir(p).unwrap()
+                })
+            },
+        ),
+        case(
+            "sweep file is a link to /dev/zero",
+            ENERGY,
+            &["p001_d03_k00.s2p", "is a device"],
+            |d| {
+                replace_with(d, "sim/sweeps/p001_d03_k00.s2p", |p| {
+                    std::os::unix::fs::symlink("/dev/zero", p).unwrap()
+                })
+            },
+        ),
+        case(
+            "sweep file is a dangling link",
+            ENERGY,
+            &["p001_d03_k00.s2p", "dangling symbolic link"],
+            |d| {
+                replace_with(d, "sim/sweeps/p001_d03_k00.s2p", |p| {
+                    std::os::unix::fs::symlink("gone.s2p", p).unwrap()
+                })
+            },
+        ),
+        case(
+            "sweep file is a symlink loop",
+            ENERGY,
+            &["p001_d03_k00.s2p", "symlink loop"],
+            |d| {
+                replace_with(d, "sim/sweeps/p001_d03_k00.s2p", |p| {
+                    std::os::unix::fs::symlink(p.file_name().unwrap(), p).unwrap()
+                })
+            },
+        ),
+        case(
+            "calibration reference is a FIFO",
+            ENERGY,
+            &["sim/ref.s2p", "calibration.reference", "is a FIFO"],
+            |d| {
+                mkfifo(&d.join("sim/ref.s2p"));
+                toml_set(d, M, "calibration.reference", "ref.s2p");
+            },
+        ),
+        import_case(
+            "index row naming /dev/zero",
+            1,
+            IMPORT,
+            &["unreadable: /dev/zero", "is a device", "1 unreadable"],
+            |d| edit(d, "index.csv", "sim/sweeps/p000_d00_k00.s2p", "/dev/zero"),
+        ),
+        import_case(
+            "index row naming a FIFO",
+            1,
+            IMPORT,
+            &["unreadable: fifo", "is a FIFO", "1 unreadable"],
+            |d| {
+                mkfifo(&d.join("fifo"));
+                edit(d, "index.csv", "sim/sweeps/p000_d00_k00.s2p", "fifo");
+            },
+        ),
+        // ---- issue 33: sizes bounded
+        case(
+            "poses CSV of 10^6 rows",
+            IMPORT,
+            &["poses.csv", "1000000 rows", "more than 100000 poses"],
+            |d| {
+                let mut s = String::from("position,x,y,heading\n");
+                for i in 0..1_000_000 {
+                    s += &format!("{i},1.0,0.0,0.0\n");
+                }
+                std::fs::write(d.join("poses.csv"), s).unwrap();
+            },
+        ),
+        case(
+            "calibrate --population 10001",
+            &[
+                "calibrate",
+                "--energy",
+                "e.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "cal.toml",
+                "--population",
+                "10001",
+            ],
+            &["--population", "[20, 10000]"],
+            nothing,
+        ),
+        case(
+            "calibrate --simulations 100001",
+            &[
+                "calibrate",
+                "--energy",
+                "e.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "cal.toml",
+                "--simulations",
+                "100001",
+            ],
+            &["--simulations", "[20, 100000]"],
+            nothing,
+        ),
+        // ---- issue 33: values that overflow, calibrations that leave nothing
+        case(
+            "Touchstone value 1e308",
+            ENERGY,
+            &["p000_d00_k00.s2p", "line", "overflows"],
+            |d| {
+                let f = "sim/sweeps/p000_d00_k00.s2p";
+                touchstone_values(d, f, f, "1e308", true)
+            },
+        ),
+        case(
+            "calibration reference of 1e-200",
+            ENERGY,
+            &["not finite", "calibration.reference"],
+            |d| {
+                touchstone_values(
+                    d,
+                    "sim/sweeps/p000_d00_k00.s2p",
+                    "sim/ref.s2p",
+                    "1e-200",
+                    false,
+                );
+                toml_set(d, M, "calibration.reference", "ref.s2p");
+            },
+        ),
+        case(
+            "calibration background = the measurement",
+            ENERGY,
+            &[M, "N0 = 0", "calibration.background", "measurement itself"],
+            |d| {
+                toml_set(
+                    d,
+                    M,
+                    "calibration.background",
+                    "sweeps/p{position:03}_d{direction:02}_k00.s2p",
+                )
+            },
+        ),
+        case(
+            "prior interval of three bounds",
+            &[
+                "calibrate",
+                "--energy",
+                "e.parquet",
+                "--campaign",
+                M,
+                "--out",
+                "cal.toml",
+                "--prior",
+                "prior.toml",
+            ],
+            &["prior.toml", "3 bounds given, exactly 2"],
+            |d| {
+                std::fs::copy(d.join("model.toml"), d.join("prior.toml")).unwrap();
+                let v = toml::Value::Array(vec![1.0.into(), 2.0.into(), 3.0.into()]);
+                toml_set(d, "prior.toml", "ray_decay.interval", v);
+            },
+        ),
+        // ---- issue 33: clap's usage errors, one line
+        case(
+            "import with --index and --sweeps",
+            &[
+                "import",
+                "--poses",
+                "poses.csv",
+                "--index",
+                "index.csv",
+                "--sweeps",
+                "sim/sweeps/*.s2p",
+                "--name-pattern",
+                "p{position:03}_d{direction:02}_k{pulse:02}.s2p",
+                "--out",
+                "imp/campaign.toml",
+            ],
+            &["--sweeps", "cannot be used with", "--index"],
+            nothing,
+        ),
+        case(
+            "import with neither --index nor --sweeps",
+            &[
+                "import",
+                "--poses",
+                "poses.csv",
+                "--out",
+                "imp/campaign.toml",
+            ],
+            &["required", "--sweeps"],
+            nothing,
+        ),
+        case(
+            "import --sweeps without --name-pattern",
+            &[
+                "import",
+                "--poses",
+                "poses.csv",
+                "--sweeps",
+                "sim/sweeps/*.s2p",
+                "--out",
+                "imp/campaign.toml",
+            ],
+            &["required", "--name-pattern"],
+            nothing,
+        ),
+        case(
+            "negative --seed",
+            &[
+                "cluster",
+                "--mpcs",
+                "m.parquet",
+                "--out",
+                "c2.parquet",
+                "--seed",
+                "-1",
+            ],
+            &["'-1'", "--seed"],
+            nothing,
+        ),
+        case(
+            "unknown flag",
+            &[
+                "energy",
+                "--campaign",
+                M,
+                "--out",
+                "e2.parquet",
+                "--outt",
+                "x",
+            ],
+            &["--outt"],
+            nothing,
+        ),
     ]
 }
 
@@ -753,7 +1265,7 @@ fn every_bad_input_is_one_line_exit_1_inputs_unchanged_nothing_written() {
         if err.contains("panicked") {
             why.push("panic".into());
         }
-        if lines.len() != 1 || !lines[0].starts_with("error: ") {
+        if lines.len() != 1 + c.problems || !lines[c.problems].starts_with("error: ") {
             why.push(format!("{} lines", lines.len()));
         }
         for w in c.want {
@@ -783,4 +1295,154 @@ fn every_bad_input_is_one_line_exit_1_inputs_unchanged_nothing_written() {
         cases.len(),
         failures.join("\n")
     );
+}
+
+/// Run `pradar args` in `dir`, killed after 120 s (a FIFO nobody reads would block it):
+/// the exit code and stderr.
+fn run_bounded(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pradar"))
+        .args(args)
+        .arg("--quiet")
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > std::time::Duration::from_secs(120) {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("pradar {args:?} still running after 120 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    (status.code(), err)
+}
+
+/// Issue 33: an output that is a FIFO or a character device is written into (exit 0) and
+/// is still a FIFO or a character device afterwards, never a regular file renamed over it;
+/// `--out /dev/null` discards. The character device is made with `mknod X c 1 3` (the
+/// node of /dev/null) where that is permitted, else that part is skipped with the reason
+/// printed. The inputs are unchanged (the harness's snapshot) and no temp file is left.
+#[test]
+fn device_and_fifo_outputs_are_written_into_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    copy_tree(base(), d);
+    let kind = |p: &Path| std::fs::symlink_metadata(p).unwrap().file_type();
+    // a FIFO, read by `cat` into a file (spawned first: opening a FIFO for writing waits
+    // for a reader; the child is killed at the end whatever happened)
+    let fifo = d.join("out.fifo");
+    mkfifo(&fifo);
+    let before = snapshot(d);
+    let got_dir = tempfile::tempdir().unwrap();
+    let got = got_dir.path().join("fifo-bytes");
+    let mut cat = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!("cat '{}' > '{}'", fifo.display(), got.display()))
+        .spawn()
+        .unwrap();
+    let (code, err) = run_bounded(
+        d,
+        &[
+            "energy",
+            "--campaign",
+            "sim/campaign.toml",
+            "--out",
+            "out.fifo",
+        ],
+    );
+    let cat_done = (0..200).any(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        cat.try_wait().unwrap().is_some()
+    });
+    if !cat_done {
+        cat.kill().unwrap();
+    }
+    cat.wait().unwrap();
+    assert_eq!(code, Some(0), "energy --out FIFO: {err}");
+    assert!(kind(&fifo).is_fifo(), "the FIFO was replaced");
+    let bytes = std::fs::read(&got).unwrap();
+    assert!(
+        bytes.starts_with(b"PAR1") && bytes.ends_with(b"PAR1"),
+        "the FIFO's reader got {} bytes, not a Parquet file",
+        bytes.len()
+    );
+    assert_eq!(snapshot(d), before, "inputs changed or files added");
+
+    // /dev/null itself, and the import's manifest into it
+    let (code, err) = run_bounded(
+        d,
+        &[
+            "energy",
+            "--campaign",
+            "sim/campaign.toml",
+            "--out",
+            "/dev/null",
+        ],
+    );
+    assert_eq!(code, Some(0), "energy --out /dev/null: {err}");
+    assert!(kind(Path::new("/dev/null")).is_char_device());
+    assert_eq!(snapshot(d), before, "inputs changed or files added");
+
+    // a character device made here
+    let node = d.join("null.node");
+    let made = std::process::Command::new("mknod")
+        .arg(&node)
+        .args(["c", "1", "3"])
+        .output()
+        .unwrap();
+    if !made.status.success() {
+        eprintln!(
+            "skipped the mknod part: mknod not permitted here ({})",
+            String::from_utf8_lossy(&made.stderr).trim()
+        );
+        return;
+    }
+    let before = snapshot(d);
+    for args in [
+        &[
+            "energy",
+            "--campaign",
+            "sim/campaign.toml",
+            "--out",
+            "null.node",
+        ][..],
+        &[
+            "import",
+            "--poses",
+            "poses.csv",
+            "--index",
+            "index.csv",
+            "--directions",
+            "-90:90:5",
+            "--layout",
+            "sim/layout.geojson",
+            "--base",
+            "base.toml",
+            "--out",
+            "null.node",
+        ],
+    ] {
+        let (code, err) = run_bounded(d, args);
+        assert_eq!(code, Some(0), "{} --out a character device: {err}", args[0]);
+        assert!(
+            kind(&node).is_char_device(),
+            "{}: the node was replaced",
+            args[0]
+        );
+        assert_eq!(
+            snapshot(d),
+            before,
+            "{}: inputs changed or files added",
+            args[0]
+        );
+    }
 }

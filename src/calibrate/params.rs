@@ -3,7 +3,10 @@
 //!
 //! * `simulations` — the simulation budget (default 3000), ≥ `population`;
 //! * `population` — N, simulations of the first (prior) generation and of every later
-//!   generation (default 400), in [20, 100 000];
+//!   generation (default 400), in [20, [`MAX_POPULATION`] = 10 000] (the first generation
+//!   alone is N simulations);
+//! * the budget is at most [`MAX_SIMULATIONS`] = 100 000 (about an hour at the corridor's
+//!   30 simulations/s on 2 cores): a larger one would run for many hours;
 //! * `alpha` — the share of the merged population kept at each generation (default 0.5),
 //!   in (0, 1); N_α = ⌊αN⌋ ≥ 10 particles carry the posterior;
 //! * `min_acceptance` — stop when fewer than this share of a generation's proposals fall
@@ -15,6 +18,13 @@
 
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
+
+/// The largest population N (the first generation alone is N simulations, and the kernel
+/// weights cost N·N_α per generation).
+pub const MAX_POPULATION: usize = 10_000;
+
+/// The largest simulation budget (about an hour at the corridor's 30 simulations/s).
+pub const MAX_SIMULATIONS: usize = 100_000;
 
 /// Options of a calibration run (builder style; [`ParamGuard::check`] gives the
 /// [`CalibrateValid`] calibrate takes).
@@ -80,17 +90,17 @@ impl ParamGuard for CalibrateParams {
 
     /// Every field in its range (module docs); the error names the field.
     fn check(&self) -> Result<CalibrateValid> {
-        if !(20..=100_000).contains(&self.population) {
+        if !(20..=MAX_POPULATION).contains(&self.population) {
             return Err(Error::param(
                 "calibrate.population",
-                format!("must be in [20, 100000], got {}", self.population),
+                format!("must be in [20, {MAX_POPULATION}], got {}", self.population),
             ));
         }
-        if self.simulations < self.population || self.simulations > 10_000_000 {
+        if self.simulations < self.population || self.simulations > MAX_SIMULATIONS {
             return Err(Error::param(
                 "calibrate.simulations",
                 format!(
-                    "must be in [population = {}, 1e7], got {}",
+                    "must be in [population = {}, {MAX_SIMULATIONS}], got {}",
                     self.population, self.simulations
                 ),
             ));

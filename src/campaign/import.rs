@@ -27,6 +27,14 @@
 //!
 //! `[noise]` from the base, else `floor_dbm = -100`, `tx_power_dbm = 0`: only `simulate` and
 //! `synth` read it (a measured campaign's N0 is estimated from its signal-free bins).
+//!
+//! Refused before any sweep is read: an `--out` (or, with `to_parquet`, its
+//! `sweeps.parquet`) that is one of the inputs — the poses CSV, the index CSV, the base,
+//! the layout, a sweep file — by path or by inode ([`crate::io::refuse_overwrite`]); a
+//! poses CSV of more than [`MAX_POSES`] rows, an index of more than [`MAX_INDEX_ROWS`]; a
+//! poses or index CSV that is a device or FIFO. A sweep file that is not a regular file
+//! (device, FIFO, dangling link, symlink loop; [`crate::io::regular_input`]) is an
+//! `unreadable:` problem, never opened.
 
 use crate::campaign::manifest::{Campaign, Directions};
 use crate::campaign::sweeps::{parquet_batch, SweepReader};
@@ -127,6 +135,10 @@ type CsvRows = (Vec<String>, Vec<(usize, Vec<String>)>);
 type FileRead = std::result::Result<(Vec<f64>, Vec<String>), String>;
 
 fn read_csv(path: &Path) -> Result<CsvRows> {
+    // a device or FIFO would never end (or block): refused before it is opened
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        crate::io::regular_input(path, "table")?;
+    }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let text = decode(&bytes);
     let mut rows = text
@@ -169,13 +181,33 @@ fn cell<T: std::str::FromStr>(
         .map_err(|_| Error::input(path, format!("line {line}: `{v}` is not a valid {what}")))
 }
 
+/// Poses a poses CSV may hold (a campaign of more positions is not a measurement; the
+/// bound keeps a runaway table from being parsed row by row).
+pub const MAX_POSES: usize = 100_000;
+
+/// Rows an index CSV may hold (one per sweep file).
+pub const MAX_INDEX_ROWS: usize = 10_000_000;
+
+/// Refuse a table of more than `max` rows, naming the bound.
+fn bound_rows(path: &Path, rows: usize, max: usize, what: &str) -> Result<()> {
+    if rows > max {
+        return Err(Error::input(
+            path,
+            format!("{rows} rows: more than {max} {what}"),
+        ));
+    }
+    Ok(())
+}
+
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
     let (h, rows) = read_csv(path)?;
+    bound_rows(path, rows.len(), MAX_POSES, "poses")?;
     let cp = column(path, &h, &["position"])?;
     let cx = column(path, &h, &["x", "x_m"])?;
     let cy = column(path, &h, &["y", "y_m"])?;
     let ch = column(path, &h, &["heading", "heading_deg"])?;
     let mut out: Vec<PoseRow> = Vec::with_capacity(rows.len());
+    let mut labels = std::collections::HashSet::with_capacity(rows.len());
     for (n, r) in &rows {
         let row = (
             cell(path, *n, r, cp, "position (integer)")?,
@@ -189,7 +221,7 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
                 format!("line {n}: x, y, heading must be finite"),
             ));
         }
-        if out.iter().any(|p| p.0 == row.0) {
+        if !labels.insert(row.0) {
             return Err(Error::input(
                 path,
                 format!("line {n}: position {} listed twice", row.0),
@@ -347,7 +379,9 @@ fn walk(dir: &Path, parts: &[String], found: &mut Vec<PathBuf>) -> Result<()> {
         }
         let p = entry.path();
         if parts.len() == 1 {
-            if p.is_file() {
+            // a matching name that is not a regular file (a dangling link, a loop, a
+            // device) is kept: the read refuses it, naming it, instead of it being missed
+            if !p.is_dir() {
                 found.push(p);
             }
         } else if p.is_dir() {
@@ -395,6 +429,7 @@ fn cells_from_glob(glob_pat: &str, pattern: &str) -> Result<Cells> {
 
 fn cells_from_index(path: &Path) -> Result<Cells> {
     let (h, rows) = read_csv(path)?;
+    bound_rows(path, rows.len(), MAX_INDEX_ROWS, "sweep files")?;
     let cp = column(path, &h, &["position"])?;
     let cd = column(path, &h, &["direction"])?;
     let ck = optional_column(&h, &["pulse"]);
@@ -460,6 +495,54 @@ fn read_base(path: &Path) -> Result<toml::Table> {
         }
     }
     Ok(t)
+}
+
+/// The folder of the output manifest (`.` for a bare name).
+fn out_dir(p: &ImportParams) -> &Path {
+    p.out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
+/// Refuse an import whose `--out` (or, with `--to-parquet`, its `sweeps.parquet`) is one
+/// of its inputs: the poses CSV, the index CSV, the base, the layout (`--layout` or the
+/// base's, relative to the output folder), or a sweep file (matched or listed).
+fn refuse_inputs(
+    p: &ImportParams,
+    base: &toml::Table,
+    cells: &BTreeMap<(i64, i64, i64), Vec<PathBuf>>,
+    extra: &[(PathBuf, String)],
+) -> Result<()> {
+    let dir = out_dir(p);
+    let pq = dir.join("sweeps.parquet");
+    let mut outputs: Vec<(&Path, &str)> = vec![(&p.out, "--out")];
+    if p.to_parquet {
+        outputs.push((&pq, "--to-parquet (sweeps.parquet beside --out)"));
+    }
+    let mut inputs: Vec<(&Path, &str)> = vec![(&p.poses, "--poses")];
+    if let SweepFiles::Index(i) = &p.sweeps {
+        inputs.push((i, "--index"));
+    }
+    if let Some(b) = &p.base {
+        inputs.push((b, "--base"));
+    }
+    let base_layout = base
+        .get("layout")
+        .and_then(|v| v.as_str())
+        .map(|l| dir.join(l));
+    match (&p.layout, &base_layout) {
+        (Some(l), _) => inputs.push((l, "--layout")),
+        (None, Some(l)) => inputs.push((l, "layout (of --base)")),
+        (None, None) => {}
+    }
+    let what = match p.sweeps {
+        SweepFiles::Index(_) => "sweep file (of --index)",
+        SweepFiles::Glob { .. } => "sweep file (of --sweeps)",
+    };
+    inputs.extend(cells.values().flatten().map(|f| (f.as_path(), what)));
+    inputs.extend(extra.iter().map(|(f, _)| (f.as_path(), what)));
+    crate::io::refuse_overwrite(&outputs, &inputs)
 }
 
 /// Build and validate the manifest; with problems, write nothing and return them.
@@ -552,13 +635,16 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
             ));
         }
     }
-    // read every file (in parallel): grid, parameter, reader refusals
+    // no output may be an input (checked before any file is read)
     let present: Vec<&PathBuf> = table.iter().flatten().collect();
+    refuse_inputs(p, &base, &cells, &extra_names)?;
+    // read every file (in parallel): grid, parameter, reader refusals
     let done = std::sync::atomic::AtomicUsize::new(0);
     let reads: Vec<FileRead> = present
         .par_iter()
         .map(|path| {
             let r = (|| -> Result<(Vec<f64>, Vec<String>)> {
+                crate::io::regular_input(path, "sweep file")?;
                 let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
                 let net = parse_touchstone(&decode(&bytes), path)?;
                 net.check_param(param.unwrap_or(SParam::default_for(net.ports)), path)?;
@@ -632,11 +718,7 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
     }
 
     // the manifest
-    let out_dir = p
-        .out
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let out_dir = out_dir(p);
     let mut t = toml::Table::new();
     t.insert("schema_version".into(), toml::Value::Integer(1));
     let name = p

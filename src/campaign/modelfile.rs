@@ -60,6 +60,19 @@ pub const FAMILIES: [&str; 9] = [
     "constant",
 ];
 
+/// An `interval` of exactly two numbers (serde's fixed-size array reads the first two of
+/// a longer list and ignores the rest).
+fn two_bounds<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    let v: Vec<f64> = serde::Deserialize::deserialize(d)?;
+    match v[..] {
+        [lo, hi] => Ok(Some([lo, hi])),
+        _ => Err(serde::de::Error::custom(format!(
+            "interval: {} bounds given, exactly 2 needed ([lo, hi])",
+            v.len()
+        ))),
+    }
+}
+
 /// The fit's diagnostics of a quantity, when present: a finite, ordered interval, a KS
 /// statistic and p-value in [0, 1].
 fn check_diagnostics(name: &str, q: &Quantity) -> Result<()> {
@@ -96,8 +109,13 @@ pub struct Quantity {
     /// Distribution family, one of [`FAMILIES`] (`exponential`, `shifted_exponential`,
     /// `laplacian`, `gaussian`, `lognormal`, `gamma`, `rayleigh`, `poisson`, `constant`).
     pub family: String,
-    /// 95 % bootstrap interval.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// 95 % bootstrap interval (exactly two bounds in the file: a third is refused, not
+    /// dropped).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "two_bounds"
+    )]
     pub interval: Option<[f64; 2]>,
     /// KS statistic.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -5,7 +5,9 @@
 //! Reading is per position ([`SweepReader::read_position`]) so the energy stage streams: at
 //! most one position's sweeps are in memory. Every file is checked against the manifest's
 //! band (same number of points, frequencies within 1e-6 of a step): a wrong band, a missing
-//! file, NaN or a truncated row is an error naming the file (and line or row).
+//! file, NaN, a value above [`crate::campaign::touchstone::MAX_VALUE`] or a truncated row is
+//! an error naming the file (and line or row). Every Touchstone file (or the Parquet table)
+//! must be a regular file ([`crate::io::regular_input`]), checked before any is opened.
 //!
 //! From a Touchstone file of any port count the reader keeps one S-parameter, `[sweeps]
 //! parameter` (S21 by default, S11 for a one-port file when the manifest names none); a file
@@ -178,11 +180,11 @@ impl SweepReader {
                         ));
                     }
                 }
-                if let Some(missing) = paths.iter().find(|p| !p.is_file()) {
-                    return Err(Error::input(
-                        missing,
-                        format!("sweep file listed in {} not found", c.path.display()),
-                    ));
+                // every file a regular one, before any is opened (a FIFO would block, a
+                // device never end)
+                let what = format!("sweep file listed in {}", c.path.display());
+                for p in &paths {
+                    crate::io::regular_input(p, &what)?;
                 }
                 // the band is checked on the first file now, before anything is computed
                 // from [band] (a wrong `points` would otherwise surface as a processing
@@ -193,12 +195,10 @@ impl SweepReader {
             }
             SweepFormat::Parquet => {
                 let p = dir.join(cfg.path.as_ref().expect("checked"));
-                if !p.is_file() {
-                    return Err(Error::input(
-                        &p,
-                        format!("sweep table listed in {} not found", c.path.display()),
-                    ));
-                }
+                crate::io::regular_input(
+                    &p,
+                    &format!("sweep table listed in {}", c.path.display()),
+                )?;
                 let rows = table::parquet_rows(&p)?;
                 let want = np * nd * nk * m.band.points;
                 if rows != want {
@@ -305,6 +305,13 @@ impl SweepReader {
                             return Err(Error::input(
                                 path,
                                 format!("row {}: frequency {} Hz does not match [band] point {j} ({} Hz)", p0 * n + r, f[r], self.band.freq(j)),
+                            ));
+                        }
+                        let bound = crate::campaign::touchstone::MAX_VALUE;
+                        if !(re[r].abs() <= bound && im[r].abs() <= bound) {
+                            return Err(Error::input(
+                                path,
+                                format!("row {}: re = {}, im = {}: not finite or above {bound:e} (its energy would overflow)", p0 * n + r, re[r], im[r]),
                             ));
                         }
                         *v = Complex64::new(re[r], im[r]);

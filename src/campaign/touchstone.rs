@@ -31,7 +31,8 @@
 //!
 //! What is refused, in one line naming the file, the line and the reason: a parameter type
 //! other than S (Y, Z, G, H), mixed-mode data, an unknown keyword or option, a token that is
-//! not a number, NaN or ±inf (other than a dB magnitude of −inf), a point that does not start
+//! not a number, NaN or ±inf (other than a dB magnitude of −inf), a |S| above [`MAX_VALUE`]
+//! (1e100, or 2000 dB: its energy would overflow), a point that does not start
 //! a line or ends inside one, or a continuation line with an odd count of numbers (the port
 //! count does not fit the data: points start with f, continuation lines hold pairs; this is
 //! what tells one-port data named `.s2p` from two-port data), a frequency that does
@@ -227,6 +228,11 @@ pub fn ports_from_name(path: &Path) -> Option<usize> {
 /// bounds every buffer the reader sizes from it (a corrupt `[Number of Ports]` asked for
 /// 3·10^17 bytes).
 pub const MAX_PORTS: usize = 1000;
+
+/// The largest |S| read (RI and MA values; 2000 dB in DB): an S-parameter is about 1 for
+/// a passive network, and a larger value would make the energies (|S|² summed over a
+/// sweep) overflow to inf, so it is refused naming the line.
+pub const MAX_VALUE: f64 = 1e100;
 
 fn unit_scale(tok: &str) -> Option<f64> {
     match tok.to_ascii_lowercase().as_str() {
@@ -569,6 +575,19 @@ impl<'a> Parser<'a> {
                 // scikit-rf writes 20·log10(0) = -inf for |S| = 0
                 if !(v.is_finite() || (db && idx % 2 == 1 && v == f64::NEG_INFINITY)) {
                     return Err(self.err(lineno, format!("non-finite value `{tok}`")));
+                }
+                // a value whose energy (|S|², summed over a sweep) would overflow to inf
+                let over = match self.fmt {
+                    _ if idx == 0 => false,
+                    TsFormat::Ri => v.abs() > MAX_VALUE,
+                    TsFormat::Ma => idx % 2 == 1 && v.abs() > MAX_VALUE,
+                    TsFormat::Db => idx % 2 == 1 && v > 20.0 * MAX_VALUE.log10(),
+                };
+                if over {
+                    return Err(self.err(
+                        lineno,
+                        format!("value `{tok}` overflows (|S| above {MAX_VALUE:e}: its energy is not finite)"),
+                    ));
                 }
                 if idx == 0 {
                     let f = v * self.scale;

@@ -147,7 +147,7 @@ pub struct SynthArgs {
     #[arg(long)]
     pub elements: Option<usize>,
     /// Seed (default: the campaign's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Ground-truth folder (default: <out stem>_truth beside the output).
     #[arg(long)]
@@ -188,7 +188,7 @@ pub struct CalibrateArgs {
     #[arg(long, default_value_t = 400, value_parser = ranges::population)]
     pub population: usize,
     /// Seed (default: the campaign's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
 }
 
@@ -273,7 +273,7 @@ pub struct MapArgs {
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_deg: f64,
     /// Seed of the pose-noise draws.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub pose_seed: u64,
 }
 
@@ -329,7 +329,7 @@ pub struct ClusterArgs {
     #[arg(long, default_value_t = pradar::cluster::ClusterParams::default().k_max, value_parser = ranges::k_max, allow_negative_numbers = true)]
     pub k_max: usize,
     /// Seed of the k-means++ draws.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// Criterion choosing K.
     #[arg(long, value_enum, default_value = "cv")]
@@ -355,7 +355,7 @@ pub struct FitArgs {
     #[arg(long, default_value_t = 1000, value_parser = ranges::bootstrap, allow_negative_numbers = true)]
     pub bootstrap: usize,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// A simulator's truth/ folder: add the same estimators on its true clusters.
     #[arg(long)]
@@ -382,7 +382,12 @@ pub struct ReproduceArgs {
     #[arg(long)]
     pub skip_experiments: bool,
     /// Model-data seeds of the experiments (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        value_delimiter = ',',
+        default_value = "1,2,3"
+    )]
     pub seeds: Vec<u64>,
 }
 
@@ -404,6 +409,11 @@ pub struct ExperimentArgs {
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Model-data seeds (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        value_delimiter = ',',
+        default_value = "1,2,3"
+    )]
     pub seeds: Vec<u64>,
 }

@@ -54,15 +54,17 @@ pub fn bootstrap(s: &str) -> Result<usize, String> {
     )
 }
 
-/// `calibrate --simulations`: in [20, 1e7] (`CalibrateParams` simulations; it must also
-/// reach the population, which the library checks).
+/// `calibrate --simulations`: in [20, 100000] (`calibrate::params::MAX_SIMULATIONS`; it
+/// must also reach the population, which the library checks).
 pub fn simulations(s: &str) -> Result<usize, String> {
-    whole_in(s, 20, 10_000_000, "the simulation budget")
+    use pradar::calibrate::params::MAX_SIMULATIONS;
+    whole_in(s, 20, MAX_SIMULATIONS, "the simulation budget")
 }
 
-/// `calibrate --population`: in [20, 100000] (`CalibrateParams` population).
+/// `calibrate --population`: in [20, 10000] (`calibrate::params::MAX_POPULATION`).
 pub fn population(s: &str) -> Result<usize, String> {
-    whole_in(s, 20, 100_000, "particles per generation")
+    use pradar::calibrate::params::MAX_POPULATION;
+    whole_in(s, 20, MAX_POPULATION, "particles per generation")
 }
 
 /// `check --draws`: in [2, 1000] (`CheckParams` draws).

@@ -19,7 +19,12 @@
 //!   response, so delays are measured from the reference plane of the thru and amplitudes
 //!   are relative to it (a thru of unit gain keeps the radar equation's scale). A reference
 //!   with |R| = 0 (or not finite) at a point is refused, naming the file and the point: the
-//!   division would be undefined there.
+//!   division would be undefined there; a calibrated value that is not finite (a reference
+//!   so small the division overflows) is refused naming the file, the step and the sweep
+//!   ([`Calibration::apply`]).
+//!
+//! Every calibration file must be a regular file ([`crate::io::regular_input`]), and
+//! `energy` refuses an `--out` that is one of them ([`Calibration::files`]).
 //!
 //! The order (subtract, then divide) follows the measurement model S = H·(scene) + B with
 //! the background measured through the same system: (S − B)/R is the scene when R = H.
@@ -33,13 +38,35 @@ use crate::error::{Error, Result};
 use num_complex::Complex64;
 use std::collections::BTreeMap;
 
+/// The files a calibration template names: one per (position, direction) key (position 0
+/// when the template has no `{position}`, direction 0 without `{direction}`).
+fn files(c: &Campaign, template: &str) -> Vec<((usize, usize), std::path::PathBuf)> {
+    let m = &c.manifest;
+    let np = if template.contains("{position") {
+        m.positions()
+    } else {
+        1
+    };
+    let nd = if template.contains("{direction") {
+        m.directions.count()
+    } else {
+        1
+    };
+    let dir = c.dir();
+    (0..np)
+        .flat_map(|p| (0..nd).map(move |d| (p, d)))
+        .map(|(p, d)| ((p, d), dir.join(expand_pattern(template, p, d, 0))))
+        .collect()
+}
+
 /// One kind of calibration sweep, loaded for every (position, direction) it applies to.
 #[derive(Debug, Clone)]
 struct CalSweeps {
     template: String,
     by_position: bool,
     by_direction: bool,
-    sweeps: BTreeMap<(usize, usize), Vec<Complex64>>,
+    /// Per (position, direction) key: the file and its sweep.
+    sweeps: BTreeMap<(usize, usize), (std::path::PathBuf, Vec<Complex64>)>,
 }
 
 impl CalSweeps {
@@ -62,35 +89,25 @@ impl CalSweeps {
             ));
         }
         let mut sweeps = BTreeMap::new();
-        let dir = c.dir();
-        for p in 0..if by_position { m.positions() } else { 1 } {
-            for d in 0..if by_direction {
-                m.directions.count()
-            } else {
-                1
-            } {
-                let path = dir.join(expand_pattern(template, p, d, 0));
-                if !path.is_file() {
+        for ((p, d), path) in files(c, template) {
+            crate::io::regular_input(
+                &path,
+                &format!("{field} sweep named in {}", c.path.display()),
+            )?;
+            let mut s = vec![Complex64::new(0.0, 0.0); m.band.points];
+            read_sweep(&path, param, &m.band, &mut s)?;
+            if reference {
+                if let Some(k) = s
+                    .iter()
+                    .position(|v| !(v.norm() > 0.0 && v.norm().is_finite()))
+                {
                     return Err(Error::input(
                         &path,
-                        format!("{field} sweep named in {} not found", c.path.display()),
+                        format!("{field}: |R| = {} at point {k} ({:.6} GHz): the system response cannot be divided out", s[k].norm(), m.band.freq(k) / 1e9),
                     ));
                 }
-                let mut s = vec![Complex64::new(0.0, 0.0); m.band.points];
-                read_sweep(&path, param, &m.band, &mut s)?;
-                if reference {
-                    if let Some(k) = s
-                        .iter()
-                        .position(|v| !(v.norm() > 0.0 && v.norm().is_finite()))
-                    {
-                        return Err(Error::input(
-                            &path,
-                            format!("{field}: |R| = {} at point {k} ({:.6} GHz): the system response cannot be divided out", s[k].norm(), m.band.freq(k) / 1e9),
-                        ));
-                    }
-                }
-                sweeps.insert((p, d), s);
             }
+            sweeps.insert((p, d), (path, s));
         }
         Ok(CalSweeps {
             template: template.to_string(),
@@ -128,15 +145,36 @@ impl Calibration {
         })
     }
 
+    /// Every file `[calibration]` names (background, then reference), with the field
+    /// naming it; nothing is read.
+    pub fn files(c: &Campaign) -> Vec<(std::path::PathBuf, &'static str)> {
+        let Some(cfg) = &c.manifest.calibration else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (t, field) in [
+            (&cfg.background, "calibration.background (of --campaign)"),
+            (&cfg.reference, "calibration.reference (of --campaign)"),
+        ] {
+            if let Some(t) = t {
+                out.extend(files(c, t).into_iter().map(|(_, p)| (p, field)));
+            }
+        }
+        out
+    }
+
     /// Whether anything is applied.
     pub fn is_empty(&self) -> bool {
         self.background.is_none() && self.reference.is_none()
     }
 
-    /// S ← (S − B) / R for every sweep of one position.
-    pub fn apply(&self, sw: &mut PositionSweeps) {
+    /// S ← (S − B) / R for every sweep of one position. A value that is not finite
+    /// afterwards (a reference so small the division overflows, a background of
+    /// overflowing values) is an error naming the calibration file, the step and the
+    /// sweep: the energies would be NaN.
+    pub fn apply(&self, sw: &mut PositionSweeps) -> Result<()> {
         if self.is_empty() {
-            return;
+            return Ok(());
         }
         let nf = sw.points;
         for d in 0..sw.directions {
@@ -151,14 +189,42 @@ impl Calibration {
             for k in 0..sw.pulses {
                 let i = (d * sw.pulses + k) * nf;
                 let s = &mut sw.s21[i..i + nf];
-                if let Some(b) = b {
+                if let Some((_, b)) = b {
                     s.iter_mut().zip(b).for_each(|(v, b)| *v -= b);
                 }
-                if let Some(r) = r {
+                if let Some((_, r)) = r {
                     s.iter_mut().zip(r).for_each(|(v, r)| *v /= r);
+                }
+                if let Some(j) = s
+                    .iter()
+                    .position(|v| !(v.re.is_finite() && v.im.is_finite()))
+                {
+                    let (file, step) = match (r, b) {
+                        (Some((f, _)), _) => (f, "calibration.reference: (S − B) / R"),
+                        (None, Some((f, _))) => (f, "calibration.background: S − B"),
+                        (None, None) => unreachable!("a calibration is applied"),
+                    };
+                    return Err(Error::input(
+                        file,
+                        format!(
+                            "{step} is not finite at position {}, direction {d}, pulse {k}, point {j}: the calibration sweep is too small or too large to apply",
+                            sw.position
+                        ),
+                    ));
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The background's template, as written (for errors naming the step).
+    pub fn background_template(&self) -> Option<&str> {
+        self.background.as_ref().map(|b| b.template.as_str())
+    }
+
+    /// The reference's template, as written (for errors naming the step).
+    pub fn reference_template(&self) -> Option<&str> {
+        self.reference.as_ref().map(|r| r.template.as_str())
     }
 
     /// Energy metadata of what was applied (empty when nothing was).

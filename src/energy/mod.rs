@@ -30,6 +30,11 @@
 //! the circular IFFT, where the coupling's kernel tail wraps to).
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 //!
+//! Refused, naming the manifest and the step: an energy that is not finite (a calibration
+//! or sweep value that overflows), and an N0 of 0 or not finite (nothing in the noise bins:
+//! e.g. a `[calibration] background` that is the measurement itself leaves an all-zero
+//! table).
+//!
 //! Layout: [`processor`] (window, IFFT, bins, TW/ENBW), [`matrix`] (the table read back,
 //! campaign check), [`writer`] (table and metadata); [`run`] streams a campaign through them
 //! and estimates N0.
@@ -142,11 +147,14 @@ pub fn run(
         let computed = (|| -> Result<()> {
             for sweeps in chunks {
                 for mut sw in sweeps? {
-                    cal.apply(&mut sw);
+                    cal.apply(&mut sw)?;
                     let e = proc.position_energy(&sw);
                     let mut energies = Vec::with_capacity(nd * nb);
                     for d in 0..nd {
                         let prof = &e[d * nbf..(d + 1) * nbf];
+                        if let Some(b) = prof.iter().position(|v| !v.is_finite()) {
+                            return Err(not_finite(campaign, &cal, sw.position, d, b));
+                        }
                         energies.extend_from_slice(&prof[..nb]);
                         noise_sum += prof[noise_from..noise_to].iter().sum::<f64>();
                         noise_n += noise_to - noise_from;
@@ -168,6 +176,21 @@ pub fn run(
     let writer = writer?;
     let noise_bin_mean = noise_sum / noise_n as f64;
     let n0 = noise_bin_mean / proc.tw();
+    if !(n0 > 0.0 && n0.is_finite()) {
+        // the bins read as signal-free hold nothing: every energy is zero too, or the
+        // background removed the noise with the signal (a background that is the
+        // measurement itself)
+        let why = match cal.background_template() {
+            Some(t) => {
+                format!(" after calibration.background = \"{t}\" (is it the measurement itself?)")
+            }
+            None => String::new(),
+        };
+        return Err(Error::input(
+            &campaign.path,
+            format!("energy: the noise estimate N0 = {n0:e}{why}: the bins from processing.noise_from_ns hold no noise, so no detection threshold can be set"),
+        ));
+    }
     let mut meta = table_metadata(m, &proc, n0, noise_bin_mean);
     meta.extend(cal.metadata());
     writer.finish(meta)?;
@@ -177,6 +200,21 @@ pub fn run(
         n0,
         noise_bin_mean,
     })
+}
+
+/// The error of an energy that is not finite: naming the calibration reference (or the
+/// background) when one is applied — the division or subtraction that made it overflow —
+/// else the manifest.
+fn not_finite(c: &Campaign, cal: &Calibration, p: usize, d: usize, b: usize) -> Error {
+    let step = match (cal.reference_template(), cal.background_template()) {
+        (Some(t), _) => format!("after calibration.reference = \"{t}\" (S − B) / R"),
+        (None, Some(t)) => format!("after calibration.background = \"{t}\" S − B"),
+        (None, None) => "from the sweeps".into(),
+    };
+    Error::input(
+        &c.path,
+        format!("energy: not finite at position {p}, direction {d}, bin {b} {step}: a sweep or calibration value overflows"),
+    )
 }
 
 #[cfg(test)]

@@ -78,16 +78,14 @@ pub fn write_yaml(
 /// Write a grey PNG, each cell `scale` pixels wide, top (highest y) row first.
 pub fn write_png(path: &Path, spec: &GridSpec, grey: &[u8], scale: u32) -> Result<()> {
     check_len(spec, grey, path)?;
-    crate::io::ensure_parent(path)?;
     let scale = scale.max(1);
-    let tmp = crate::io::temp_path(path).with_extension("png");
     let (w, h) = (spec.cols as u32 * scale, spec.rows as u32 * scale);
     let perr = |e: &dyn std::fmt::Display| Error::Plot {
         file: path.to_path_buf(),
         msg: e.to_string(),
     };
-    {
-        let root = BitMapBackend::new(&tmp, (w, h)).into_drawing_area();
+    crate::io::write_rendered(path, "png", |tmp| {
+        let root = BitMapBackend::new(tmp, (w, h)).into_drawing_area();
         for r in 0..spec.rows {
             let y0 = (spec.rows - 1 - r) as i32 * scale as i32;
             for c in 0..spec.cols {
@@ -101,8 +99,8 @@ pub fn write_png(path: &Path, spec: &GridSpec, grey: &[u8], scale: u32) -> Resul
             }
         }
         root.present().map_err(|e| perr(&e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// Write `<stem>.pgm`, `<stem>.yaml` and `<stem>.png` in `dir`.

@@ -14,7 +14,8 @@
 //! resolving `all` into the list of experiments.
 //!
 //! Every command first refuses to write over one of its own inputs
-//! ([`crate::io::refuse_overwrite`]: `energy --out` naming the manifest or a sweep file,
+//! ([`crate::io::refuse_overwrite`]: `energy --out` naming the manifest, a sweep file or
+//! a `[calibration]` file,
 //! `extract`/`cluster`/`fit` naming their input table, `fit --out x --table x`, `simulate`
 //! or `synth` writing into the folder of the manifest or the model file they read). `fit`
 //! writes Table 1 first and the model file last, so a failed table leaves no model.
@@ -238,6 +239,7 @@ pub fn energy(cmd: &Energy, progress: StepProgress) -> Result<EnergySummary> {
             .map(|p| (p.to_path_buf(), "sweep file (of --campaign)")),
     );
     drop(reader);
+    inputs.extend(crate::energy::calibration::Calibration::files(&c));
     refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
     let report = crate::energy::run(&c, &cmd.out, progress)?;
     Ok(EnergySummary {

@@ -7,7 +7,7 @@
 use super::{html_escape, plot_err, register_font, Section};
 use crate::calibrate::{weighted_quantile, Calibration};
 use crate::campaign::modelfile::ModelConfig;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -15,17 +15,15 @@ use std::path::Path;
 /// atomically). `chain`: the cluster fit's model, drawn as a red line where it has a value.
 pub fn posterior_plot(path: &Path, cal: &Calibration, chain: Option<&ModelConfig>) -> Result<()> {
     register_font();
-    crate::io::ensure_parent(path)?;
     let k = cal.free.len();
     if k == 0 {
         return Err(plot_err(path, "no free quantity"));
     }
     let cols = k.min(4);
     let rows = k.div_ceil(cols);
-    let tmp = crate::io::temp_path(path).with_extension("png");
-    {
+    crate::io::write_rendered(path, "png", |tmp| {
         let root =
-            BitMapBackend::new(&tmp, (320 * cols as u32, 240 * rows as u32)).into_drawing_area();
+            BitMapBackend::new(tmp, (320 * cols as u32, 240 * rows as u32)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let areas = root.split_evenly((rows, cols));
         let parts = cal.particles();
@@ -95,8 +93,8 @@ pub fn posterior_plot(path: &Path, cal: &Calibration, chain: Option<&ModelConfig
             }
         }
         root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(())
+    })
 }
 
 /// The section: the marginal posteriors (`<dir>/<plot>`), the posterior beside the
