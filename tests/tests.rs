@@ -10,6 +10,7 @@ mod common;
 mod bad_inputs;
 mod calibrate;
 mod calibration;
+mod check;
 mod cli;
 mod closed_loop;
 mod cluster;

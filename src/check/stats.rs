@@ -15,18 +15,13 @@
 //!   of the relative direction angle with weights Σ_b S of each direction (deg);
 //! * per (position, direction): the angular power profile, the direction's share of its
 //!   position's signal energy in dB (floored at −60 dB; silent positions give no values);
-//! * per position, the peak-pair angles: a 2-D peak is a signal bin above its eight
-//!   neighbours in (direction, bin) (at least those after it); for every pair of a
-//!   position's peaks in different directions at most [`PAIR_NS`] apart in delay and at
-//!   most [`PAIR_DEG`] apart in angle, |Δθ| (deg) — how far in angle the echoes of one
-//!   delay spread (the clusters' AoA spread, which the per-profile statistics do not see);
 //! * per campaign: the mean delay power profile P(τ_b) = mean over profiles of S(τ_b),
 //!   compared as the distribution over delay it defines (its normalised cumulative sum),
 //!   so its KS distance is max_b |C₁(b) − C₂(b)| and its "median" is the delay where C
 //!   crosses ½.
 
 /// The statistics' names and units, in order (`Statistics::values` has one entry each).
-pub const NAMES: [(&str, &str); 10] = [
+pub const NAMES: [(&str, &str); 9] = [
     ("signal energy", "dB"),
     ("mean delay", "ns"),
     ("RMS delay spread", "ns"),
@@ -35,18 +30,11 @@ pub const NAMES: [(&str, &str); 10] = [
     ("peaks", "count"),
     ("angular spread", "deg"),
     ("angular power profile", "dB"),
-    ("peak-pair angle", "deg"),
     ("mean delay power profile", "ns"),
 ];
 
 /// Index of the campaign-level delay power profile in [`NAMES`].
-pub const PROFILE: usize = 9;
-
-/// Delay window of the peak pairs, ns.
-pub const PAIR_NS: f64 = 2.0;
-
-/// Angle window of the peak pairs, deg.
-pub const PAIR_DEG: f64 = 45.0;
+pub const PROFILE: usize = 8;
 
 /// Floor of the angular power profile, dB.
 pub const SHARE_FLOOR_DB: f64 = -60.0;
@@ -103,7 +91,6 @@ impl Statistics {
         let mut peaks = Vec::with_capacity(np * nd);
         let mut spread = Vec::new();
         let mut shares = Vec::new();
-        let mut pairs = Vec::new();
         let mut curve = vec![0.0; nb];
         let mut per_dir = vec![0.0; nd];
         for p in 0..np {
@@ -148,46 +135,6 @@ impl Statistics {
                     first.push(t0);
                 }
             }
-            // 2-D peaks of the position and their pairs
-            let at = |d: usize, b: usize| e[(p * nd + d) * nb + b];
-            let mut pk: Vec<(usize, usize)> = Vec::new();
-            for d in 0..nd {
-                for b in ctx.first_bin..nb {
-                    let v = at(d, b);
-                    if !(v > thr) {
-                        continue;
-                    }
-                    let mut top = true;
-                    'n: for dd in d.saturating_sub(1)..(d + 2).min(nd) {
-                        for bb in b.saturating_sub(1).max(ctx.first_bin)..(b + 2).min(nb) {
-                            if (dd, bb) == (d, b) {
-                                continue;
-                            }
-                            let w = at(dd, bb);
-                            // strictly above the neighbours before, at least those after
-                            if w > v || (w == v && (dd, bb) < (d, b)) {
-                                top = false;
-                                break 'n;
-                            }
-                        }
-                    }
-                    if top {
-                        pk.push((d, b));
-                    }
-                }
-            }
-            let win = (PAIR_NS / ctx.bin_ns).round() as usize;
-            for (i, &(d1, b1)) in pk.iter().enumerate() {
-                for &(d2, b2) in &pk[i + 1..] {
-                    if d1 == d2 || b1.abs_diff(b2) > win {
-                        continue;
-                    }
-                    let da = (ctx.angles_deg[d1] - ctx.angles_deg[d2]).abs();
-                    if da <= PAIR_DEG {
-                        pairs.push(da);
-                    }
-                }
-            }
             let total: f64 = per_dir.iter().sum();
             if total > 0.0 {
                 let m = ctx
@@ -228,7 +175,6 @@ impl Statistics {
                 sorted(peaks),
                 sorted(spread),
                 sorted(shares),
-                sorted(pairs),
                 Stat::Curve(curve),
             ],
             bin_ns: ctx.bin_ns,
@@ -430,7 +376,7 @@ mod tests {
         assert_eq!(s.values[4], Stat::Sample(vec![2.0, 4.0]));
         assert_eq!(s.values[5], Stat::Sample(vec![0.0, 1.0, 2.0]));
         // angular spread: weights 398 at −10°, 118 at +10°
-        let mean_a = (-10.0 * 398.0 + 10.0 * 118.0) / 516.0;
+        let mean_a: f64 = (-10.0 * 398.0 + 10.0 * 118.0) / 516.0;
         let sd =
             ((398.0 * (-10.0 - mean_a).powi(2) + 118.0 * (10.0 - mean_a).powi(2)) / 516.0).sqrt();
         let Stat::Sample(sp) = &s.values[6] else {

@@ -18,9 +18,12 @@
 //! 1. **Specular |Γ|** (`walls.specular_gamma`): for every pose and every wall whose
 //!    normal-incidence point the pose sees inside the scanned sector (`walls::feet`; at
 //!    most half a direction step beyond its edges), the direction d* nearest the foot's
-//!    bearing and the bins within ±2 of its delay 2d/c: r = max S / max U, U the expected
+//!    bearing and the bins within ±2 of its delay 2d/c (for a wall so near that its echo
+//!    falls inside the coupling gate, the first 3 bins after the gate, where its range
+//!    side lobes show): r = max S / max U over those bins, U the expected
 //!    energy of that wall's specular return alone with |Γ| = 1
-//!    ([`EnergySimulator::expected_profiles`]). |Γ|² = median r (robust to the other
+//!    ([`EnergySimulator::expected_profiles`]), kept where max U > 10μ (a unit echo
+//!    below the noise there says nothing about |Γ|). |Γ|² = median r (robust to the other
 //!    echoes that share the cell), over every pair (`specular_gamma`) and, when the layout
 //!    names more than one material among them, over each material's pairs where it has
 //!    at least [`MIN_MATERIAL_PAIRS`] (`material_gamma`). Not estimable without a pair.
@@ -85,7 +88,7 @@ pub struct LevelReport {
 }
 
 /// (pose, wall) pairs a material needs for a |Γ| of its own.
-pub const MIN_MATERIAL_PAIRS: usize = 3;
+pub const MIN_MATERIAL_PAIRS: usize = 1;
 
 /// Pose-draws the moment matching averages over (draws = ⌈this / poses⌉, in [4, 8]).
 pub const LEVEL_POSES: usize = 384;
@@ -155,7 +158,11 @@ pub fn fit_levels(
             let rel = wrap_rad(foot.bearing - heading.to_radians()).to_degrees();
             let Some(d) = nearest(rel) else { continue };
             let b = bin_of(crate::units::delay_s(foot.d_m));
-            if b < first_bin as isize + 2 || b + 2 >= nb as isize {
+            // the bins ±2 around the echo, or, for an echo inside the coupling gate, the
+            // first 3 bins after it (where its range side lobes show)
+            let lo = (b - 2).max(first_bin as isize);
+            let hi = (b + 2).max(first_bin as isize + 2);
+            if hi >= nb as isize {
                 continue;
             }
             let ray = SeenRay {
@@ -167,10 +174,11 @@ pub fn fit_levels(
                 phase: 0.0,
             };
             let u = sim.expected_profile(p, d, &[ray]);
-            let (lo, hi) = ((b - 2) as usize, (b + 2) as usize);
+            let (lo, hi) = (lo as usize, hi as usize);
             let umax = (lo..=hi).map(|k| u[k]).fold(0.0, f64::max);
             let smax = (lo..=hi).map(|k| sig(p, d, k)).fold(0.0, f64::max);
-            if umax > 0.0 {
+            // a unit echo that would not reach the noise level there says nothing
+            if umax > 10.0 * mu {
                 ratios.push((layout.walls[foot.wall].material.clone(), smax / umax));
             }
         }

@@ -39,10 +39,9 @@ pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
     let cols = 3;
     let rows = k.div_ceil(cols);
     let bin_ns = r.measured.bin_ns;
-    let tmp = crate::io::temp_path(path).with_extension("png");
-    {
+    crate::io::write_rendered(path, "png", |tmp| {
         let root =
-            BitMapBackend::new(&tmp, (360 * cols as u32, 270 * rows as u32)).into_drawing_area();
+            BitMapBackend::new(tmp, (360 * cols as u32, 270 * rows as u32)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let areas = root.split_evenly((rows, cols));
         for (s, res) in r.stats.iter().enumerate() {
@@ -141,9 +140,8 @@ pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
                 .draw_series(std::iter::once(PathElement::new(m, BLACK.stroke_width(2))))
                 .map_err(|e| plot_err(path, e))?;
         }
-        root.present().map_err(|e| plot_err(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        root.present().map_err(|e| plot_err(path, e))
+    })
 }
 
 /// The report section: the verdict, the table and the CDF panels (`png`, relative to
@@ -154,7 +152,7 @@ pub fn section(title: &str, what: &str, r: &CheckResult, png: &str) -> Section {
         "<p>{}: {} draws of <code>synth</code> from {} (seeds from {}), statistics of \
          <code>pradar check</code> (signal = bins 10 dB above the measured noise mean). \
          KS measured↔draws is the median over draws; draw↔draw the median over pairs; \
-         p = (1 + #draw↔draw ≥ it)/(1 + #pairs). Pass: every ratio ≤ 1.5 and min p × {} ≥ 0.05.</p>\n\
+         p = share of draw↔draw distances ≥ it. Pass: every ratio ≤ 1.5 and min p × {} ≥ 0.05.</p>\n\
          <p><b>{}</b></p>\n{}\
          <p>Measured CDF (black) in the draws' 5–95 % band (shaded; median blue).</p>\n\
          <p><img src=\"{}\" alt=\"check CDFs\"></p>\n",
