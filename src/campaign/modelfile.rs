@@ -39,6 +39,27 @@ use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The comment block every saved model file opens with: each quantity's meaning and
+/// estimator (the module docs of `fit`, `model::levels` and `calibrate` have the equations).
+pub const HEADER: &str = "\
+# pradar channel model (DESIGN §3 \"Model\"; docs/model.md). Per quantity: value, unit,
+# family, interval (95 %), ks, ks_p (parametric bootstrap), n (samples).
+# From the clustered MPCs (`fit`): inter_cluster_rate Λ (1/ns, informational: synth derives
+#   it from d_c), intra_cluster_rate λ (1/ns), intra_cluster_aoa (deg, Laplacian std of the
+#   rays' angle offsets), perimeter_offset d_p (m), perimeter_spacing d_c (m), cluster_decay
+#   Γ and ray_decay γ (ns), rays_per_cluster (mean); [diffuse] lambert_exponent, power_share,
+#   decay.
+# Levels read from the energy table through the model's own forward response
+#   (`fit --energy`, `reproduce`; model::levels): walls.specular_gamma and
+#   walls.material_gamma.<material> (|Γ| at normal incidence: sqrt of the median ratio of the
+#   measured peak at each seen wall foot to a unit-|Γ| echo there), walls.corner_rcs and
+#   walls.edge_rcs (m², median excess over the walls at the seen layout vertices per unit-σ
+#   response), diffuse.wall_rcs_per_m (m²/m, median on-wall cell / unit wall, / ln 2),
+#   cluster_rrcs (m², first-ray σ at which synth's mean signal bins per profile equals the
+#   table's). Without the table these are the cluster chain's CLEAN-peak values.
+# [calibration], when present: the values are posterior medians of `pradar calibrate`.
+";
+
 fn nan() -> f64 {
     f64::NAN
 }
@@ -552,10 +573,11 @@ impl ModelConfig {
         Ok(m)
     }
 
-    /// Write a model file atomically.
+    /// Write a model file atomically, after a comment block ([`HEADER`]) stating what each
+    /// quantity means and how it was estimated.
     pub fn save(&self, path: &Path) -> Result<()> {
         let text = toml::to_string(self).map_err(|e| Error::input(path, e.to_string()))?;
-        crate::io::write_bytes(path, text.as_bytes())
+        crate::io::write_bytes(path, format!("{HEADER}{text}").as_bytes())
     }
 }
 

@@ -15,6 +15,9 @@
 //!   hi, family, ks_p, best_aic, paper, truth`; numbers at full precision, empty where
 //!   missing; `paper` and `truth` in the value's unit. The paper's d_c, 5.02 ns, is read
 //!   one-way as metres (1.505 m, as [`ModelConfig::table1_defaults`]).
+//! * With a `[walls]` section (the levels read from the energy table, `model::levels`)
+//!   rows for the walls' specular |Γ| (per material in its text), the corners' and
+//!   edges' σ and the clusters' σ follow the others.
 //! * With a `[diffuse]` section the dense component's four quantities follow the discrete
 //!   clusters' rows (σ′, the Lambert exponent, the power share, the decay).
 //! * A quantity the fit could not estimate shows "not estimable: <reason>" in the value
@@ -234,6 +237,38 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
         ] {
             rows.push(row(name, q, String::new(), None));
         }
+    }
+    // the levels read from the energy table (`model::levels`), beside the paper's
+    // quantities
+    if let Some(w) = &m.walls {
+        let mut spec = row("wall specular |Γ|", &w.specular_gamma, String::new(), None);
+        if !w.material_gamma.is_empty() && w.specular_gamma.is_estimable() {
+            let per: Vec<String> = w
+                .material_gamma
+                .iter()
+                .map(|(k, q)| format!("{k} {:.3}", q.value))
+                .collect();
+            spec.value_shown = format!("{} ({})", spec.value_shown, per.join(", "));
+        }
+        rows.push(spec);
+        for (name, q) in [
+            ("corner σ (dihedrals)", &w.corner_rcs),
+            ("edge σ (other vertices)", &w.edge_rcs),
+        ] {
+            if let Some(q) = q {
+                rows.push(row(name, q, String::new(), None));
+            }
+        }
+        let mut sigma = row(
+            "cluster σ (first ray)",
+            &m.cluster_rrcs,
+            String::new(),
+            None,
+        );
+        if m.cluster_rrcs.is_estimable() {
+            sigma.value_shown = format!("{:.3e} {}", m.cluster_rrcs.value, m.cluster_rrcs.unit);
+        }
+        rows.push(sigma);
     }
     rows
 }
