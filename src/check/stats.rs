@@ -79,6 +79,7 @@ pub struct Statistics {
 
 impl Statistics {
     /// The statistics of energies `e` (position-major, then direction, then bin).
+    #[allow(clippy::needless_range_loop)] // bins index the profile and its neighbours
     pub fn of(ctx: &StatContext, e: &[f64]) -> Statistics {
         let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
         debug_assert_eq!(e.len(), np * nd * nb);
@@ -265,7 +266,7 @@ impl Stat {
 /// The normalised cumulative sum of a non-negative curve (None when it sums to 0).
 fn cumulative(c: &[f64]) -> Option<Vec<f64>> {
     let total: f64 = c.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return None;
     }
     let mut acc = 0.0;

@@ -35,6 +35,7 @@
 //!    Lambert exponent ([`super::DiffuseWalls::unit_mean`]) plus the specular returns at
 //!    the |Γ| of step 1. σ′ = median r / ln 2: a Rayleigh cell's energy is exponential, whose
 //!    median is ln 2 times its mean. Cells where W is below the noise mean are left out.
+//!
 //! 2b. **Vertices' σ** (`walls.corner_rcs`, `walls.edge_rcs`): for every pose and every
 //!    layout vertex it sees (`walls::vertices`) inside the sector and not within 10° of a
 //!    visible normal-incidence point, the bin of the vertex's delay (±1, where the unit
@@ -112,11 +113,11 @@ pub fn mean_signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> f64 
     n as f64 / profiles as f64
 }
 
-fn median(mut v: Vec<f64>) -> Option<f64> {
+fn median(v: Vec<f64>) -> Option<f64> {
     if v.is_empty() {
         None
     } else {
-        Some(crate::fit::estimators::median(&mut v))
+        Some(crate::fit::estimators::median(&v))
     }
 }
 
