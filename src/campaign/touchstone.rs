@@ -36,7 +36,8 @@
 //! a line or ends inside one, or a continuation line with an odd count of numbers (the port
 //! count does not fit the data: points start with f, continuation lines hold pairs; this is
 //! what tells one-port data named `.s2p` from two-port data), a frequency that does
-//! not increase, a truncated last point, a v1 file without an `.sNp` name, and a port count
+//! not increase, a v2 two-port file without `[Two-Port Data Order]` (v2.0 requires it:
+//! which pair is S21 is otherwise unknown), a truncated last point, a v1 file without an `.sNp` name, and a port count
 //! of the name that disagrees with `[Number of Ports]`.
 //!
 //! Why not the `touchstone` crate (0.17, evaluated): it parses into its own network type
@@ -337,6 +338,8 @@ struct Parser<'a> {
     r_option: Vec<Complex64>,
     reference: Option<Vec<Complex64>>,
     legacy_two_port: bool,
+    /// The line of `[Two-Port Data Order]`, when given.
+    two_port_order: Option<usize>,
     matrix: MatrixFormat,
     declared_points: Option<(usize, usize)>,
     in_network: bool,
@@ -440,6 +443,7 @@ impl<'a> Parser<'a> {
                 self.set_ports(n, lineno)?;
             }
             "two-port data order" => {
+                self.two_port_order = Some(lineno);
                 self.legacy_two_port = match arg {
                     a if a.starts_with("21_12") => true,
                     a if a.starts_with("12_21") => false,
@@ -533,6 +537,13 @@ impl<'a> Parser<'a> {
                 "cannot tell the port count: a Touchstone v1 file must be named .sNp (e.g. .s2p)",
             )),
         };
+        if self.version == 2 && n == 2 && self.two_port_order.is_none() {
+            // v2.0 requires it of two-ports: without it, which pair is S21 is a guess
+            return Err(self.err(
+                lineno,
+                "[Two-Port Data Order] missing: Touchstone v2.0 requires it (12_21 or 21_12) before the data of a two-port file, which pair is S21 is otherwise unknown",
+            ));
+        }
         let values = match self.matrix {
             MatrixFormat::Full => n * n,
             MatrixFormat::Lower | MatrixFormat::Upper => n * (n + 1) / 2,
@@ -761,6 +772,7 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
         r_option: vec![Complex64::new(50.0, 0.0)],
         reference: None,
         legacy_two_port: true,
+        two_port_order: None,
         matrix: MatrixFormat::Full,
         declared_points: None,
         in_network: true,
@@ -1046,6 +1058,26 @@ mod tests {
                 .contains("c.s2p: line 2: [Number of Ports] 4 but the file name says 2"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn v2_two_port_without_data_order_is_refused() {
+        let t = "[Version] 2.0\n# GHz S RI R 50\n[Number of Ports] 2\n[Network Data]\n1 1 0 2 0 3 0 4 0\n[End]\n";
+        let e = p(t, "a.ts").unwrap_err().to_string();
+        assert!(
+            e.contains("a.ts: line 5:") && e.contains("[Two-Port Data Order]"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        // with it, and for other port counts (which have no such keyword), accepted
+        let with = t.replace(
+            "[Network Data]",
+            "[Two-Port Data Order] 12_21\n[Network Data]",
+        );
+        assert!(p(&with, "a.ts").is_ok());
+        let one =
+            "[Version] 2.0\n# GHz S RI R 50\n[Number of Ports] 1\n[Network Data]\n1 1 0\n[End]\n";
+        assert!(p(one, "a.ts").is_ok());
     }
 
     #[test]
