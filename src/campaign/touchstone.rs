@@ -36,8 +36,10 @@
 //! a line or ends inside one, or a continuation line with an odd count of numbers (the port
 //! count does not fit the data: points start with f, continuation lines hold pairs; this is
 //! what tells one-port data named `.s2p` from two-port data), a frequency that does
-//! not increase, a v2 two-port file without `[Two-Port Data Order]` (v2.0 requires it:
-//! which pair is S21 is otherwise unknown), a truncated last point, a v1 file without an `.sNp` name, and a port count
+//! not increase (naming the line where it stops and the line before; in a v1 two-port file
+//! only a falling row of five numbers starts the noise parameters), a v2 two-port file
+//! without `[Two-Port Data Order]` (v2.0 requires it: which pair is S21 is otherwise
+//! unknown), a truncated last point, a v1 file without an `.sNp` name, and a port count
 //! of the name that disagrees with `[Number of Ports]`.
 //!
 //! Why not the `touchstone` crate (0.17, evaluated): it parses into its own network type
@@ -603,15 +605,23 @@ impl<'a> Parser<'a> {
                 if idx == 0 {
                     let f = v * self.scale;
                     if let Some(&last) = self.freq_hz.last() {
-                        if f < last && n == 2 && self.version == 1 {
-                            // v1 two-port noise parameters follow the S data
+                        // v1 two-port noise parameters follow the S data: rows of five
+                        // numbers (f, NFmin, |Γopt|, ∠Γopt, Rn) whose frequency falls; a
+                        // falling row of any other length is S data out of order
+                        if f < last && n == 2 && self.version == 1 && Tokens::new(line).count() == 5
+                        {
                             self.noise = Some((lineno, 1));
                             return Ok(());
                         }
                         if f <= last {
-                            return Err(
-                                self.err(lineno, format!("frequency {f} Hz not increasing"))
-                            );
+                            let prev = self.point_line;
+                            let what = if f == last { "repeats" } else { "below" };
+                            return Err(self.err(
+                                lineno,
+                                format!(
+                                    "frequency {f} Hz not increasing ({what} {last} Hz of line {prev}): the rows stop increasing here (swapped or reversed?)"
+                                ),
+                            ));
                         }
                     }
                     self.point_line = lineno;
@@ -1125,6 +1135,20 @@ mod tests {
                 .contains("line 3: frequency 1 Hz not increasing"),
             "{e}"
         );
+        // a swapped pair of two-port rows is not a v1 noise block: it names both lines
+        let e = p(
+            "# Hz S RI R 50\n1 0 0 1 0 0 0 0 0\n3 0 0 1 0 0 0 0 0\n2 0 0 1 0 0 0 0 0\n",
+            "b.s2p",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("line 4: frequency 2 Hz not increasing (below 3 Hz of line 3)")
+                && e.contains("swapped or reversed"),
+            "{e}"
+        );
+        let e = p("# Hz S RI R 50\n1 0 0\n1 0 0\n", "b.s1p").unwrap_err();
+        assert!(e.to_string().contains("(repeats 1 Hz of line 2)"), "{e}");
         assert!("S2".parse::<SParam>().is_err() && "S0,1".parse::<SParam>().is_err());
         assert_eq!("s12".parse::<SParam>().unwrap().to_string(), "S12");
     }
