@@ -307,7 +307,9 @@ fn check_physical(path: &Path, meta: &EnergyMeta) -> Result<()> {
             .find(|(key, _)| key == k)
             .map(|(_, v)| v.as_str())
     };
+    // the value as stored (a number printed back could be 300 digits long)
     let bad = |k: &str, v: f64, why: String| {
+        let v = value(k).map_or_else(|| v.to_string(), |s| s.trim().to_string());
         Error::input(
             path,
             format!("metadata `{k}` = {v} is outside its physical range: {why}"),
