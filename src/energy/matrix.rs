@@ -296,10 +296,10 @@ const BIN_WIDTH_TOL: f64 = 1e-6;
 const ENBW_RANGE: [f64; 2] = [1.0, 3.0];
 
 /// The metadata numbers an energy table's readers rely on, against their physical ranges
-/// (a table whose `tw` is absurd would silently detect nothing): `bin_width_ns` finite,
-/// > 0 and, where the `band` is recorded, 1e9/B within [`BIN_WIDTH_TOL`]; `enbw` within
-/// [`ENBW_RANGE`]; `tw` finite with 1 ≤ TW ≤ the oversampling (samples per bin; the
-/// recorded `oversample`, else the largest accepted). Names the file and the key.
+/// (a table whose `tw` is absurd would silently detect nothing): `bin_width_ns` finite
+/// and positive and, where the `band` is recorded, 1e9/B within [`BIN_WIDTH_TOL`];
+/// `enbw` within [`ENBW_RANGE`]; `tw` finite with 1 ≤ TW ≤ the oversampling (samples per
+/// bin; the recorded `oversample`, else the largest accepted). Names the file and the key.
 fn check_physical(path: &Path, meta: &EnergyMeta) -> Result<()> {
     let value = |k: &str| {
         meta.all
