@@ -140,7 +140,11 @@ fn read_csv(path: &Path) -> Result<CsvRows> {
         crate::io::regular_input(path, "table")?;
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let text = decode(&bytes);
+    parse_csv(&decode(&bytes), path)
+}
+
+/// The header and rows of a CSV's text (`path` names it in errors).
+fn parse_csv(text: &str, path: &Path) -> Result<CsvRows> {
     let mut rows = text
         .lines()
         .enumerate()
@@ -277,7 +281,17 @@ fn bound_rows(path: &Path, rows: usize, max: usize, what: &str) -> Result<()> {
 }
 
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
-    let (h, rows) = read_csv(path)?;
+    poses_from(path, read_csv(path)?)
+}
+
+/// The poses of a poses CSV's text, as `import --poses` reads them (`path` names the file
+/// in errors): `(label, x_m, y_m, heading_deg)` sorted by label. The entry point of the
+/// poses target of [`crate::fuzz`].
+pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<(i64, f64, f64, f64)>> {
+    poses_from(path, parse_csv(text, path)?)
+}
+
+fn poses_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<PoseRow>> {
     bound_rows(path, rows.len(), MAX_POSES, "poses")?;
     let cp = column(path, &h, &["position"])?;
     let cx = column(path, &h, &["x", "x_m"])?;
@@ -505,7 +519,18 @@ fn cells_from_glob(glob_pat: &str, pattern: &str) -> Result<Cells> {
 }
 
 fn cells_from_index(path: &Path) -> Result<Cells> {
-    let (h, rows) = read_csv(path)?;
+    index_from(path, read_csv(path)?)
+}
+
+/// The sweep files an index CSV's text lists, as `import --index` reads them (`path` names
+/// the file in errors, and relative paths are taken from its folder): per (position,
+/// direction, pulse) the files naming it. The entry point of the index target of
+/// [`crate::fuzz`].
+pub fn parse_index(text: &str, path: &Path) -> Result<BTreeMap<(i64, i64, i64), Vec<PathBuf>>> {
+    Ok(index_from(path, parse_csv(text, path)?)?.0)
+}
+
+fn index_from(path: &Path, (h, rows): CsvRows) -> Result<Cells> {
     bound_rows(path, rows.len(), MAX_INDEX_ROWS, "sweep files")?;
     let cp = column(path, &h, &["position"])?;
     let cd = column(path, &h, &["direction"])?;
