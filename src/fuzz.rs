@@ -9,7 +9,11 @@
 //! with a layout beside it), layout (`Layout::from_geojson`), model file
 //! (`ModelConfig::from_str`), and the energy, MPC and clustered-MPC Parquet readers
 //! (`EnergyMatrix::read` and `EnergyTable::open` + `load`, `read_mpcs` + `read_sector_deg`, `read_clustered`; the bytes are
-//! written to a scratch file first, as the readers take paths). An execution passes when
+//! written to a scratch file first, as the readers take paths), the import's poses and
+//! index CSV readers (`import::parse_poses`, `import::parse_index`, on the text decoded as
+//! `import` decodes it), and the calibration step (`Calibration::from_sweeps` + `apply` on
+//! measured, background and reference sweeps decoded from the bytes as f64 pairs, see
+//! `calibration_step`; an accepted calibration leaving a non-finite value is a failure). An execution passes when
 //! the parser returns, `Ok` or `Err`; a panic is a failure, caught with `catch_unwind`
 //! and reported with its message (the process's panic hook is silenced while fuzzing).
 //!
@@ -54,11 +58,18 @@ pub enum Target {
     Mpc,
     /// Clustered MPC Parquet table.
     Cluster,
+    /// `import --poses` CSV.
+    Poses,
+    /// `import --index` CSV.
+    Index,
+    /// The calibration step: a reference and a background sweep built from the input's
+    /// bytes, checked and applied to sweeps built from them too.
+    Calibration,
 }
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 7] = [
+    pub const ALL: [Target; 10] = [
         Target::Touchstone,
         Target::Manifest,
         Target::Layout,
@@ -66,6 +77,9 @@ impl Target {
         Target::Energy,
         Target::Mpc,
         Target::Cluster,
+        Target::Poses,
+        Target::Index,
+        Target::Calibration,
     ];
 
     /// Name (seed and regression folder name, command-line name).
@@ -78,6 +92,9 @@ impl Target {
             Target::Energy => "energy",
             Target::Mpc => "mpc",
             Target::Cluster => "cluster",
+            Target::Poses => "poses",
+            Target::Index => "index",
+            Target::Calibration => "calibration",
         }
     }
 
@@ -90,7 +107,12 @@ impl Target {
     pub fn is_text(self) -> bool {
         matches!(
             self,
-            Target::Touchstone | Target::Manifest | Target::Layout | Target::Model
+            Target::Touchstone
+                | Target::Manifest
+                | Target::Layout
+                | Target::Model
+                | Target::Poses
+                | Target::Index
         )
     }
 
@@ -104,6 +126,9 @@ impl Target {
             Target::Energy => vec!["fuzz/seeds/energy"],
             Target::Mpc => vec!["fuzz/seeds/mpc"],
             Target::Cluster => vec!["fuzz/seeds/cluster"],
+            Target::Poses => vec!["fuzz/seeds/poses"],
+            Target::Index => vec!["fuzz/seeds/index"],
+            Target::Calibration => vec!["fuzz/seeds/calibration"],
         }
     }
 
@@ -114,6 +139,8 @@ impl Target {
             Target::Manifest | Target::Model => &["toml"],
             Target::Layout => &["geojson"],
             Target::Energy | Target::Mpc | Target::Cluster => &["parquet"],
+            Target::Poses | Target::Index => &["csv"],
+            Target::Calibration => &["bin"],
         }
     }
 }
@@ -231,6 +258,17 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
             let p = scratch.dir.join("model.toml");
             crate::campaign::modelfile::ModelConfig::from_str(&text(), &p).map(|_| ())
         }
+        Target::Poses => {
+            let p = scratch.dir.join("poses.csv");
+            let text = crate::campaign::touchstone::decode(bytes);
+            crate::campaign::import::parse_poses(&text, &p).map(|_| ())
+        }
+        Target::Index => {
+            let p = scratch.dir.join("index.csv");
+            let text = crate::campaign::touchstone::decode(bytes);
+            crate::campaign::import::parse_index(&text, &p).map(|_| ())
+        }
+        Target::Calibration => calibration_step(bytes, &scratch.dir),
         Target::Energy | Target::Mpc | Target::Cluster => {
             let p = parquet_input(&scratch.dir, target);
             std::fs::write(&p, bytes).map_err(|e| crate::error::Error::io(&p, e))?;
@@ -256,6 +294,84 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
             }
         }
     }
+}
+
+/// The calibration step on sweeps decoded from `bytes`: byte 0 says which calibration
+/// sweeps there are (bit 0 background, bit 1 reference), the directions (1–3, bits 2–3)
+/// and pulses (1–2, bit 4); byte 1 the points (8–64); the rest are little-endian f64
+/// pairs (re, im): the measured sweeps, then the background, then the reference. Too few
+/// values is a refusal. [`crate::energy::calibration::Calibration::from_sweeps`] checks
+/// the reference, `apply` computes (S − B)/R; when both accept, every value must be finite
+/// (a non-finite one accepted would be a NaN energy): a panic otherwise.
+fn calibration_step(bytes: &[u8], dir: &Path) -> Result<()> {
+    use crate::campaign::manifest::Band;
+    use crate::campaign::sweeps::PositionSweeps;
+    use crate::energy::calibration::Calibration;
+    use num_complex::Complex64;
+    let input = dir.join("calibration.bin");
+    let (flags, points) = match bytes {
+        [f, p, ..] => (*f, 8 + usize::from(*p) % 57),
+        _ => return Err(crate::error::Error::input(&input, "shorter than 2 bytes")),
+    };
+    let (has_b, has_r) = (flags & 1 == 1, flags & 2 == 2);
+    let directions = 1 + usize::from((flags >> 2) & 3) % 3;
+    let pulses = 1 + usize::from((flags >> 4) & 1);
+    let sweeps = directions * pulses + usize::from(has_b) + usize::from(has_r);
+    let mut vals = bytes[2..].chunks_exact(16).map(|c| {
+        let f = |b: &[u8]| f64::from_le_bytes(b.try_into().expect("8 bytes"));
+        Complex64::new(f(&c[..8]), f(&c[8..]))
+    });
+    let mut take = |n: usize| -> Result<Vec<Complex64>> {
+        let v: Vec<Complex64> = vals.by_ref().take(n).collect();
+        if v.len() < n {
+            return Err(crate::error::Error::input(
+                &input,
+                format!("{sweeps} sweeps of {points} points need more values"),
+            ));
+        }
+        Ok(v)
+    };
+    let s21 = take(directions * pulses * points)?;
+    let background = if has_b {
+        Some((dir.join("background.s2p"), take(points)?))
+    } else {
+        None
+    };
+    let reference = if has_r {
+        Some((dir.join("reference.s2p"), take(points)?))
+    } else {
+        None
+    };
+    let band = Band {
+        start_hz: 57.5e9,
+        stop_hz: 63.5e9,
+        points,
+    };
+    let cal = Calibration::from_sweeps(&band, background, reference)?;
+    let mut sw = PositionSweeps {
+        position: 0,
+        directions,
+        pulses,
+        points,
+        s21,
+    };
+    let measured_finite = sw.s21.iter().all(|v| v.re.is_finite() && v.im.is_finite());
+    cal.apply(&mut sw)?;
+    // a measured value that is not finite is the sweep reader's to refuse; once they all
+    // are, an accepted calibration must leave finite values
+    if measured_finite {
+        if let Some(j) = sw
+            .s21
+            .iter()
+            .position(|v| !(v.re.is_finite() && v.im.is_finite()))
+        {
+            panic!(
+                "calibration accepted a non-finite value at {j}: {}",
+                sw.s21[j]
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Extreme numbers the text mutations put in place of a number.

@@ -10,7 +10,9 @@
 //! the layout, `--to-parquet`'s table), outputs that are folders, sockets or a full
 //! device, sweep files that are FIFOs, devices, folders, dangling links or loops, bounded
 //! sizes (poses, population, simulations), overflowing values and calibrations that leave
-//! NaN or no noise, and clap's usage errors. The snapshot records every entry by kind (a
+//! NaN or no noise, a v2 two-port without its data order, energy metadata outside its
+//! physical range, Touchstone rows swapped or reversed, commas in index paths, and clap's
+//! usage errors. The snapshot records every entry by kind (a
 //! FIFO or device is never read), so the harness checks those too. The FIFO and
 //! character-device outputs that must be written into, not replaced, are
 //! [`device_and_fifo_outputs_are_written_into_not_replaced`].
@@ -308,6 +310,27 @@ fn touchstone_values(dir: &Path, from: &str, to: &str, value: &str, first_only: 
         out.push('\n');
     }
     std::fs::write(dir.join(to), out).unwrap();
+}
+
+/// Set one key of the energy table's metadata (`e.parquet`), its rows unchanged.
+fn energy_meta(dir: &Path, key: &str, value: &str) {
+    let p = dir.join("e.parquet");
+    let mut meta = pradar::table::parquet_metadata(&p).unwrap();
+    let hit = meta.iter_mut().find(|(k, _)| k == key).unwrap();
+    hit.1 = value.into();
+    let df = pradar::table::read_parquet(&p, None).unwrap();
+    pradar::table::write_parquet(&p, &df, meta).unwrap();
+}
+
+/// Rewrite a Touchstone file of the case folder: `f` gets its header lines (comments and
+/// the option line) and its data lines, and returns the new text.
+fn touchstone_rows(dir: &Path, file: &str, f: impl FnOnce(Vec<&str>, Vec<&str>) -> String) {
+    let p = dir.join(file);
+    let text = std::fs::read_to_string(&p).unwrap();
+    let (head, rows): (Vec<&str>, Vec<&str>) = text
+        .lines()
+        .partition(|l| l.starts_with('!') || l.starts_with('#'));
+    std::fs::write(&p, f(head, rows)).unwrap();
 }
 
 const ENERGY: &[&str] = &[
@@ -1162,6 +1185,137 @@ fn cases() -> Vec<Case> {
                 std::fs::copy(d.join("model.toml"), d.join("prior.toml")).unwrap();
                 let v = toml::Value::Array(vec![1.0.into(), 2.0.into(), 3.0.into()]);
                 toml_set(d, "prior.toml", "ray_decay.interval", v);
+            },
+        ),
+        // ---- issue 33: a v2 two-port without its data order, energy metadata out of range
+        case(
+            "Touchstone v2 two-port without [Two-Port Data Order]",
+            ENERGY,
+            &["p000_d00_k00.s2p", "line", "[Two-Port Data Order] missing"],
+            |d| {
+                touchstone_rows(d, "sim/sweeps/p000_d00_k00.s2p", |head, rows| {
+                    let mut t = String::from("[Version] 2.0\n");
+                    for l in head {
+                        t += &format!("{l}\n");
+                    }
+                    t += "[Number of Ports] 2\n[Network Data]\n";
+                    for l in rows {
+                        t += &format!("{l}\n");
+                    }
+                    t + "[End]\n"
+                })
+            },
+        ),
+        case(
+            "energy table with an absurd tw",
+            EXTRACT,
+            &["e.parquet", "metadata `tw` = 1e300", "physical range"],
+            |d| energy_meta(d, "tw", "1e300"),
+        ),
+        case(
+            "energy table with tw below 1",
+            EXTRACT,
+            &["e.parquet", "metadata `tw`", "[1, 5]"],
+            |d| energy_meta(d, "tw", "1e-9"),
+        ),
+        case(
+            "energy table with an enbw of 50 bins",
+            EXTRACT,
+            &["e.parquet", "metadata `enbw` = 50", "[1, 3]"],
+            |d| energy_meta(d, "enbw", "50"),
+        ),
+        case(
+            "energy table whose bin width is not 1e9/B",
+            EXTRACT,
+            &["e.parquet", "metadata `bin_width_ns` = 1", "1e9/B"],
+            |d| energy_meta(d, "bin_width_ns", "1"),
+        ),
+        case(
+            "energy table with a negative bin width",
+            EXTRACT,
+            &["e.parquet", "metadata `bin_width_ns` = -0.5", "> 0"],
+            |d| energy_meta(d, "bin_width_ns", "-0.5"),
+        ),
+        // ---- issue 33: rows out of order, commas in index paths
+        case(
+            "Touchstone frequency rows swapped",
+            ENERGY,
+            &[
+                "p000_d00_k00.s2p",
+                "not increasing (below",
+                "of line",
+                "swapped or reversed",
+            ],
+            |d| {
+                touchstone_rows(d, "sim/sweeps/p000_d00_k00.s2p", |head, mut rows| {
+                    rows.swap(10, 11);
+                    head.into_iter()
+                        .chain(rows)
+                        .map(|l| format!("{l}\n"))
+                        .collect()
+                })
+            },
+        ),
+        case(
+            "Touchstone frequency rows reversed",
+            ENERGY,
+            &[
+                "p000_d00_k00.s2p",
+                "not increasing (below",
+                "swapped or reversed",
+            ],
+            |d| {
+                touchstone_rows(d, "sim/sweeps/p000_d00_k00.s2p", |head, rows| {
+                    let rows = rows.into_iter().rev();
+                    head.into_iter()
+                        .chain(rows)
+                        .map(|l| format!("{l}\n"))
+                        .collect()
+                })
+            },
+        ),
+        case(
+            "index path with an unquoted comma",
+            IMPORT,
+            &[
+                "index.csv",
+                "line 2: 5 cells for the header's 4 columns",
+                "quoted",
+            ],
+            |d| {
+                edit(
+                    d,
+                    "index.csv",
+                    "sim/sweeps/p000_d00_k00.s2p",
+                    "sim/sweeps/p000,d00_k00.s2p",
+                )
+            },
+        ),
+        case(
+            "index path with an unclosed quote",
+            IMPORT,
+            &["index.csv", "line 2: cell 4 opens a quote"],
+            |d| {
+                edit(
+                    d,
+                    "index.csv",
+                    "sim/sweeps/p000_d00_k00.s2p",
+                    "\"sim/sweeps/p000,d00_k00.s2p",
+                )
+            },
+        ),
+        import_case(
+            "index path with a quoted comma naming no file",
+            1,
+            IMPORT,
+            &["unreadable: sim/sweeps/p000,d00_k00.s2p", "not found"],
+            |d| {
+                edit(
+                    d,
+                    "index.csv",
+                    "sim/sweeps/p000_d00_k00.s2p",
+                    "\"sim/sweeps/p000,d00_k00.s2p\"",
+                )
             },
         ),
         // ---- issue 33: clap's usage errors, one line

@@ -103,11 +103,21 @@ fn imported_campaign_gives_byte_identical_energy() {
         original,
         "energy from the imported manifest differs"
     );
-    // index CSV (paths relative to it)
+    // index CSV (paths relative to it; one path holds a comma, quoted as CSV quotes it)
+    std::fs::create_dir_all(dir.join("raw2")).unwrap();
+    std::fs::copy(
+        dir.join("raw/pos10_dir0.s2p"),
+        dir.join("raw2/pos10,dir0.s2p"),
+    )
+    .unwrap();
     let mut index = String::from("position,direction,path\n");
     for p in [10, 20] {
         for d in 0..37 {
-            index.push_str(&format!("{p},{d},raw/pos{p}_dir{d}.s2p\n"));
+            if (p, d) == (10, 0) {
+                index.push_str("10,0, \"raw2/pos10,dir0.s2p\"\n");
+            } else {
+                index.push_str(&format!("{p},{d},raw/pos{p}_dir{d}.s2p\n"));
+            }
         }
     }
     std::fs::write(dir.join("index.csv"), index).unwrap();

@@ -116,12 +116,24 @@ fn refusals_name_file_line_and_reason() {
         ("nan.s2p", two.replacen("0.16000000000000003", "NaN", 1), "line 4: non-finite value `NaN`"),
         ("word.s2p", two.replacen("0.17", "0.1.7", 1), "line 4: cannot parse `0.1.7` as a number"),
         ("z.s2p", two.replacen("# Hz S RI", "# Hz Z RI", 1), "line 2: parameter type `Z` not supported (only S)"),
-        // (a falling frequency in a v1 two-port file starts its noise block, as in skrf)
+        // (in a v1 two-port file a falling row of five numbers starts the noise block, as
+        // in skrf; a falling row of S data is out of order)
         ("down.s1p", {
             let mut l: Vec<&str> = one.lines().collect();
             l.swap(4, 5);
             l.join("\n")
         }, "line 6: frequency 57500000000 Hz not increasing"),
+        ("swapped.s2p", {
+            let mut l: Vec<&str> = two.lines().collect();
+            l.swap(4, 5);
+            l.join("\n")
+        }, "line 6: frequency 58700000000 Hz not increasing (below 59900000000 Hz of line 5): the rows stop increasing here (swapped or reversed?)"),
+        ("reversed.s2p", {
+            let l: Vec<&str> = two.lines().collect();
+            let (head, rows) = l.split_at(3);
+            head.iter().chain(rows.iter().rev()).copied().collect::<Vec<_>>().join("\n")
+        }, "line 5: frequency"),
+        ("no_order.ts", "[Version] 2.0\n# GHz S RI\n[Number of Ports] 2\n[Network Data]\n1 0 0 1 0 1 0 0 0\n[End]\n".into(), "line 5: [Two-Port Data Order] missing"),
         ("v1.txt", two.clone(), "must be named .sNp"),
         ("mm.ts", "[Version] 2.0\n# GHz S RI\n[Number of Ports] 4\n[Mixed-Mode Order] D2,1 C2,1 D4,3 C4,3\n".into(), "line 4: mixed-mode data"),
         ("nf.ts", "[Version] 2.0\n# GHz S RI\n[Number of Ports] 1\n[Number of Frequencies] 3\n[Network Data]\n1 0 0\n2 0 0\n[End]\n".into(), "line 4: [Number of Frequencies] 3 but the file holds 2 points"),

@@ -127,8 +127,8 @@ impl std::fmt::Display for ImportOutcome {
 /// A pose row: label, x_m, y_m, heading_deg.
 type PoseRow = (i64, f64, f64, f64);
 
-/// Rows of a small CSV (no quoting): header names lower-cased, then (line number, cells).
-/// A small CSV: the lower-cased header, then (line number, cells) per row.
+/// A small CSV ([`split_csv`] quoting): the lower-cased header, then (line number, cells)
+/// per row.
 type CsvRows = (Vec<String>, Vec<(usize, Vec<String>)>);
 
 /// One sweep file as `import` reads it: its grid and reader notes, or the refusal.
@@ -140,7 +140,11 @@ fn read_csv(path: &Path) -> Result<CsvRows> {
         crate::io::regular_input(path, "table")?;
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let text = decode(&bytes);
+    parse_csv(&decode(&bytes), path)
+}
+
+/// The header and rows of a CSV's text (`path` names it in errors).
+fn parse_csv(text: &str, path: &Path) -> Result<CsvRows> {
     let mut rows = text
         .lines()
         .enumerate()
@@ -149,14 +153,91 @@ fn read_csv(path: &Path) -> Result<CsvRows> {
     let (_, head) = rows
         .next()
         .ok_or_else(|| Error::input(path, "empty table (a header line is needed)"))?;
-    let header = head
-        .split(',')
-        .map(|h| h.trim().to_ascii_lowercase())
+    let header: Vec<String> = split_csv(head)
+        .map_err(|e| Error::input(path, format!("header line: {e}")))?
+        .into_iter()
+        .map(|h| h.to_ascii_lowercase())
         .collect();
-    let body = rows
-        .map(|(n, l)| (n, l.split(',').map(|c| c.trim().to_string()).collect()))
-        .collect();
+    let mut body = Vec::new();
+    for (n, l) in rows {
+        let cells = split_csv(l).map_err(|e| Error::input(path, format!("line {n}: {e}")))?;
+        if cells.len() > header.len() {
+            return Err(Error::input(
+                path,
+                format!(
+                    "line {n}: {} cells for the header's {} columns (a cell holding a comma must be quoted: \"a,b.s2p\")",
+                    cells.len(),
+                    header.len()
+                ),
+            ));
+        }
+        body.push((n, cells));
+    }
     Ok((header, body))
+}
+
+/// The cells of one CSV line (RFC 4180 quoting within a line): separated by commas,
+/// unquoted cells trimmed; a cell opening with `"` (after spaces) runs to its closing
+/// quote, `""` inside it is one `"`, and it is kept as written. Refused: a quote left open
+/// (a quoted cell may not span lines), text after a closing quote, a `"` inside an
+/// unquoted cell.
+fn split_csv(line: &str) -> std::result::Result<Vec<String>, String> {
+    let mut cells = Vec::new();
+    let mut rest = line;
+    loop {
+        let t = rest.trim_start();
+        if let Some(q) = t.strip_prefix('"') {
+            let mut cell = String::new();
+            let mut chars = q.char_indices();
+            let after = loop {
+                match chars.next() {
+                    None => {
+                        return Err(format!(
+                            "cell {} opens a quote that the line does not close",
+                            cells.len() + 1
+                        ))
+                    }
+                    Some((i, '"')) => {
+                        if q[i + 1..].starts_with('"') {
+                            cell.push('"');
+                            chars.next();
+                        } else {
+                            break &q[i + 1..];
+                        }
+                    }
+                    Some((_, c)) => cell.push(c),
+                }
+            };
+            cells.push(cell);
+            let after = after.trim_start();
+            match after.strip_prefix(',') {
+                Some(r) => rest = r,
+                None if after.is_empty() => return Ok(cells),
+                None => {
+                    return Err(format!(
+                        "text after the closing quote of cell {}",
+                        cells.len()
+                    ))
+                }
+            }
+        } else {
+            let (cell, next) = match t.find(',') {
+                Some(i) => (&t[..i], Some(&t[i + 1..])),
+                None => (t, None),
+            };
+            if cell.contains('"') {
+                return Err(format!(
+                    "a `\"` inside unquoted cell {} (quote the whole cell, a quote in it doubled)",
+                    cells.len() + 1
+                ));
+            }
+            cells.push(cell.trim().to_string());
+            match next {
+                Some(r) => rest = r,
+                None => return Ok(cells),
+            }
+        }
+    }
 }
 
 /// The column named by any of `names`: an error naming the file when absent.
@@ -200,7 +281,17 @@ fn bound_rows(path: &Path, rows: usize, max: usize, what: &str) -> Result<()> {
 }
 
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
-    let (h, rows) = read_csv(path)?;
+    poses_from(path, read_csv(path)?)
+}
+
+/// The poses of a poses CSV's text, as `import --poses` reads them (`path` names the file
+/// in errors): `(label, x_m, y_m, heading_deg)` sorted by label. The entry point of the
+/// poses target of [`crate::fuzz`].
+pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<(i64, f64, f64, f64)>> {
+    poses_from(path, parse_csv(text, path)?)
+}
+
+fn poses_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<PoseRow>> {
     bound_rows(path, rows.len(), MAX_POSES, "poses")?;
     let cp = column(path, &h, &["position"])?;
     let cx = column(path, &h, &["x", "x_m"])?;
@@ -428,7 +519,18 @@ fn cells_from_glob(glob_pat: &str, pattern: &str) -> Result<Cells> {
 }
 
 fn cells_from_index(path: &Path) -> Result<Cells> {
-    let (h, rows) = read_csv(path)?;
+    index_from(path, read_csv(path)?)
+}
+
+/// The sweep files an index CSV's text lists, as `import --index` reads them (`path` names
+/// the file in errors, and relative paths are taken from its folder): per (position,
+/// direction, pulse) the files naming it. The entry point of the index target of
+/// [`crate::fuzz`].
+pub fn parse_index(text: &str, path: &Path) -> Result<BTreeMap<(i64, i64, i64), Vec<PathBuf>>> {
+    Ok(index_from(path, parse_csv(text, path)?)?.0)
+}
+
+fn index_from(path: &Path, (h, rows): CsvRows) -> Result<Cells> {
     bound_rows(path, rows.len(), MAX_INDEX_ROWS, "sweep files")?;
     let cp = column(path, &h, &["position"])?;
     let cd = column(path, &h, &["direction"])?;
@@ -852,6 +954,27 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn csv_cells_quoted_and_unquoted() {
+        let c = split_csv;
+        assert_eq!(c(" 1, 2 ,x").unwrap(), ["1", "2", "x"]);
+        assert_eq!(c("1,,").unwrap(), ["1", "", ""]);
+        assert_eq!(
+            c(r#"0,1, "raw/a,b.s2p" ,"say ""hi""""#).unwrap(),
+            ["0", "1", "raw/a,b.s2p", r#"say "hi""#]
+        );
+        assert_eq!(c(r#""a""#).unwrap(), ["a"]);
+        assert!(c(r#"0,"raw/a,b.s2p"#)
+            .unwrap_err()
+            .contains("cell 2 opens a quote"));
+        assert!(c(r#"0,"a"b"#)
+            .unwrap_err()
+            .contains("after the closing quote of cell 2"));
+        assert!(c(r#"0,a"b"#)
+            .unwrap_err()
+            .contains("inside unquoted cell 2"));
+    }
 
     #[test]
     fn naming_patterns_match_with_and_without_widths() {

@@ -36,7 +36,10 @@
 //! a line or ends inside one, or a continuation line with an odd count of numbers (the port
 //! count does not fit the data: points start with f, continuation lines hold pairs; this is
 //! what tells one-port data named `.s2p` from two-port data), a frequency that does
-//! not increase, a truncated last point, a v1 file without an `.sNp` name, and a port count
+//! not increase (naming the line where it stops and the line before; in a v1 two-port file
+//! only a falling row of five numbers starts the noise parameters), a v2 two-port file
+//! without `[Two-Port Data Order]` (v2.0 requires it: which pair is S21 is otherwise
+//! unknown), a truncated last point, a v1 file without an `.sNp` name, and a port count
 //! of the name that disagrees with `[Number of Ports]`.
 //!
 //! Why not the `touchstone` crate (0.17, evaluated): it parses into its own network type
@@ -337,6 +340,8 @@ struct Parser<'a> {
     r_option: Vec<Complex64>,
     reference: Option<Vec<Complex64>>,
     legacy_two_port: bool,
+    /// The line of `[Two-Port Data Order]`, when given.
+    two_port_order: Option<usize>,
     matrix: MatrixFormat,
     declared_points: Option<(usize, usize)>,
     in_network: bool,
@@ -440,6 +445,7 @@ impl<'a> Parser<'a> {
                 self.set_ports(n, lineno)?;
             }
             "two-port data order" => {
+                self.two_port_order = Some(lineno);
                 self.legacy_two_port = match arg {
                     a if a.starts_with("21_12") => true,
                     a if a.starts_with("12_21") => false,
@@ -533,6 +539,13 @@ impl<'a> Parser<'a> {
                 "cannot tell the port count: a Touchstone v1 file must be named .sNp (e.g. .s2p)",
             )),
         };
+        if self.version == 2 && n == 2 && self.two_port_order.is_none() {
+            // v2.0 requires it of two-ports: without it, which pair is S21 is a guess
+            return Err(self.err(
+                lineno,
+                "[Two-Port Data Order] missing: Touchstone v2.0 requires it (12_21 or 21_12) before the data of a two-port file, which pair is S21 is otherwise unknown",
+            ));
+        }
         let values = match self.matrix {
             MatrixFormat::Full => n * n,
             MatrixFormat::Lower | MatrixFormat::Upper => n * (n + 1) / 2,
@@ -592,15 +605,23 @@ impl<'a> Parser<'a> {
                 if idx == 0 {
                     let f = v * self.scale;
                     if let Some(&last) = self.freq_hz.last() {
-                        if f < last && n == 2 && self.version == 1 {
-                            // v1 two-port noise parameters follow the S data
+                        // v1 two-port noise parameters follow the S data: rows of five
+                        // numbers (f, NFmin, |Γopt|, ∠Γopt, Rn) whose frequency falls; a
+                        // falling row of any other length is S data out of order
+                        if f < last && n == 2 && self.version == 1 && Tokens::new(line).count() == 5
+                        {
                             self.noise = Some((lineno, 1));
                             return Ok(());
                         }
                         if f <= last {
-                            return Err(
-                                self.err(lineno, format!("frequency {f} Hz not increasing"))
-                            );
+                            let prev = self.point_line;
+                            let what = if f == last { "repeats" } else { "below" };
+                            return Err(self.err(
+                                lineno,
+                                format!(
+                                    "frequency {f} Hz not increasing ({what} {last} Hz of line {prev}): the rows stop increasing here (swapped or reversed?)"
+                                ),
+                            ));
                         }
                     }
                     self.point_line = lineno;
@@ -761,6 +782,7 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
         r_option: vec![Complex64::new(50.0, 0.0)],
         reference: None,
         legacy_two_port: true,
+        two_port_order: None,
         matrix: MatrixFormat::Full,
         declared_points: None,
         in_network: true,
@@ -1049,6 +1071,26 @@ mod tests {
     }
 
     #[test]
+    fn v2_two_port_without_data_order_is_refused() {
+        let t = "[Version] 2.0\n# GHz S RI R 50\n[Number of Ports] 2\n[Network Data]\n1 1 0 2 0 3 0 4 0\n[End]\n";
+        let e = p(t, "a.ts").unwrap_err().to_string();
+        assert!(
+            e.contains("a.ts: line 5:") && e.contains("[Two-Port Data Order]"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        // with it, and for other port counts (which have no such keyword), accepted
+        let with = t.replace(
+            "[Network Data]",
+            "[Two-Port Data Order] 12_21\n[Network Data]",
+        );
+        assert!(p(&with, "a.ts").is_ok());
+        let one =
+            "[Version] 2.0\n# GHz S RI R 50\n[Number of Ports] 1\n[Network Data]\n1 1 0\n[End]\n";
+        assert!(p(one, "a.ts").is_ok());
+    }
+
+    #[test]
     fn v1_noise_block_after_two_port_data() {
         let t = "# GHz S MA R 50\n1 0 0 1 0 1 0 0 0\n2 0 0 1 0 1 0 0 0\n! Noise\n1 1.5 0.3 20 0.2\n2 1.6 0.3 21 0.2\n";
         let ts = p(t, "n.s2p").unwrap();
@@ -1093,6 +1135,20 @@ mod tests {
                 .contains("line 3: frequency 1 Hz not increasing"),
             "{e}"
         );
+        // a swapped pair of two-port rows is not a v1 noise block: it names both lines
+        let e = p(
+            "# Hz S RI R 50\n1 0 0 1 0 0 0 0 0\n3 0 0 1 0 0 0 0 0\n2 0 0 1 0 0 0 0 0\n",
+            "b.s2p",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("line 4: frequency 2 Hz not increasing (below 3 Hz of line 3)")
+                && e.contains("swapped or reversed"),
+            "{e}"
+        );
+        let e = p("# Hz S RI R 50\n1 0 0\n1 0 0\n", "b.s1p").unwrap_err();
+        assert!(e.to_string().contains("(repeats 1 Hz of line 2)"), "{e}");
         assert!("S2".parse::<SParam>().is_err() && "S0,1".parse::<SParam>().is_err());
         assert_eq!("s12".parse::<SParam>().unwrap().to_string(), "S12");
     }

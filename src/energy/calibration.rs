@@ -32,11 +32,12 @@
 //! `calibration_reference`: the templates as written); a campaign without `[calibration]`
 //! adds no keys, so its energy table is unchanged.
 
-use crate::campaign::manifest::{expand_pattern, Campaign};
+use crate::campaign::manifest::{expand_pattern, Band, Campaign};
 use crate::campaign::sweeps::{read_sweep, PositionSweeps};
 use crate::error::{Error, Result};
 use num_complex::Complex64;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// The files a calibration template names: one per (position, direction) key (position 0
 /// when the template has no `{position}`, direction 0 without `{direction}`).
@@ -97,15 +98,7 @@ impl CalSweeps {
             let mut s = vec![Complex64::new(0.0, 0.0); m.band.points];
             read_sweep(&path, param, &m.band, &mut s)?;
             if reference {
-                if let Some(k) = s
-                    .iter()
-                    .position(|v| !(v.norm() > 0.0 && v.norm().is_finite()))
-                {
-                    return Err(Error::input(
-                        &path,
-                        format!("{field}: |R| = {} at point {k} ({:.6} GHz): the system response cannot be divided out", s[k].norm(), m.band.freq(k) / 1e9),
-                    ));
-                }
+                check_reference(&path, field, &s, &m.band)?;
             }
             sweeps.insert((p, d), (path, s));
         }
@@ -116,6 +109,25 @@ impl CalSweeps {
             sweeps,
         })
     }
+}
+
+/// A reference sweep must have 0 < |R| < ∞ at every point: the division is undefined
+/// otherwise (names the file and the point).
+fn check_reference(path: &Path, field: &str, s: &[Complex64], band: &Band) -> Result<()> {
+    if let Some(k) = s
+        .iter()
+        .position(|v| !(v.norm() > 0.0 && v.norm().is_finite()))
+    {
+        return Err(Error::input(
+            path,
+            format!(
+                "{field}: |R| = {} at point {k} ({:.6} GHz): the system response cannot be divided out",
+                s[k].norm(),
+                band.freq(k) / 1e9
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The loaded `[calibration]` of a campaign.
@@ -141,6 +153,42 @@ impl Calibration {
                 .reference
                 .as_deref()
                 .map(|t| CalSweeps::load(c, t, "calibration.reference", true))
+                .transpose()?,
+        })
+    }
+
+    /// A calibration of one background and one reference sweep for the whole campaign
+    /// (either may be absent), already read: each a file name (for errors) and its values
+    /// on `band`'s grid. The reference is checked as [`Calibration::load`] checks it. What
+    /// the fuzz harness of the calibration step builds ([`crate::fuzz`]).
+    pub fn from_sweeps(
+        band: &Band,
+        background: Option<(std::path::PathBuf, Vec<Complex64>)>,
+        reference: Option<(std::path::PathBuf, Vec<Complex64>)>,
+    ) -> Result<Calibration> {
+        let one = |field: &str, (path, s): (std::path::PathBuf, Vec<Complex64>)| {
+            if s.len() != band.points {
+                return Err(Error::input(
+                    &path,
+                    format!("{field}: {} points, [band] has {}", s.len(), band.points),
+                ));
+            }
+            if field == "calibration.reference" {
+                check_reference(&path, field, &s, band)?;
+            }
+            Ok(CalSweeps {
+                template: path.display().to_string(),
+                by_position: false,
+                by_direction: false,
+                sweeps: BTreeMap::from([((0, 0), (path, s))]),
+            })
+        };
+        Ok(Calibration {
+            background: background
+                .map(|b| one("calibration.background", b))
+                .transpose()?,
+            reference: reference
+                .map(|r| one("calibration.reference", r))
                 .transpose()?,
         })
     }

@@ -283,7 +283,85 @@ fn meta_from(path: &Path, kv: Vec<(String, String)>) -> Result<EnergyMeta> {
             ),
         ));
     }
+    check_physical(path, &meta)?;
     Ok(meta)
+}
+
+/// Relative tolerance of the bin width against `1e9 / B` of the recorded band.
+const BIN_WIDTH_TOL: f64 = 1e-6;
+
+/// The window ENBW range, in frequency steps, of the windows the energy stage has: 1 for
+/// the rectangular window, about 1.5·N/(N − 1) for an N-point Hann (at most 1.71 at the
+/// 8 points a band needs); 3 leaves room for any window, not for a corrupt number.
+const ENBW_RANGE: [f64; 2] = [1.0, 3.0];
+
+/// The metadata numbers an energy table's readers rely on, against their physical ranges
+/// (a table whose `tw` is absurd would silently detect nothing): `bin_width_ns` finite
+/// and positive and, where the `band` is recorded, 1e9/B within [`BIN_WIDTH_TOL`];
+/// `enbw` within [`ENBW_RANGE`]; `tw` finite with 1 ≤ TW ≤ the oversampling (samples per
+/// bin; the recorded `oversample`, else the largest accepted). Names the file and the key.
+fn check_physical(path: &Path, meta: &EnergyMeta) -> Result<()> {
+    let value = |k: &str| {
+        meta.all
+            .iter()
+            .find(|(key, _)| key == k)
+            .map(|(_, v)| v.as_str())
+    };
+    // the value as stored (a number printed back could be 300 digits long)
+    let bad = |k: &str, v: f64, why: String| {
+        let v = value(k).map_or_else(|| v.to_string(), |s| s.trim().to_string());
+        Error::input(
+            path,
+            format!("metadata `{k}` = {v} is outside its physical range: {why}"),
+        )
+    };
+    let tb = meta.bin_width_ns;
+    if !(tb.is_finite() && tb > 0.0) {
+        return Err(bad("bin_width_ns", tb, "must be finite and > 0".into()));
+    }
+    // `band` = "start_hz stop_hz points", as the writer records it
+    let band: Option<Vec<f64>> = value("band").map(|b| {
+        b.split_ascii_whitespace()
+            .filter_map(|v| v.parse().ok())
+            .collect()
+    });
+    if let Some(b) = band.filter(|b| b.len() == 3) {
+        let bw = b[1] - b[0];
+        if bw.is_finite() && bw > 0.0 {
+            let want = 1e9 / bw;
+            if ((tb - want) / want).abs() > BIN_WIDTH_TOL {
+                return Err(bad(
+                    "bin_width_ns",
+                    tb,
+                    format!(
+                        "the recorded band ({} to {} Hz) gives 1e9/B = {want} ns",
+                        b[0], b[1]
+                    ),
+                ));
+            }
+        }
+    }
+    let [lo, hi] = ENBW_RANGE;
+    if !(meta.enbw.is_finite() && meta.enbw >= lo * (1.0 - 1e-9) && meta.enbw <= hi) {
+        return Err(bad(
+            "enbw",
+            meta.enbw,
+            format!("a window's ENBW is within [{lo}, {hi}] frequency steps"),
+        ));
+    }
+    let oversample = value("oversample")
+        .and_then(|v| v.parse::<usize>().ok())
+        .filter(|&l| l >= 1)
+        .unwrap_or(crate::campaign::manifest::limits::MAX_OVERSAMPLE);
+    let tw = meta.tw;
+    if !(tw.is_finite() && tw >= 1.0 - 1e-9 && tw <= oversample as f64 * (1.0 + 1e-9)) {
+        return Err(bad(
+            "tw",
+            tw,
+            format!("independent samples per bin are within [1, {oversample}] (the oversampling)"),
+        ));
+    }
+    Ok(())
 }
 
 /// Energy matrices served a run of positions at a time: a whole [`EnergyMatrix`] in
@@ -663,4 +741,51 @@ pub fn check_campaign(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kv(tw: &str, enbw: &str, tb: &str) -> Vec<(String, String)> {
+        [
+            ("schema_version", SCHEMA_VERSION.to_string()),
+            ("bin_width_ns", tb.to_string()),
+            ("pulses", "1".into()),
+            ("n0", "1e-12".into()),
+            ("enbw", enbw.to_string()),
+            ("tw", tw.to_string()),
+            ("array", "ula16".into()),
+            ("oversample", "5".into()),
+            ("band", "57500000000 63500000000 801".into()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
+
+    #[test]
+    fn metadata_outside_its_physical_range_is_refused_naming_the_key() {
+        let p = Path::new("e.parquet");
+        let tb = format!("{:.17e}", 1e9 / 6e9);
+        assert!(meta_from(p, kv("1.2", "1.5", &tb)).is_ok());
+        assert!(meta_from(p, kv("1", "1", &tb)).is_ok());
+        for (k, v) in [
+            ("tw", kv("1e300", "1.5", &tb)),
+            ("tw", kv("0.5", "1.5", &tb)),
+            ("tw", kv("6", "1.5", &tb)),
+            ("tw", kv("nan", "1.5", &tb)),
+            ("enbw", kv("1.2", "0.5", &tb)),
+            ("enbw", kv("1.2", "1e9", &tb)),
+            ("bin_width_ns", kv("1.2", "1.5", "0")),
+            ("bin_width_ns", kv("1.2", "1.5", "inf")),
+            ("bin_width_ns", kv("1.2", "1.5", "0.1667")),
+        ] {
+            let e = meta_from(p, v).unwrap_err().to_string();
+            assert!(
+                e.contains("e.parquet") && e.contains(&format!("`{k}`")) && !e.contains('\n'),
+                "{k}: {e}"
+            );
+        }
+    }
 }
