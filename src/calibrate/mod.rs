@@ -269,19 +269,8 @@ pub fn calibrate(
         }
         .check()?,
     )?;
-    let (np, nd, nb) = sim.shape();
-    if (np, nd, nb) != (energy.positions, energy.directions(), energy.bins) {
-        return Err(Error::input(
-            energy_path,
-            format!(
-                "{} x {} x {} bins, but campaign {} gives {np} x {nd} x {nb} (other processing settings?)",
-                energy.positions,
-                energy.directions(),
-                energy.bins,
-                c.path.display()
-            ),
-        ));
-    }
+    sim.check_shape(energy, energy_path, &c.path)?;
+    let nb = energy.bins;
     let poses: Vec<(f64, f64, f64)> = m
         .poses
         .iter()

@@ -249,18 +249,12 @@ impl CheckResult {
     }
 }
 
+/// The median (NaN when empty).
 fn median_of(v: &[f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
+    crate::fit::estimators::median(v)
 }
 
 /// The statistics' context of a campaign's energy table.
@@ -305,22 +299,7 @@ pub fn check(
         }
         .check()?,
     )?;
-    let shape = sim.shape();
-    if shape != (energy.positions, energy.directions(), energy.bins) {
-        return Err(Error::input(
-            energy_path,
-            format!(
-                "{} x {} x {} bins, but campaign {} gives {} x {} x {} (other processing settings?)",
-                energy.positions,
-                energy.directions(),
-                energy.bins,
-                c.path.display(),
-                shape.0,
-                shape.1,
-                shape.2
-            ),
-        ));
-    }
+    sim.check_shape(energy, energy_path, &c.path)?;
     let ctx = context(energy);
     let measured = Statistics::of(&ctx, &energy.data);
     let seed = params.seed.unwrap_or(c.manifest.seed);

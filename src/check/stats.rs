@@ -2,7 +2,7 @@
 //! computed the same way on the measured table and on every draw ([`Statistics::of`]).
 //!
 //! A bin is *signal* when it lies after the coupling gate and E > 10·μ (10 dB above the
-//! detector's noise mean μ = N0·TW·N_p of the **measured** table: the same threshold for
+//! detector's noise mean μ = N0·TW of the **measured** table: the same threshold for
 //! the measured table and the draws, so a model with the wrong noise level is seen as
 //! such); its signal energy is S = E − μ. With τ_b = b·T_b:
 //!
@@ -52,7 +52,7 @@ pub struct StatContext {
     pub bin_ns: f64,
     /// First bin after the coupling gate.
     pub first_bin: usize,
-    /// Noise mean μ of the measured table (N0·TW·N_p).
+    /// Noise mean μ of the measured table (N0·TW).
     pub mu: f64,
     /// Relative direction angles, degrees.
     pub angles_deg: Vec<f64>,

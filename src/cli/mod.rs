@@ -208,7 +208,7 @@ pub struct CheckArgs {
     #[arg(long, default_value_t = 20, value_parser = ranges::draws)]
     pub draws: usize,
     /// Seed of the draws (default: the campaign's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// Output folder: check.csv, check.md, check_cdfs.png, index.html.
     #[arg(long)]

@@ -12,7 +12,7 @@
 //! echo: a wall's specular return and corner become "clusters" of σ ≈ 1–2 m², and the
 //! diffuse σ′ reads the continuum's local maxima (about 4× its mean). Levels read where
 //! the layout says each part must be, against what the model's forward response predicts
-//! there, do not depend on the clustering. With μ the table's noise mean (N0·TW·N_p) and
+//! there, do not depend on the clustering. With μ the table's noise mean (N0·TW) and
 //! S = max(E − μ, 0):
 //!
 //! 1. **Specular |Γ|** (`walls.specular_gamma`): for every pose and every wall whose
@@ -30,11 +30,12 @@
 //! 2. **Diffuse σ′** (`diffuse.wall_rcs_per_m`, when the model has `[diffuse]`): for
 //!    every (pose, direction) whose first wall along the beam (the layout's) is not within
 //!    10° of a visible normal-incidence point (those cells are the specular return's) and
-//!    lies inside the table's delay span, the bin b* of the hit's delay: r = S / W, W the
-//!    expected energy there of every wall's diffuse points with σ′ = 1 m²/m at the model's
-//!    Lambert exponent ([`super::DiffuseWalls::unit_mean`]) plus the specular returns at
-//!    the |Γ| of step 1. σ′ = median r / ln 2: a Rayleigh cell's energy is exponential, whose
-//!    median is ln 2 times its mean. Cells where W is below the noise mean are left out.
+//!    lies inside the table's delay span, the bin b* of the hit's delay:
+//!    r = (S − W_s) / W_d, W_d the expected energy there of every wall's diffuse points
+//!    with σ′ = 1 m²/m at the model's Lambert exponent ([`super::DiffuseWalls::unit_mean`])
+//!    and W_s that of the specular returns at the |Γ| of step 1. σ′ = median r / ln 2: a
+//!    Rayleigh cell's energy is exponential, whose median is ln 2 times its mean. Cells
+//!    where W_d is below the noise mean are left out.
 //!
 //! 2b. **Vertices' σ** (`walls.corner_rcs`, `walls.edge_rcs`): for every pose and every
 //!    layout vertex it sees (`walls::vertices`) inside the sector and not within 10° of a
@@ -54,15 +55,17 @@
 //!    [1e-6, 10] m², stopped within 0.1 % of the table's mean or after
 //!    16 steps; at either end the end is kept and the report says so.
 //!
-//! Choices: one |Γ| for every wall (module [`super::walls`]); the medians make each
-//! estimate robust to the parts the cell also holds; the cluster level is the one free
-//! level left once the geometry's returns are fixed, and the profile signal energy is
-//! the statistic most directly set by it. Nothing reads the simulator's `[scene]` or
-//! `[clutter]`.
+//! Choices: |Γ| per layout material where the table sees the material's walls, one |Γ|
+//! for the rest (module [`super::walls`]; a ratio above 1 is clamped to the passive bound
+//! 1); the medians make each estimate robust to the parts the cell also holds; the
+//! cluster level is the one free level left once the geometry's returns are fixed, and
+//! the mean number of signal bins is the statistic that moves with it. Without a wall foot
+//! in the sector the model gets no `[walls]` (nor vertices) and σ is matched without them.
+//! Nothing reads the simulator's `[scene]` or `[clutter]`.
 
-use super::channel::{RaySource, SeenRay};
+use super::channel::SeenRay;
 use super::diffuse::DiffuseWalls;
-use super::walls::{feet, specular_amp2, vertex_seen, vertices, VertexKind, WallModel};
+use super::walls::{feet, specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{ModelConfig, Quantity};
@@ -166,15 +169,7 @@ pub fn fit_levels(
             if hi >= nb as isize {
                 continue;
             }
-            let ray = SeenRay {
-                source: RaySource::Specular(foot.wall),
-                tau_s: crate::units::delay_s(foot.d_m),
-                theta: foot.bearing,
-                amp2: specular_amp2(1.0, foot.d_m),
-                pos: foot.pos,
-                phase: 0.0,
-            };
-            let u = sim.expected_profile(p, d, &[ray]);
+            let u = sim.expected_profile(p, d, &[specular_ray(foot, 1.0, 0.0)]);
             let (lo, hi) = (lo as usize, hi as usize);
             let umax = (lo..=hi).map(|k| u[k]).fold(0.0, f64::max);
             let smax = (lo..=hi).map(|k| sig(p, d, k)).fold(0.0, f64::max);
@@ -247,14 +242,7 @@ pub fn fit_levels(
         let spec: Vec<SeenRay> = pose_feet
             .iter()
             .filter(|_| g > 0.0)
-            .map(|f| SeenRay {
-                source: RaySource::Specular(f.wall),
-                tau_s: crate::units::delay_s(f.d_m),
-                theta: f.bearing,
-                amp2: specular_amp2(wm.gamma(&layout.walls[f.wall].material), f.d_m),
-                pos: f.pos,
-                phase: 0.0,
-            })
+            .map(|f| specular_ray(f, wm.gamma(&layout.walls[f.wall].material), 0.0))
             .collect();
         ws.push(sim.expected_profiles(p, &spec));
         wd.push(match &unit {
@@ -287,11 +275,11 @@ pub fn fit_levels(
                     continue;
                 }
                 let k = d * nb + b as usize;
-                let wv = wd[p][k] + ws[p][k];
-                if wv < mu {
+                // the diffuse part: what the specular returns leave, over a unit wall
+                if wd[p][k] < mu {
                     continue;
                 }
-                r.push(sig(p, d, b as usize) / wv);
+                r.push((sig(p, d, b as usize) - ws[p][k]) / wd[p][k]);
             }
         }
         diffuse_cells = r.len();
@@ -325,15 +313,7 @@ pub fn fit_levels(
             if b < first_bin as isize + 1 || b + 1 >= nb as isize {
                 continue;
             }
-            let ray = SeenRay {
-                source: RaySource::Vertex(i),
-                tau_s: crate::units::delay_s(r),
-                theta: bearing,
-                amp2: 1.0 / ((4.0 * std::f64::consts::PI).powi(3) * r.powi(4)),
-                pos: v.pos,
-                phase: 0.0,
-            };
-            let u = sim.expected_profile(p, d, &[ray]);
+            let u = sim.expected_profile(p, d, &[vertex_ray(i, v, r, bearing, 1.0, 0.0)]);
             let (lo, hi) = ((b - 1) as usize, (b + 1) as usize);
             let (k, umax) = (lo..=hi)
                 .map(|k| (k, u[k]))
@@ -389,7 +369,7 @@ pub fn fit_levels(
         out.cluster_rrcs.value
     } else {
         // g(x) = level(e^x) − measured, increasing in x: regula falsi (Illinois) on the
-        // bracket, stopped within 0.05 dB or after 16 steps
+        // bracket, stopped within 0.1 % of the table's mean or after 16 steps
         let (mut a, mut b) = (lo, hi);
         let (mut ga, mut gb) = (level(a.exp())? - measured, level(b.exp())? - measured);
         if ga >= 0.0 {
@@ -436,6 +416,11 @@ pub fn fit_levels(
             family: out.cluster_rrcs.family.clone(),
             ..out.cluster_rrcs.clone()
         };
+    }
+    if gamma.is_none() {
+        // no wall foot in the sector: a model without the layout's returns (σ was matched
+        // without them), not one that synth would refuse for a missing |Γ|
+        out.walls = None;
     }
     out.check()?;
     Ok((

@@ -258,6 +258,30 @@ impl EnergySimulator {
 }
 
 impl EnergySimulator {
+    /// Refuse an energy table (read from `energy_path`) whose shape is not the one this
+    /// simulator draws for the campaign at `campaign_path` (other processing settings).
+    pub fn check_shape(
+        &self,
+        energy: &crate::energy::EnergyMatrix,
+        energy_path: &Path,
+        campaign_path: &Path,
+    ) -> Result<()> {
+        let (np, nd, nb) = self.shape();
+        if (np, nd, nb) == (energy.positions, energy.directions(), energy.bins) {
+            return Ok(());
+        }
+        Err(Error::input(
+            energy_path,
+            format!(
+                "{} x {} x {} bins, but campaign {} gives {np} x {nd} x {nb} (other processing settings?)",
+                energy.positions,
+                energy.directions(),
+                energy.bins,
+                campaign_path.display()
+            ),
+        ))
+    }
+
     /// Pose `p`'s position and heading (deg).
     pub fn pose(&self, p: usize) -> (Coord<f64>, f64) {
         (self.poses[p], self.headings_deg[p])
@@ -407,26 +431,46 @@ impl Response {
             });
     }
 
-    /// The CIR h(t_n) of direction `d` on the oversampled grid (from bin 0, sample −half).
-    fn cir(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<Complex64> {
-        let nb = self.proc.nbins();
-        let (l, half, dt) = (self.l, self.half, self.dt);
+    /// The rays direction `d` sees through the pattern with a received |amplitude|²
+    /// a2 = g²|A|² of at least `min_a2`: (ray, a2, delay with the pattern's group delay).
+    fn seen<'a>(
+        &'a self,
+        d: usize,
+        heading: f64,
+        rays: &'a [SeenRay],
+        min_a2: f64,
+    ) -> impl Iterator<Item = (&'a SeenRay, f64, f64)> + 'a {
         let bp = &self.bands[if self.bands.len() == 1 { 0 } else { d }];
         let theta_s = self.angles[d].to_radians();
-        let mut h = vec![Complex64::new(0.0, 0.0); nb * l];
-        for r in rays {
+        rays.iter().filter_map(move |r| {
             let th = match self.steering {
                 Steering::Mechanical => r.theta - heading - theta_s,
                 Steering::Electronic => r.theta - heading,
             };
-            let Some((g, tau_g)) = bp.at(wrap_rad(th)) else {
-                continue;
-            };
+            let (g, tau_g) = bp.at(wrap_rad(th))?;
             let a2 = g * g * r.amp2;
-            if a2 < self.cull * self.noise_mean {
-                continue;
-            }
-            let tau = r.tau_s + tau_g;
+            (a2 >= min_a2).then_some((r, a2, r.tau_s + tau_g))
+        })
+    }
+
+    /// The samples n·dt (index from bin 0, sample −half; and t) within `reach` of `tau`,
+    /// outside the coupling gate.
+    fn samples(&self, tau: f64, reach: f64) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let (l, half, dt) = (self.l, self.half, self.dt);
+        let nb = self.proc.nbins();
+        let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
+        let hi = ((tau + reach) / dt).floor() as i64;
+        let hi = hi.min((nb * l) as i64 - half - 1);
+        (lo..=hi).filter_map(move |n| {
+            let t = n as f64 * dt;
+            (t.abs() >= self.gate).then_some(((n + half) as usize, t))
+        })
+    }
+
+    /// The CIR h(t_n) of direction `d` on the oversampled grid (from bin 0, sample −half).
+    fn cir(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<Complex64> {
+        let mut h = vec![Complex64::new(0.0, 0.0); self.proc.nbins() * self.l];
+        for (r, a2, tau) in self.seen(d, heading, rays, self.cull * self.noise_mean) {
             let (phase, reach) = match r.source {
                 RaySource::Cluster(_) => (-2.0 * PI * (self.fc * tau).fract(), self.kernel_reach),
                 RaySource::Specular(_) | RaySource::Vertex(_) => (
@@ -440,16 +484,8 @@ impl Response {
                 ),
             };
             let a = Complex64::from_polar(a2.sqrt(), phase);
-            // samples n·dt within the kernel's reach, from bin 0 (sample −half)
-            let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
-            let hi = ((tau + reach) / dt).floor() as i64;
-            let hi = hi.min((nb * l) as i64 - half - 1);
-            for n in lo..=hi {
-                let t = n as f64 * dt;
-                if t.abs() < self.gate {
-                    continue;
-                }
-                h[(n + half) as usize] += a * self.kernel.at(t - tau);
+            for (i, t) in self.samples(tau, reach) {
+                h[i] += a * self.kernel.at(t - tau);
             }
         }
         h
@@ -458,34 +494,10 @@ impl Response {
     /// The CIR's expected power |h(t_n)|² of direction `d` with the rays added in power
     /// (grid as [`Response::cir`], no cull).
     fn power(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<f64> {
-        let nb = self.proc.nbins();
-        let (l, half, dt) = (self.l, self.half, self.dt);
-        let bp = &self.bands[if self.bands.len() == 1 { 0 } else { d }];
-        let theta_s = self.angles[d].to_radians();
-        let mut h = vec![0.0; nb * l];
-        for r in rays {
-            let th = match self.steering {
-                Steering::Mechanical => r.theta - heading - theta_s,
-                Steering::Electronic => r.theta - heading,
-            };
-            let Some((g, tau_g)) = bp.at(wrap_rad(th)) else {
-                continue;
-            };
-            let a2 = g * g * r.amp2;
-            if a2 <= 0.0 {
-                continue;
-            }
-            let tau = r.tau_s + tau_g;
-            let reach = self.kernel_reach;
-            let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
-            let hi = ((tau + reach) / dt).floor() as i64;
-            let hi = hi.min((nb * l) as i64 - half - 1);
-            for n in lo..=hi {
-                let t = n as f64 * dt;
-                if t.abs() < self.gate {
-                    continue;
-                }
-                h[(n + half) as usize] += a2 * self.kernel.at(t - tau).powi(2);
+        let mut h = vec![0.0; self.proc.nbins() * self.l];
+        for (_, a2, tau) in self.seen(d, heading, rays, f64::MIN_POSITIVE) {
+            for (i, t) in self.samples(tau, self.kernel_reach) {
+                h[i] += a2 * self.kernel.at(t - tau).powi(2);
             }
         }
         h

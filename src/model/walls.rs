@@ -148,7 +148,6 @@ pub fn vertex_rays(layout: &Layout, at: Coord<f64>, walls: &WallModel, seed: u64
     if c.is_none() && e.is_none() {
         return Vec::new();
     }
-    let re = 1.0 / (4.0 * PI).powi(3);
     vertices(layout)
         .iter()
         .enumerate()
@@ -158,14 +157,7 @@ pub fn vertex_rays(layout: &Layout, at: Coord<f64>, walls: &WallModel, seed: u64
                 VertexKind::Edge => e?,
             };
             let (r, bearing) = vertex_seen(layout, at, v)?;
-            Some(SeenRay {
-                source: RaySource::Vertex(i),
-                tau_s: crate::units::delay_s(r),
-                theta: bearing,
-                amp2: sigma * re / r.powi(4),
-                pos: v.pos,
-                phase: vertex_phase(seed, i),
-            })
+            Some(vertex_ray(i, v, r, bearing, sigma, vertex_phase(seed, i)))
         })
         .collect()
 }
@@ -187,19 +179,37 @@ pub fn specular_amp2(gamma: f64, d_m: f64) -> f64 {
     gamma * gamma / ((4.0 * PI).powi(2) * 4.0 * d_m * d_m)
 }
 
+/// The specular ray of foot `f` with reflection magnitude `gamma` and phase `phase`.
+pub fn specular_ray(f: &Foot, gamma: f64, phase: f64) -> SeenRay {
+    SeenRay {
+        source: RaySource::Specular(f.wall),
+        tau_s: crate::units::delay_s(f.d_m),
+        theta: f.bearing,
+        amp2: specular_amp2(gamma, f.d_m),
+        pos: f.pos,
+        phase,
+    }
+}
+
 /// The specular rays seen from `at`, each wall's |Γ| from `walls` (by its material).
 pub fn specular_rays(layout: &Layout, at: Coord<f64>, walls: &WallModel) -> Vec<SeenRay> {
     feet(layout, at)
-        .into_iter()
-        .map(|f| SeenRay {
-            source: RaySource::Specular(f.wall),
-            tau_s: crate::units::delay_s(f.d_m),
-            theta: f.bearing,
-            amp2: specular_amp2(walls.gamma(&layout.walls[f.wall].material), f.d_m),
-            pos: f.pos,
-            phase: PI,
-        })
+        .iter()
+        .map(|f| specular_ray(f, walls.gamma(&layout.walls[f.wall].material), PI))
         .collect()
+}
+
+/// The ray of vertex `i` at `v` seen at range `r_m` and bearing `bearing` (rad), with σ
+/// `sigma` (m²) and phase `phase`: |A|² = σ/((4π)³r⁴).
+pub fn vertex_ray(i: usize, v: &Vertex, r_m: f64, bearing: f64, sigma: f64, phase: f64) -> SeenRay {
+    SeenRay {
+        source: RaySource::Vertex(i),
+        tau_s: crate::units::delay_s(r_m),
+        theta: bearing,
+        amp2: sigma / ((4.0 * PI).powi(3) * r_m.powi(4)),
+        pos: v.pos,
+        phase,
+    }
 }
 
 #[cfg(test)]

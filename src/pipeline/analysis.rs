@@ -23,6 +23,9 @@ pub struct Analysis {
     pub cluster_params: cluster::ClusterParams,
     /// The channel fit (Table 1, model file), or why it failed (too few clusters, say).
     pub fit: Result<crate::fit::channel::ChannelFit>,
+    /// Why the levels (`model::levels`) could not be read from the energy table, if so
+    /// (the fit's model is then the cluster chain's).
+    pub levels_error: Option<String>,
     /// Stage timings, s.
     pub timings: Vec<(String, f64)>,
 }
@@ -67,9 +70,14 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());
     timings.push(("fit (Table 1)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
-    let fit = fit.and_then(|mut f| {
-        f.model = crate::model::levels::fit_levels(sc, em, &f.model)?.0;
-        Ok(f)
+    // the levels refine a fitted model; when they cannot be read the chain's model stays
+    let mut levels_error = None;
+    let fit = fit.map(|mut f| {
+        match crate::model::levels::fit_levels(sc, em, &f.model) {
+            Ok((m, _)) => f.model = m,
+            Err(e) => levels_error = Some(e.to_string()),
+        }
+        f
     });
     timings.push((
         "levels (walls, diffuse, clusters)".into(),
@@ -80,6 +88,7 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
         clustering,
         cluster_params: params,
         fit,
+        levels_error,
         timings,
     })
 }

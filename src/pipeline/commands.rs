@@ -607,6 +607,9 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     if let Some(dir) = &cmd.truth {
         inputs.push((dir.join("rays.parquet"), "--truth"));
     }
+    if let Some(e) = &cmd.energy {
+        inputs.push((e.clone(), "--energy"));
+    }
     refuse(
         &[
             (cmd.table.clone(), "--table"),
@@ -615,10 +618,6 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
         ],
         &inputs,
     )?;
-    if let Some(e) = &cmd.energy {
-        inputs.push((e.clone(), "--energy"));
-    }
-    refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
     let params = cmd.params.check()?;
     let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
     if let Some(e) = &cmd.energy {

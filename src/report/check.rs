@@ -149,7 +149,7 @@ pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
 /// corridor".
 pub fn section(title: &str, what: &str, r: &CheckResult, png: &str) -> Section {
     let html = format!(
-        "<p>{}: {} draws of <code>synth</code> from {} (seeds from {}), statistics of \
+        "<p>{}: {} draws of <code>synth</code> (seeds from {}), statistics of \
          <code>pradar check</code> (signal = bins 10 dB above the measured noise mean). \
          KS measured↔draws is the median over draws; draw↔draw the median over pairs; \
          p = share of draw↔draw distances ≥ it. Pass: every ratio ≤ 1.5 and min p × {} ≥ 0.05.</p>\n\
@@ -158,7 +158,6 @@ pub fn section(title: &str, what: &str, r: &CheckResult, png: &str) -> Section {
          <p><img src=\"{}\" alt=\"check CDFs\"></p>\n",
         html_escape(what),
         r.draws.len(),
-        html_escape(what),
         r.seed,
         r.stats.len(),
         html_escape(&r.verdict()),
