@@ -74,8 +74,7 @@ use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
-use crate::model::{EnergySimulator, SynthParams};
-use crate::params::ParamGuard;
+use crate::model::EnergySimulator;
 use std::path::Path;
 use summaries::SummaryContext;
 
@@ -258,18 +257,8 @@ pub fn calibrate(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Calibration> {
     let t0 = std::time::Instant::now();
-    crate::energy::matrix::check_campaign(c, energy, energy_path)?;
-    energy.meta.check_noise(energy_path)?;
     let m = &c.manifest;
-    let sim = EnergySimulator::new(
-        c,
-        &SynthParams {
-            cull: params.cull,
-            ..Default::default()
-        }
-        .check()?,
-    )?;
-    sim.check_shape(energy, energy_path, &c.path)?;
+    let sim = EnergySimulator::for_table(c, energy, energy_path, params.cull)?;
     let nb = energy.bins;
     let poses: Vec<(f64, f64, f64)> = m
         .poses

@@ -245,7 +245,55 @@ fn check_polygon(poly: &Polygon<f64>, path: &Path, i: usize) -> Result<()> {
     Ok(())
 }
 
+/// A wall's normal-incidence point seen from a pose ([`Layout::feet`]): where a
+/// monostatic radar sees that wall's mirror image of itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Foot {
+    /// Wall index (into [`Layout::walls`]).
+    pub wall: usize,
+    /// The normal-incidence point, m.
+    pub pos: Coord<f64>,
+    /// Distance pose → foot, m.
+    pub d_m: f64,
+    /// Global bearing of the foot from the pose, rad.
+    pub bearing: f64,
+}
+
 impl Layout {
+    /// The walls whose normal-incidence point `at` sees, in wall order: the foot of the
+    /// perpendicular from `at` onto the wall's line lies on the segment, `at` is on the
+    /// wall's free side and at least 5 cm away, and the segment `at` → foot crosses no
+    /// wall (1 mm slack). The image method's specular returns (the simulator's and the
+    /// statistical model's) come from these.
+    pub fn feet(&self, at: Coord<f64>) -> Vec<Foot> {
+        let mut out = Vec::new();
+        for (wi, w) in self.walls.iter().enumerate() {
+            let dl = w.line.delta();
+            let l2 = dl.x * dl.x + dl.y * dl.y;
+            if l2 <= 0.0 {
+                continue;
+            }
+            let t = ((at.x - w.line.start.x) * dl.x + (at.y - w.line.start.y) * dl.y) / l2;
+            if !(0.0..=1.0).contains(&t) {
+                continue;
+            }
+            let foot = w.line.start + dl * t;
+            let n = w.normal();
+            let v = at - foot;
+            let d = v.x.hypot(v.y);
+            if d < 0.05 || v.x * n.x + v.y * n.y <= 0.0 || self.occluded(at, foot, 1e-3) {
+                continue;
+            }
+            out.push(Foot {
+                wall: wi,
+                pos: foot,
+                d_m: d,
+                bearing: (-v.y).atan2(-v.x),
+            });
+        }
+        out
+    }
+
     /// Read a layout GeoJSON file.
     pub fn load(path: &Path) -> Result<Layout> {
         let text = crate::io::read_text(path)?;

@@ -38,7 +38,7 @@ use crate::campaign::modelfile::ModelConfig;
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::export::{Cell, Column, Table};
-use crate::model::{EnergySimulator, SynthParams};
+use crate::model::EnergySimulator;
 use crate::params::{ParamGuard, Valid};
 use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -114,8 +114,6 @@ pub struct StatResult {
     pub measured_median: f64,
     /// Median over draws of each draw's median.
     pub draws_median: f64,
-    /// Values in the measured sample (bins of the curve).
-    pub measured_n: usize,
 }
 
 impl StatResult {
@@ -289,17 +287,7 @@ pub fn check(
     progress: &dyn Fn(usize, usize),
 ) -> Result<CheckResult> {
     let t0 = std::time::Instant::now();
-    crate::energy::matrix::check_campaign(c, energy, energy_path)?;
-    energy.meta.check_noise(energy_path)?;
-    let sim = EnergySimulator::new(
-        c,
-        &SynthParams {
-            cull: params.cull,
-            ..Default::default()
-        }
-        .check()?,
-    )?;
-    sim.check_shape(energy, energy_path, &c.path)?;
+    let sim = EnergySimulator::for_table(c, energy, energy_path, params.cull)?;
     let ctx = context(energy);
     let measured = Statistics::of(&ctx, &energy.data);
     let seed = params.seed.unwrap_or(c.manifest.seed);
@@ -344,10 +332,6 @@ pub fn check(
                 reference_ks,
                 measured_median: measured.values[k].median(ctx.bin_ns),
                 draws_median: median_of(&draw_medians),
-                measured_n: match &measured.values[k] {
-                    stats::Stat::Sample(v) => v.len(),
-                    stats::Stat::Curve(v) => v.len(),
-                },
             }
         })
         .collect();
@@ -372,7 +356,6 @@ mod tests {
             reference_ks,
             measured_median: 0.0,
             draws_median: 0.0,
-            measured_n: 1,
         }
     }
 

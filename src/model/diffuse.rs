@@ -60,6 +60,49 @@ pub struct DiffusePoint {
     pub phase: f64,
 }
 
+/// One range cell of a wall: arc length a to a + l along a wall of length `len`.
+struct Cell<'a> {
+    wall: usize,
+    line: &'a geo::Line<f64>,
+    normal: Coord<f64>,
+    len: f64,
+    a: f64,
+    l: f64,
+}
+
+impl Cell<'_> {
+    /// The point at arc length `s` along the cell's wall.
+    fn at(&self, s: f64) -> Coord<f64> {
+        self.line.start + self.line.delta() * (s / self.len)
+    }
+}
+
+/// The cells of Δ = `cell` of every wall of `layout`, wall by wall: n = ⌈L/Δ⌉ (a wall of
+/// exactly k cells has k, not k + 1: rounding), the last one shorter.
+fn cells(layout: &Layout, cell: f64) -> impl Iterator<Item = Cell<'_>> + '_ {
+    layout
+        .walls
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.length() > 0.0)
+        .flat_map(move |(i, w)| {
+            let len = w.length();
+            let n = ((len / cell) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+            let normal = w.normal();
+            (0..n).map(move |k| {
+                let a = k as f64 * cell;
+                Cell {
+                    wall: i,
+                    line: &w.line,
+                    normal,
+                    len,
+                    a,
+                    l: (len - a).min(cell),
+                }
+            })
+        })
+}
+
 /// The drawn diffuse walls.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiffuseWalls {
@@ -100,28 +143,17 @@ impl DiffuseWalls {
         let cell = C0 / (2.0 * bandwidth_hz);
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
         let mut points = Vec::new();
-        for (i, w) in layout.walls.iter().enumerate() {
-            let len = w.length();
-            if len <= 0.0 {
-                continue;
-            }
-            // a wall of exactly k cells has k, not k + 1 (rounding)
-            let n = ((len / cell) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
-            let normal = w.normal();
-            for k in 0..n {
-                let a = k as f64 * cell;
-                let l = (len - a).min(cell);
-                let s = a + l * rng.gen::<f64>();
-                let e: f64 = -(1.0 - rng.gen::<f64>()).ln(); // Exp(1)
-                let phase = 2.0 * PI * rng.gen::<f64>();
-                points.push(DiffusePoint {
-                    wall: i,
-                    pos: w.line.start + w.line.delta() * (s / len),
-                    normal,
-                    sigma_m2: per_m * l * e,
-                    phase,
-                });
-            }
+        for c in cells(layout, cell) {
+            let s = c.a + c.l * rng.gen::<f64>();
+            let e: f64 = -(1.0 - rng.gen::<f64>()).ln(); // Exp(1)
+            let phase = 2.0 * PI * rng.gen::<f64>();
+            points.push(DiffusePoint {
+                wall: c.wall,
+                pos: c.at(s),
+                normal: c.normal,
+                sigma_m2: per_m * c.l * e,
+                phase,
+            });
         }
         Ok(DiffuseWalls {
             points,
@@ -136,25 +168,15 @@ impl DiffuseWalls {
     /// unit wall, which the level estimator ([`super::levels`]) scales.
     pub fn unit_mean(layout: &Layout, lambert_exponent: f64, bandwidth_hz: f64) -> DiffuseWalls {
         let cell = C0 / (2.0 * bandwidth_hz);
-        let mut points = Vec::new();
-        for (i, w) in layout.walls.iter().enumerate() {
-            let len = w.length();
-            if len <= 0.0 {
-                continue;
-            }
-            let n = ((len / cell) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
-            for k in 0..n {
-                let a = k as f64 * cell;
-                let l = (len - a).min(cell);
-                points.push(DiffusePoint {
-                    wall: i,
-                    pos: w.line.start + w.line.delta() * ((a + 0.5 * l) / len),
-                    normal: w.normal(),
-                    sigma_m2: l,
-                    phase: 0.0,
-                });
-            }
-        }
+        let points = cells(layout, cell)
+            .map(|c| DiffusePoint {
+                wall: c.wall,
+                pos: c.at(c.a + 0.5 * c.l),
+                normal: c.normal,
+                sigma_m2: c.l,
+                phase: 0.0,
+            })
+            .collect();
         DiffuseWalls {
             points,
             lambert_exponent,

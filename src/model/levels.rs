@@ -16,7 +16,7 @@
 //! S = max(E − μ, 0):
 //!
 //! 1. **Specular |Γ|** (`walls.specular_gamma`): for every pose and every wall whose
-//!    normal-incidence point the pose sees inside the scanned sector (`walls::feet`; at
+//!    normal-incidence point the pose sees inside the scanned sector (`Layout::feet`; at
 //!    most half a direction step beyond its edges), the direction d* nearest the foot's
 //!    bearing and the bins within ±2 of its delay 2d/c (for a wall so near that its echo
 //!    falls inside the coupling gate, the first 3 bins after the gate, where its range
@@ -65,7 +65,7 @@
 
 use super::channel::SeenRay;
 use super::diffuse::DiffuseWalls;
-use super::walls::{feet, specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
+use super::walls::{specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{ModelConfig, Quantity};
@@ -157,7 +157,7 @@ pub fn fit_levels(
     let mut feet_at = Vec::with_capacity(np);
     for p in 0..np {
         let (at, heading) = sim.pose(p);
-        let f = feet(&layout, at);
+        let f = layout.feet(at);
         for foot in &f {
             let rel = wrap_rad(foot.bearing - heading.to_radians()).to_degrees();
             let Some(d) = nearest(rel) else { continue };

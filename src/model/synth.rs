@@ -14,7 +14,7 @@
 
 use super::channel::{ChannelModel, RaySource, SeenRay};
 use super::diffuse::DiffuseWalls;
-use super::params::SynthValid;
+use super::params::{SynthParams, SynthValid};
 use super::response::{BandPattern, Kernel, KERNEL_BINS};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, CouplingRemoval, Steering};
@@ -23,6 +23,7 @@ use crate::campaign::pattern::ArrayPattern;
 use crate::campaign::simulate::{truth_rays_frame, write_truth_clusters, TruthCluster, TruthRay};
 use crate::energy::{self, EnergyProcessor};
 use crate::error::{Error, Result};
+use crate::params::ParamGuard;
 use crate::table;
 use crate::units::{wrap_rad, C0};
 use geo::Coord;
@@ -258,17 +259,30 @@ impl EnergySimulator {
 }
 
 impl EnergySimulator {
-    /// Refuse an energy table (read from `energy_path`) whose shape is not the one this
-    /// simulator draws for the campaign at `campaign_path` (other processing settings).
-    pub fn check_shape(
-        &self,
+    /// The simulator to compare with the measured table `energy` (read from
+    /// `energy_path`) of campaign `c`, at ray cull `cull`: the table is first checked
+    /// against the campaign (poses, directions, noise) and then refused when its shape is
+    /// not the one this simulator draws (other processing settings). What `check` and
+    /// `calibrate` set up before drawing.
+    pub fn for_table(
+        c: &Campaign,
         energy: &crate::energy::EnergyMatrix,
         energy_path: &Path,
-        campaign_path: &Path,
-    ) -> Result<()> {
-        let (np, nd, nb) = self.shape();
+        cull: f64,
+    ) -> Result<EnergySimulator> {
+        crate::energy::matrix::check_campaign(c, energy, energy_path)?;
+        energy.meta.check_noise(energy_path)?;
+        let sim = EnergySimulator::new(
+            c,
+            &SynthParams {
+                cull,
+                ..Default::default()
+            }
+            .check()?,
+        )?;
+        let (np, nd, nb) = sim.shape();
         if (np, nd, nb) == (energy.positions, energy.directions(), energy.bins) {
-            return Ok(());
+            return Ok(sim);
         }
         Err(Error::input(
             energy_path,
@@ -277,7 +291,7 @@ impl EnergySimulator {
                 energy.positions,
                 energy.directions(),
                 energy.bins,
-                campaign_path.display()
+                c.path.display()
             ),
         ))
     }

@@ -8,7 +8,8 @@
 //! * **Image method, monostatic** (DESIGN §2 "Scattering"): the pose sees wall w's mirror
 //!   image of itself when the foot of the perpendicular from the pose onto the wall's line
 //!   lies on the segment, the pose is on the wall's free side, at least 5 cm away, and the
-//!   segment pose → foot crosses no other wall (1 mm slack). The ray arrives from the
+//!   segment pose → foot crosses no other wall (1 mm slack; [`Layout::feet`], the
+//!   simulator's rule too). The ray arrives from the
 //!   foot's bearing at τ = 2d/c with amplitude G·λ·|Γ|/(4π·2d), i.e.
 //!   |A|² = |Γ|² / ((4π)²·4d²) (falls as d⁻², not d⁻⁴: a mirror, not a point).
 //! * **|Γ| per layout material** (the GeoJSON's `properties.material` names which walls
@@ -30,48 +31,7 @@ use std::f64::consts::PI;
 
 pub use crate::campaign::modelfile::WallModel;
 
-/// One wall's normal-incidence point seen from a pose.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Foot {
-    /// Wall index (into the layout's walls).
-    pub wall: usize,
-    /// The normal-incidence point, m.
-    pub pos: Coord<f64>,
-    /// Distance pose → foot, m.
-    pub d_m: f64,
-    /// Global bearing of the foot from the pose, rad.
-    pub bearing: f64,
-}
-
-/// The walls whose normal-incidence point `at` sees (module docs' rule), in wall order.
-pub fn feet(layout: &Layout, at: Coord<f64>) -> Vec<Foot> {
-    let mut out = Vec::new();
-    for (wi, w) in layout.walls.iter().enumerate() {
-        let dl = w.line.delta();
-        let l2 = dl.x * dl.x + dl.y * dl.y;
-        if l2 <= 0.0 {
-            continue;
-        }
-        let t = ((at.x - w.line.start.x) * dl.x + (at.y - w.line.start.y) * dl.y) / l2;
-        if !(0.0..=1.0).contains(&t) {
-            continue;
-        }
-        let foot = w.line.start + dl * t;
-        let n = w.normal();
-        let v = at - foot;
-        let d = v.x.hypot(v.y);
-        if d < 0.05 || v.x * n.x + v.y * n.y <= 0.0 || layout.occluded(at, foot, 1e-3) {
-            continue;
-        }
-        out.push(Foot {
-            wall: wi,
-            pos: foot,
-            d_m: d,
-            bearing: (-v.y).atan2(-v.x),
-        });
-    }
-    out
-}
+pub use crate::campaign::layout::Foot;
 
 /// The class of a layout vertex.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -193,7 +153,8 @@ pub fn specular_ray(f: &Foot, gamma: f64, phase: f64) -> SeenRay {
 
 /// The specular rays seen from `at`, each wall's |Γ| from `walls` (by its material).
 pub fn specular_rays(layout: &Layout, at: Coord<f64>, walls: &WallModel) -> Vec<SeenRay> {
-    feet(layout, at)
+    layout
+        .feet(at)
         .iter()
         .map(|f| specular_ray(f, walls.gamma(&layout.walls[f.wall].material), PI))
         .collect()
@@ -221,7 +182,7 @@ mod tests {
         let p = concat!(env!("CARGO_MANIFEST_DIR"), "/data/corridor/layout.geojson");
         let layout = Layout::load(std::path::Path::new(p)).unwrap();
         let at = Coord { x: 0.5, y: -0.3 };
-        let f = feet(&layout, at);
+        let f = layout.feet(at);
         // the south wall (y = −1) at 0.7 m and the north wall (y = 1) at 1.3 m, the back
         // wall (x = −1) at 1.5 m
         let mut d: Vec<f64> = f.iter().map(|f| f.d_m).collect();

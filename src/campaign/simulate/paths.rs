@@ -87,29 +87,17 @@ impl Scene {
 
     /// The specular (normal-incidence) path of every wall seen from `at`, appended to `out`.
     fn specular_paths(&self, at: Coord<f64>, out: &mut Vec<Path1>) {
-        for (wi, w) in self.layout.walls.iter().enumerate() {
-            let dl = w.line.delta();
-            let l2 = dl.x * dl.x + dl.y * dl.y;
-            let t = ((at.x - w.line.start.x) * dl.x + (at.y - w.line.start.y) * dl.y) / l2;
-            if !(0.0..=1.0).contains(&t) {
-                continue;
-            }
-            let foot = w.line.start + dl * t;
-            let n = w.normal();
-            let v = at - foot;
-            let d = v.x.hypot(v.y);
-            if d < 0.05 || v.x * n.x + v.y * n.y <= 0.0 || self.layout.occluded(at, foot, 1e-3) {
-                continue;
-            }
+        for f in self.layout.feet(at) {
+            let w = &self.layout.walls[f.wall];
             let gamma = self.cfg.material(&w.material).gamma();
             out.push(Path1 {
-                tau_s: crate::units::delay_s(d),
-                theta: (-v.y).atan2(-v.x),
-                amp: gamma / (4.0 * PI * 2.0 * d),
+                tau_s: crate::units::delay_s(f.d_m),
+                theta: f.bearing,
+                amp: gamma / (4.0 * PI * 2.0 * f.d_m),
                 scatterer: usize::MAX,
                 kind: ScattererKind::Specular,
-                wall: Some(wi),
-                pos: foot,
+                wall: Some(f.wall),
+                pos: f.pos,
             });
         }
     }
