@@ -17,7 +17,7 @@ use clap::error::ErrorKind;
 use clap::Parser;
 use cli::{
     CalibrateArgs, CheckArgs, Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs,
-    FitArgs, ImportArgs, MapArgs, ReproduceArgs, SimulateArgs, SynthArgs,
+    FitArgs, ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use pradar::params::ParamGuard;
@@ -83,6 +83,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Fit(a) => fit(a, quiet),
         Cmd::Calibrate(a) => calibrate(a, quiet),
         Cmd::Check(a) => check(a, quiet),
+        Cmd::Report(a) => report_cmd(a, quiet),
         Cmd::Reproduce(a) => reproduce(a, quiet),
         Cmd::Experiment(a) => experiment(a, quiet),
     }
@@ -382,6 +383,23 @@ fn reproduce(a: ReproduceArgs, quiet: bool) -> Result<()> {
     .check()?;
     let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
     let index = pradar::pipeline::reproduce(&opts, &progress)?;
+    report(quiet, format_args!("report: {}", index.display()));
+    Ok(())
+}
+
+fn report_cmd(a: ReportArgs, quiet: bool) -> Result<()> {
+    let opts = pradar::pipeline::ReportOptions {
+        out: a.out,
+        campaign: a.campaign,
+        energy: a.energy,
+        model: a.model,
+        truth: a.truth,
+        experiments: !a.skip_experiments,
+        experiment_params: ExperimentParams::default().seeds(a.seeds).check()?,
+    }
+    .check()?;
+    let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
+    let index = pradar::pipeline::report(&opts, &progress)?;
     report(quiet, format_args!("report: {}", index.display()));
     Ok(())
 }

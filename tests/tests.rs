@@ -27,6 +27,7 @@ mod mapping;
 mod mpc;
 mod occlusion;
 mod physics;
+mod report;
 mod responsiveness;
 mod streaming;
 mod synth;

@@ -53,6 +53,8 @@ pub enum Cmd {
     Calibrate(CalibrateArgs),
     /// Posterior-predictive check: does `synth` from a model give channels like the table's?
     Check(CheckArgs),
+    /// The report of any campaign (measured or simulated): energy, MPCs, Table 1, check, maps.
+    Report(ReportArgs),
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce(ReproduceArgs),
     /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
@@ -364,6 +366,38 @@ pub struct FitArgs {
     /// |Γ|, the diffuse σ′, the clusters' σ; see `model::levels`).
     #[arg(long)]
     pub energy: Option<PathBuf>,
+}
+
+// `pradar report`
+#[derive(Args)]
+pub struct ReportArgs {
+    /// The campaign's manifest (measured: `pradar import`; or simulated).
+    #[arg(long)]
+    pub campaign: PathBuf,
+    /// Energy table of its sweeps (default: computed from them into OUT/work).
+    #[arg(long)]
+    pub energy: Option<PathBuf>,
+    /// Report folder.
+    #[arg(long, default_value = "reports/campaign")]
+    pub out: PathBuf,
+    /// Model for the check and the experiments (default: the one fitted from the campaign).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// A simulator's truth folder for Table 1's truth column (default: truth/ beside the
+    /// manifest when it has one).
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Skip the mapping experiments.
+    #[arg(long)]
+    pub skip_experiments: bool,
+    /// Model-data seeds of the experiments (comma-separated).
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        value_delimiter = ',',
+        default_value = "1,2,3"
+    )]
+    pub seeds: Vec<u64>,
 }
 
 // `pradar reproduce`

@@ -119,7 +119,7 @@ pub struct ChannelFit {
 /// let p = FitParams { bootstrap: 200, seed: 1 }.check()?;
 /// let f = fit_channel(Path::new("clusters.parquet"), &c, &p)?;
 /// f.model.save(Path::new("fitted_model.toml"))?;
-/// pradar::fit::table1::write_table1(Path::new("table1.md"), &f, None)?;
+/// pradar::fit::table1::write_table1(Path::new("table1.md"), &c.manifest.name, &f, None)?;
 /// # Ok(())
 /// # }
 /// ```

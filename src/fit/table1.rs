@@ -106,9 +106,10 @@ impl Table1Row {
     }
 }
 
-/// The columns of Table 1 (Markdown headers, the report's shorter HTML headers, CSV names).
-fn columns() -> Vec<Column> {
-    vec![
+/// The columns of Table 1 (Markdown headers, the report's shorter HTML headers, CSV names);
+/// the truth's last, only when there is a truth.
+fn columns(truth: bool) -> Vec<Column> {
+    let mut c = vec![
         Column::new("parameter", "parameter"),
         Column::new("pradar", "value"),
         Column::new("unit", "unit").csv_only(),
@@ -122,15 +123,24 @@ fn columns() -> Vec<Column> {
         Column::new("best family by AIC", "best_aic").html("best by AIC"),
         Column::new("paper Table 1", "paper").html("paper"),
         Column::new("simulator truth (same estimators)", "truth"),
-    ]
+    ];
+    if !truth {
+        c.pop();
+    }
+    c
 }
 
 /// Table 1 as one [`Table`]: `t.to_markdown()` is the table of `table1.md`, `t.to_csv()`
-/// is `table1.csv`, `report::html_table(&t)` the report's.
+/// is `table1.csv`, `report::html_table(&t)` the report's. Without a truth there is no
+/// truth column (a measured campaign has none to show).
 pub fn table(f: &ChannelFit, truth: Option<&ChannelFit>) -> Table {
-    let mut t = Table::new(columns());
+    let mut t = Table::new(columns(truth.is_some()));
     for r in rows(f, truth) {
-        t.push(r.cells());
+        let mut cells = r.cells();
+        if truth.is_none() {
+            cells.pop();
+        }
+        t.push(cells);
     }
     t
 }
@@ -146,10 +156,16 @@ pub fn rows(f: &ChannelFit, truth: Option<&ChannelFit>) -> Vec<Table1Row> {
     rows
 }
 
-/// Write table1.md and table1.csv (beside `md`).
-pub fn write_table1(md: &Path, f: &ChannelFit, truth: Option<&ChannelFit>) -> Result<()> {
+/// Write table1.md (titled "Table 1: `name` channel parameters", `name` the campaign's) and
+/// table1.csv (beside `md`).
+pub fn write_table1(
+    md: &Path,
+    name: &str,
+    f: &ChannelFit,
+    truth: Option<&ChannelFit>,
+) -> Result<()> {
     let t = table(f, truth);
-    let mut s = String::from("# Table 1: corridor channel parameters\n\n");
+    let mut s = format!("# Table 1: {name} channel parameters\n\n");
     s.push_str(&t.to_markdown());
     s.push_str("\nThe paper's values are printed beside ours for comparison; nothing is tuned toward them.\n");
     crate::io::write_bytes(md, s.as_bytes())?;

@@ -630,7 +630,7 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
         None => None,
     };
     // the table first, the model last: a model file on disk means the run completed
-    crate::fit::channel::write_table1(&cmd.table, &fit, truth.as_ref())?;
+    crate::fit::channel::write_table1(&cmd.table, &c.manifest.name, &fit, truth.as_ref())?;
     fit.model.save(&cmd.out)?;
     Ok(FitSummary { fit, truth })
 }

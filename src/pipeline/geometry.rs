@@ -35,7 +35,8 @@ pub(crate) fn geometry_only_table(
     let a = analyse(&sc, &em, dir, false)?;
     let note = report::reproduce::k_cap_note(&a.clustering, a.cluster_params.k_max);
     let (mpcs, clustering, f) = (a.mpcs, a.clustering, a.fit?);
-    crate::fit::channel::write_table1(&out.join("table1_geometry.md"), &f, None)?;
+    let name = format!("{} without clutter (geometry only)", c.manifest.name);
+    crate::fit::channel::write_table1(&out.join("table1_geometry.md"), &name, &f, None)?;
     Ok(report::reproduce::geometry_html(
         &table1_html_rows(&f, None),
         mpcs.len(),

@@ -1,10 +1,11 @@
-//! The main job (`pradar reproduce`): simulate the built-in corridor into a work folder,
-//! compute its energy matrices, extract and cluster MPCs, fit Table 1 (also on the corridor
+//! The report of a campaign (`pradar report`) and the main job (`pradar reproduce`: simulate
+//! the built-in corridor into a work folder, then the same report): compute its energy matrices, extract and cluster MPCs, fit Table 1 (also on the corridor
 //! without clutter), map it (OG, boresight OG, EKF), run the mapping experiments
 //! ([`experiment`]) and write the report: campaign summary, per-position heat maps, MPC
 //! clusters, Table 1, maps, every experiment's table and panel, and stage timings.
 //!
-//! Layout: [`reproduce()`] (the job as named steps, its options), [`analyse`] (the chain
+//! Layout: [`report()`] (the page's one code path, its options), [`reproduce()`] (simulate,
+//! then that path), [`analyse`] (the chain
 //! CLEAN → K-means → fit on one energy table), `kmax` (Table 1 against the clustering cap),
 //! `geometry` (Table 1 without clutter), [`experiment`] (the mapping experiments). The
 //! report's HTML is built in [`crate::report::reproduce`] and [`crate::report::experiments`].
@@ -14,6 +15,7 @@ use crate::report;
 use std::path::{Path, PathBuf};
 
 mod analysis;
+mod campaign_report;
 pub mod commands;
 pub mod experiment;
 mod geometry;
@@ -21,6 +23,7 @@ mod kmax;
 mod reproduce;
 
 pub use analysis::{analyse, Analysis};
+pub use campaign_report::{report, ReportOptions, ReportValid};
 pub use reproduce::{reproduce, ReproduceOptions, ReproduceValid};
 
 /// The built-in corridor manifest.

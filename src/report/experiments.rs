@@ -70,7 +70,7 @@ pub fn plot_img(name: &str, alt: &str) -> String {
 /// relative to the page: `""` for `DIR/index.html`, `"experiments/"` in `reproduce`).
 pub fn section(r: &ExperimentResult, prefix: &str) -> Section {
     let title = match r.name.as_str() {
-        "fig5" => "Experiment fig5: EKF maps from simulated sweeps and from model data",
+        "fig5" => "Experiment fig5: EKF maps from the campaign's sweeps and from model data",
         "fig6" => "Experiment fig6: OG vs EKF, N = 16 vs N = 100 (model data)",
         "prior-sensitivity" => "Experiment prior-sensitivity: OG prior and EKF μ0 ±40 %",
         _ => "Experiment pose-noise: ψ as pose noise grows",

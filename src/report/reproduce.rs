@@ -12,6 +12,8 @@ use std::path::Path;
 pub struct ReproducePage {
     /// Page title.
     pub title: String,
+    /// The campaign's name (in the section titles).
+    pub name: String,
     /// Campaign summary (key, value).
     pub campaign: Vec<(String, String)>,
     /// Positions (one heat map and one cluster plot each).
@@ -48,11 +50,11 @@ pub fn write_index(path: &Path, page: &ReproducePage) -> Result<()> {
         },
         page.check.clone(),
         Section {
-            title: "Table 1 (corridor)".into(),
+            title: format!("Table 1 ({})", page.name),
             html: page.table1.clone(),
         },
         Section {
-            title: "Table 1 of the corridor without clutter (geometry only)".into(),
+            title: format!("Table 1 of {} without clutter (geometry only)", page.name),
             html: page.geometry.clone(),
         },
         Section {
@@ -98,6 +100,11 @@ fn timings_html(timings: &[(String, f64)], wall_s: f64) -> String {
     kv_table(&rows)
 }
 
+/// `<p>not run: {why}</p>` (escaped), a stage that cannot run on this campaign.
+pub fn not_run(why: &str) -> String {
+    format!("<p>not run: {}</p>", html_escape(why))
+}
+
 /// `<p>{what} failed: {error}</p>` (the error escaped).
 pub fn failed(what: &str, e: &dyn std::fmt::Display) -> String {
     format!("<p>{what} failed: {}</p>", html_escape(&e.to_string()))
@@ -138,9 +145,9 @@ pub type FitPlot = (String, Option<String>);
 /// it, already closed): the closing note with links and the fit plots. The extra
 /// `</table>` it writes first is a stray tag of the original page, kept so the page stays
 /// byte-identical; drop it with the next change that alters the page.
-pub fn table1_fitted_html(rows_html: &str, plots: &[FitPlot]) -> String {
+pub fn table1_fitted_html(name: &str, rows_html: &str, plots: &[FitPlot]) -> String {
     let mut h = rows_html.to_string();
-    h.push_str("</table><p>From the simulated corridor's clusters; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n");
+    h.push_str(&format!("</table><p>From the clusters of {}; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n", html_escape(name)));
     for (name, png) in plots {
         match png {
             None => h.push_str(&format!("<p>{name}: fewer than 2 samples, no plot.</p>\n")),
@@ -192,7 +199,7 @@ pub fn geometry_html(
 ) -> String {
     let mut h = rows_html.to_string();
     h.push_str(&format!(
-        "<p>The corridor simulated without its <code>[clutter]</code> section: walls (diffuse and specular), corners, edges and objects only; {mpcs} MPCs in {clusters} clusters over {positions} positions. What the chain calls clusters here is the layout's own structure (<a href=\"table1_geometry.md\">table1_geometry.md</a>).</p>\n",
+        "<p>The campaign simulated without its <code>[clutter]</code> section: walls (diffuse and specular), corners, edges and objects only; {mpcs} MPCs in {clusters} clusters over {positions} positions. What the chain calls clusters here is the layout's own structure (<a href=\"table1_geometry.md\">table1_geometry.md</a>).</p>\n",
     ));
     h.push_str(k_note);
     h

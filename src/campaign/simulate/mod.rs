@@ -84,6 +84,15 @@ pub struct SimReport {
     pub manifest: PathBuf,
 }
 
+/// Whether the manifest has a `[scene]` section (a simulated campaign; `simulate` copies it
+/// into the manifest it writes), read from its text as [`scene_sections`] reads it.
+pub fn has_scene(c: &Campaign) -> Result<bool> {
+    let text = crate::io::read_text(&c.path)?;
+    let t: toml::Table =
+        toml::from_str(&text).map_err(|e| Error::input(&c.path, one_line(&e.to_string())))?;
+    Ok(t.contains_key("scene"))
+}
+
 /// Read `[scene]` (checked) and `[clutter]` from the manifest text (simulator only).
 pub fn scene_sections(c: &Campaign) -> Result<(SceneValid, Option<ModelConfig>)> {
     let text = crate::io::read_text(&c.path)?;

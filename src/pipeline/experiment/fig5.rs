@@ -1,4 +1,4 @@
-//! fig5: EKF maps at the campaign's array from the simulated sweeps and from model data
+//! fig5: EKF maps at the campaign's array from its sweeps (simulated or measured) and from model data
 //! (every seed), side by side with the reference.
 
 use super::lab::{join, mean, CaseFigures, DataSource, Lab};
@@ -17,7 +17,7 @@ impl Lab<'_> {
         let tiles = vec![
             self.reference_tile(),
             self.tile(
-                format!("EKF, simulated sweeps: ψ {:.2}", done[0].0.psi_whole),
+                format!("EKF, {}: ψ {:.2}", self.sweeps_word, done[0].0.psi_whole),
                 &done[0].1,
             ),
             self.tile(
@@ -32,7 +32,7 @@ impl Lab<'_> {
         let model_psi: Vec<f64> = done[1..].iter().map(|d| d.0.psi_whole).collect();
         let findings = vec![
             (
-                "ψ whole, simulated sweeps".to_string(),
+                format!("ψ whole, {}", self.sweeps_word),
                 format!("{:.3}", done[0].0.psi_whole),
             ),
             (
@@ -49,7 +49,7 @@ impl Lab<'_> {
         let extra = report::experiments::ekf_mean_figures(&keys);
         Ok(self.result(
             "fig5",
-            &format!("EKF maps ({n} elements, the campaign's array) from the simulated sweeps and from model data (synth with the model file), 0.1 m cells. Colours: black occupied in both, red false occupied, blue missed occupied, white free, grey outside (free in the map)."),
+            &format!("EKF maps ({n} elements, the campaign's array) from the {} and from model data (synth with the model file), 0.1 m cells. Colours: black occupied in both, red false occupied, blue missed occupied, white free, grey outside (free in the map).", self.sweeps_word),
             cases,
             findings,
             &extra,

@@ -181,6 +181,8 @@ pub struct Lab<'a> {
     pub(super) out: PathBuf,
     model: ModelConfig,
     pub(super) campaign_elements: usize,
+    /// "simulated sweeps" for a campaign with a `[scene]`, else "measured sweeps".
+    pub(super) sweeps_word: &'static str,
     reference: ReferenceMap,
     synth_cache: HashMap<(usize, u64), PathBuf>,
     sweeps_cache: HashMap<usize, (PathBuf, PathBuf)>,
@@ -203,6 +205,10 @@ impl<'a> Lab<'a> {
         std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
         Ok(Lab {
             campaign_elements: c.manifest.array.elements,
+            sweeps_word: match crate::campaign::simulate::has_scene(&c)? {
+                true => "simulated sweeps",
+                false => "measured sweeps",
+            },
             inputs,
             params,
             out: out.to_path_buf(),

@@ -35,7 +35,7 @@
 //!   mapper and seed on the interior and on the whole map, and on the campaign's sweeps
 //!   simulated at both N when the campaign has a `[scene]`;
 //! * **fig5**: EKF maps at the campaign's array (400-element 1-bit for the corridor) from the
-//!   simulated sweeps and from model data (every seed), side by side with the reference;
+//!   campaign's sweeps (simulated or measured) and from model data (every seed), side by side with the reference;
 //! * **fig6**: OG and EKF on model data at N = 16 and N = 100, every seed (and on the
 //!   sweeps simulated at both N);
 //! * **prior-sensitivity**: at N = 16 on model data, the OG prior p0 and the EKF μ0 each
@@ -70,7 +70,7 @@ pub use params::{ExperimentParams, ExperimentValid};
 /// The experiments.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum Experiment {
-    /// EKF maps from simulated sweeps and from model data.
+    /// EKF maps from the campaign's sweeps and from model data.
     Fig5,
     /// OG vs EKF for N = 16 and N = 100 on model data.
     Fig6,
