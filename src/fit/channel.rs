@@ -612,7 +612,7 @@ mod tests {
         let line = md.lines().nth(3).unwrap();
         assert!(line.contains("| exponential | — |"), "{line}");
         let csv = t.to_csv();
-        assert!(csv.starts_with("parameter,value,unit,lo,hi,family,ks_p,best_aic,paper,truth\n"));
+        assert!(csv.starts_with("parameter,value,unit,lo,hi,family,ks_p,best_aic,paper\n"));
         let dc = csv.lines().nth(2).unwrap();
         assert!(
             dc.starts_with(&format!("inter-cluster perimeter distance d_c,{got},m,")),
