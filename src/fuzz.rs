@@ -354,6 +354,7 @@ fn calibration_step(bytes: &[u8], dir: &Path) -> Result<()> {
         pulses,
         points,
         s21,
+        missing: vec![],
     };
     let measured_finite = sw.s21.iter().all(|v| v.re.is_finite() && v.im.is_finite());
     cal.apply(&mut sw)?;

@@ -40,10 +40,13 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
 
 /// Heat map of one position: direction (x, degrees relative) vs range (y, m = delay·c/2),
 /// colour = energy in dB relative to the position's peak, clipped at `floor_db`.
-/// `marks` are (angle_rel_deg, range_m) points drawn as white circles (extracted MPCs).
+/// `marks` are (angle_rel_deg, range_m) points drawn as white circles (extracted MPCs);
+/// `label` names the position in the title (the lab's label); a direction without a sweep
+/// is left blank.
 pub fn energy_heatmap(
     em: &EnergyMatrix,
     p: usize,
+    label: &str,
     path: &Path,
     floor_db: f64,
     marks: &[(f64, f64)],
@@ -52,6 +55,7 @@ pub fn energy_heatmap(
     let nd = em.directions();
     let nb = em.bins;
     let peak = (0..nd)
+        .filter(|&d| em.has(p, d))
         .flat_map(|d| em.profile(p, d).iter().copied())
         .fold(f64::MIN_POSITIVE, f64::max);
     let step = if nd > 1 {
@@ -69,7 +73,7 @@ pub fn energy_heatmap(
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
-                format!("position {p}: energy (dB re peak)"),
+                format!("position {label}: energy (dB re peak)"),
                 ("sans-serif", 18),
             )
             .margin(10)
@@ -89,7 +93,7 @@ pub fn energy_heatmap(
         let db = |e: f64| crate::units::db(e.max(1e-300) / peak).max(floor_db);
         let dr = crate::units::range_m(em.meta.bin_width_ns);
         chart
-            .draw_series((0..nd).flat_map(|d| {
+            .draw_series((0..nd).filter(|&d| em.has(p, d)).flat_map(|d| {
                 let prof = em.profile(p, d);
                 let a = em.angles_rel_deg[d];
                 (0..nb).map(move |b| {

@@ -79,6 +79,10 @@ pub struct ImportParams {
     pub out: PathBuf,
     /// Also write the Parquet sweep table.
     pub to_parquet: bool,
+    /// Go on without what is missing: a position without any sweep file is left out, a
+    /// (position, direction) without a file (for any pulse) is listed in `[sweeps]
+    /// missing`; one warning per item ([`ImportOutcome::warnings`]).
+    pub allow_missing: bool,
 }
 
 /// What [`run`] found and wrote.
@@ -98,6 +102,46 @@ pub struct ImportOutcome {
     pub manifest: Option<PathBuf>,
     /// The Parquet sweep table written.
     pub parquet: Option<PathBuf>,
+    /// What `allow_missing` left out, one line each (for stderr).
+    pub warnings: Vec<String>,
+    /// (position, direction) sweeps recorded as missing.
+    pub missing: usize,
+    /// Positions left out.
+    pub dropped: usize,
+}
+
+/// Problem lines shown after the summary; the rest are counted.
+pub const SHOWN_PROBLEMS: usize = 20;
+
+impl ImportOutcome {
+    /// The refusal of an import with problems, as the command prints it: the summary line
+    /// first (counts per kind), then at most [`SHOWN_PROBLEMS`] problems, then "… and N
+    /// more". `None` when there is no problem.
+    pub fn problem_report(&self) -> Option<(String, Vec<String>)> {
+        if self.problems.is_empty() {
+            return None;
+        }
+        let count = |k: &str| self.problems.iter().filter(|p| p.starts_with(k)).count();
+        let summary = format!(
+            "import: {} problem(s) before processing ({} missing, {} duplicated, {} extra, {} unreadable, {} grid); nothing written{}",
+            self.problems.len(),
+            count("missing"),
+            count("duplicated"),
+            count("extra"),
+            count("unreadable"),
+            count("grid"),
+            if count("missing") > 0 {
+                " (--allow-missing goes on without the missing sweeps)"
+            } else {
+                ""
+            }
+        );
+        let mut lines: Vec<String> = self.problems.iter().take(SHOWN_PROBLEMS).cloned().collect();
+        if self.problems.len() > SHOWN_PROBLEMS {
+            lines.push(format!("… and {} more", self.problems.len() - SHOWN_PROBLEMS));
+        }
+        Some((summary, lines))
+    }
 }
 
 impl std::fmt::Display for ImportOutcome {
@@ -110,6 +154,13 @@ impl std::fmt::Display for ImportOutcome {
         )?;
         if let Some((a, b, n)) = self.band {
             write!(f, ", {:.6}..{:.6} GHz, {n} points", a / 1e9, b / 1e9)?;
+        }
+        if self.missing + self.dropped > 0 {
+            write!(
+                f,
+                "; left out: {} position(s), {} (position, direction) sweep(s) (recorded in the manifest)",
+                self.dropped, self.missing
+            )?;
         }
         for n in &self.notes {
             write!(f, "\nnote: {n}")?;
@@ -125,10 +176,10 @@ impl std::fmt::Display for ImportOutcome {
 }
 
 /// A pose row: label, x_m, y_m, heading_deg.
-type PoseRow = (i64, f64, f64, f64);
+type PoseRow = (String, f64, f64, f64);
 
-/// A small CSV ([`split_csv`] quoting): the lower-cased header, then (line number, cells)
-/// per row.
+/// A small CSV ([`split_csv`] quoting): the header (lower-cased, units folded into the
+/// name: `X [m]` → `x_m`), then (line number, cells) per row.
 type CsvRows = (Vec<String>, Vec<(usize, Vec<String>)>);
 
 /// One sweep file as `import` reads it: its grid and reader notes, or the refusal.
@@ -156,7 +207,7 @@ fn parse_csv(text: &str, path: &Path) -> Result<CsvRows> {
     let header: Vec<String> = split_csv(head)
         .map_err(|e| Error::input(path, format!("header line: {e}")))?
         .into_iter()
-        .map(|h| h.to_ascii_lowercase())
+        .map(|h| header_name(&h))
         .collect();
     let mut body = Vec::new();
     for (n, l) in rows {
@@ -174,6 +225,33 @@ fn parse_csv(text: &str, path: &Path) -> Result<CsvRows> {
         body.push((n, cells));
     }
     Ok((header, body))
+}
+
+/// A header cell as the column lookups see it: lower case, a unit in brackets or
+/// parentheses folded in with `_` (`X [m]` → `x_m`, `Heading (deg)` → `heading_deg`,
+/// `angle [°]` → `angle_deg`), inner spaces as `_`.
+fn header_name(h: &str) -> String {
+    let h = h.trim().to_lowercase();
+    let (name, unit) = match h.find(['[', '(']) {
+        Some(i) => {
+            let close = if h[i..].starts_with('[') { ']' } else { ')' };
+            let unit = h[i + 1..].trim_end().trim_end_matches(close).trim();
+            (h[..i].trim().to_string(), Some(unit.to_string()))
+        }
+        None => (h.clone(), None),
+    };
+    let name = name.split_whitespace().collect::<Vec<_>>().join("_");
+    match unit {
+        Some(u) if !u.is_empty() => {
+            let u = match u.as_str() {
+                "°" | "degree" | "degrees" => "deg",
+                "meter" | "meters" | "metre" | "metres" => "m",
+                other => other,
+            };
+            format!("{name}_{u}")
+        }
+        _ => name,
+    }
 }
 
 /// The cells of one CSV line (RFC 4180 quoting within a line): separated by commas,
@@ -240,11 +318,28 @@ fn split_csv(line: &str) -> std::result::Result<Vec<String>, String> {
     }
 }
 
-/// The column named by any of `names`: an error naming the file when absent.
+/// The column named by any of `names`: an error naming the file, the column and the
+/// accepted names (and the header read) when absent.
 fn column(path: &Path, header: &[String], names: &[&str]) -> Result<usize> {
-    optional_column(header, names)
-        .ok_or_else(|| Error::input(path, format!("no column `{}` in the header", names[0])))
+    optional_column(header, names).ok_or_else(|| {
+        Error::input(
+            path,
+            format!(
+                "no {} column in the header `{}` (accepted names, any case, units in brackets folded in: {})",
+                names[0],
+                header.join(","),
+                names.join(", ")
+            ),
+        )
+    })
 }
+
+/// The accepted names of the poses and index columns (after [`header_name`]).
+const POSITION_NAMES: [&str; 5] = ["position", "pos", "label", "position_label", "pose"];
+const X_NAMES: [&str; 2] = ["x", "x_m"];
+const Y_NAMES: [&str; 2] = ["y", "y_m"];
+const HEADING_NAMES: [&str; 3] = ["heading", "heading_deg", "theta_deg"];
+const ANGLE_NAMES: [&str; 4] = ["angle_deg", "angle", "steering_deg", "azimuth_deg"];
 
 fn optional_column(header: &[String], names: &[&str]) -> Option<usize> {
     header.iter().position(|h| names.contains(&h.as_str()))
@@ -285,23 +380,41 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
 }
 
 /// The poses of a poses CSV's text, as `import --poses` reads them (`path` names the file
-/// in errors): `(label, x_m, y_m, heading_deg)` sorted by label. The entry point of the
-/// poses target of [`crate::fuzz`].
-pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<(i64, f64, f64, f64)>> {
+/// in errors): `(label, x_m, y_m, heading_deg)` in manifest order (see [`order_poses`]).
+/// The entry point of the poses target of [`crate::fuzz`].
+pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<(String, f64, f64, f64)>> {
     poses_from(path, parse_csv(text, path)?)
 }
 
+/// Manifest order of the poses: by number when every label is an integer (`1, 2, 10`),
+/// else as the file lists them (`P01, P02, …`, or any names).
+fn order_poses(rows: &mut [PoseRow]) {
+    if rows.iter().all(|r| r.0.parse::<i64>().is_ok()) {
+        rows.sort_by_key(|r| r.0.parse::<i64>().unwrap_or(0));
+    }
+}
+
+/// Largest length of a position label, bytes.
+const MAX_LABEL: usize = 200;
+
 fn poses_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<PoseRow>> {
     bound_rows(path, rows.len(), MAX_POSES, "poses")?;
-    let cp = column(path, &h, &["position"])?;
-    let cx = column(path, &h, &["x", "x_m"])?;
-    let cy = column(path, &h, &["y", "y_m"])?;
-    let ch = column(path, &h, &["heading", "heading_deg"])?;
+    let cp = column(path, &h, &POSITION_NAMES)?;
+    let cx = column(path, &h, &X_NAMES)?;
+    let cy = column(path, &h, &Y_NAMES)?;
+    let ch = column(path, &h, &HEADING_NAMES)?;
     let mut out: Vec<PoseRow> = Vec::with_capacity(rows.len());
-    let mut labels = std::collections::HashSet::with_capacity(rows.len());
+    let mut labels = std::collections::HashMap::with_capacity(rows.len());
     for (n, r) in &rows {
+        let label = r.get(cp).map(|v| v.trim()).unwrap_or("");
+        if label.is_empty() || label.len() > MAX_LABEL || label.chars().any(char::is_control) {
+            return Err(Error::input(
+                path,
+                format!("line {n}: the position label must be a non-empty text of at most {MAX_LABEL} bytes"),
+            ));
+        }
         let row = (
-            cell(path, *n, r, cp, "position (integer)")?,
+            label.to_string(),
             cell::<f64>(path, *n, r, cx, "x (m)")?,
             cell::<f64>(path, *n, r, cy, "y (m)")?,
             cell::<f64>(path, *n, r, ch, "heading (degrees)")?,
@@ -312,10 +425,15 @@ fn poses_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<PoseRow>> {
                 format!("line {n}: x, y, heading must be finite"),
             ));
         }
-        if !labels.insert(row.0) {
+        // `7` and `07` name one position when labels are numbers
+        let key = label
+            .parse::<i64>()
+            .map(|v| v.to_string())
+            .unwrap_or_else(|_| label.to_string());
+        if let Some(first) = labels.insert(key, *n) {
             return Err(Error::input(
                 path,
-                format!("line {n}: position {} listed twice", row.0),
+                format!("line {n}: position {label} already listed on line {first}"),
             ));
         }
         out.push(row);
@@ -323,18 +441,89 @@ fn poses_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<PoseRow>> {
     if out.is_empty() {
         return Err(Error::input(path, "no poses"));
     }
-    out.sort_by_key(|p| p.0);
+    order_poses(&mut out);
     Ok(out)
+}
+
+/// A field of a naming pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Field {
+    Position,
+    Direction,
+    Pulse,
+    Angle,
+}
+
+/// The format of a field: `{name:SPEC}` with SPEC = `[+][0][width][.precision]` as Rust
+/// and Python format numbers (`+` always signed, `0` zero-padded to `width` characters
+/// sign included, `.p` exactly p decimals). For the index fields only a width is taken:
+/// exactly that many digits (`{direction:02}` reads `07`, not `7`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+struct Spec {
+    plus: bool,
+    zero: bool,
+    width: Option<usize>,
+    precision: Option<usize>,
 }
 
 /// A piece of a naming pattern.
 #[derive(Debug, Clone, PartialEq)]
 enum Piece {
     Lit(String),
-    Field(usize, Option<usize>),
+    Field(Field, Spec),
 }
 
-const FIELDS: [&str; 3] = ["position", "direction", "pulse"];
+const FIELDS: [(&str, Field); 4] = [
+    ("position", Field::Position),
+    ("direction", Field::Direction),
+    ("pulse", Field::Pulse),
+    ("angle", Field::Angle),
+];
+
+fn parse_spec(p: &str, name: &str, spec: &str, field: Field) -> Result<Spec> {
+    let bad = |why: &str| {
+        Error::param(
+            "--name-pattern",
+            format!("`{p}`: `{{{name}:{spec}}}`: {why}"),
+        )
+    };
+    let mut s = Spec::default();
+    let mut rest = spec;
+    if field == Field::Angle {
+        if let Some(r) = rest.strip_prefix('+') {
+            s.plus = true;
+            rest = r;
+        }
+        if let Some(r) = rest.strip_prefix('0') {
+            s.zero = true;
+            rest = r;
+        }
+        if let Some((w, prec)) = rest.split_once('.') {
+            s.precision = Some(
+                prec.parse::<usize>()
+                    .ok()
+                    .filter(|&v| v <= 9)
+                    .ok_or_else(|| bad("the precision after `.` must be a number up to 9"))?,
+            );
+            rest = w;
+        }
+    }
+    if !rest.is_empty() {
+        s.width = Some(
+            rest.parse::<usize>()
+                .ok()
+                .filter(|&w| (1..=crate::campaign::manifest::limits::MAX_PATTERN_WIDTH).contains(&w))
+                .ok_or_else(|| {
+                    bad(if field == Field::Angle {
+                        "the format is [+][0][width][.precision], e.g. +03 or .1"
+                    } else {
+                        "the width must be a number (digits in the name)"
+                    })
+                })?,
+        );
+    }
+    Ok(s)
+}
 
 fn parse_pattern(p: &str) -> Result<Vec<Piece>> {
     let mut out = Vec::new();
@@ -347,75 +536,205 @@ fn parse_pattern(p: &str) -> Result<Vec<Piece>> {
             .find('}')
             .ok_or_else(|| Error::param("--name-pattern", format!("`{p}`: `{{` without `}}`")))?
             + open;
-        let spec = &rest[open + 1..close];
-        let (name, width) = match spec.split_once(':') {
-            Some((n, w)) => (
-                n,
-                Some(w.parse::<usize>().map_err(|_| {
-                    Error::param(
-                        "--name-pattern",
-                        format!("`{{{spec}}}`: the width must be a number"),
-                    )
-                })?),
-            ),
-            None => (spec, None),
-        };
-        let f = FIELDS.iter().position(|&x| x == name).ok_or_else(|| {
-            Error::param(
-                "--name-pattern",
-                format!("unknown field `{{{name}}}` (use {{position}}, {{direction}}, {{pulse}})"),
-            )
-        })?;
-        out.push(Piece::Field(f, width));
+        let inner = &rest[open + 1..close];
+        let (name, spec) = inner.split_once(':').unwrap_or((inner, ""));
+        let field = FIELDS
+            .iter()
+            .find(|f| f.0 == name)
+            .map(|f| f.1)
+            .ok_or_else(|| {
+                Error::param(
+                    "--name-pattern",
+                    format!("`{p}`: unknown field `{{{name}}}` (use {{position}}, {{direction}} or {{angle}}, {{pulse}})"),
+                )
+            })?;
+        out.push(Piece::Field(field, parse_spec(p, name, spec, field)?));
         rest = &rest[close + 1..];
     }
     if !rest.is_empty() {
         out.push(Piece::Lit(rest.to_string()));
     }
-    for (f, name) in FIELDS.iter().enumerate().take(2) {
-        if !out
-            .iter()
-            .any(|q| matches!(q, Piece::Field(g, _) if *g == f))
-        {
-            return Err(Error::param(
-                "--name-pattern",
-                format!("`{p}` has no {{{name}}}"),
-            ));
-        }
+    let has = |f: Field| out.iter().any(|q| matches!(q, Piece::Field(g, _) if *g == f));
+    if !has(Field::Position) {
+        return Err(Error::param(
+            "--name-pattern",
+            format!("`{p}` has no {{position}}"),
+        ));
     }
-    Ok(out)
+    match (has(Field::Direction), has(Field::Angle)) {
+        (false, false) => Err(Error::param(
+            "--name-pattern",
+            format!("`{p}` has no {{direction}} (index 0..n−1) or {{angle}} (signed degrees)"),
+        )),
+        (true, true) => Err(Error::param(
+            "--name-pattern",
+            format!("`{p}` has both {{direction}} and {{angle}}: name the direction once"),
+        )),
+        _ => Ok(out),
+    }
 }
 
-/// Match a name against the pattern: the values of (position, direction, pulse).
-fn match_name(pieces: &[Piece], s: &str, vals: &mut [Option<i64>; 3]) -> bool {
-    let Some((first, rest)) = pieces.split_first() else {
-        return s.is_empty();
+/// An angle written as a field of format `s` writes it (see [`Spec`]).
+fn format_angle(v: f64, s: &Spec) -> String {
+    let digits = match s.precision {
+        Some(p) => format!("{:.p$}", v.abs()),
+        None => format!("{}", v.abs()),
     };
+    let sign = if v.is_sign_negative() && digits.bytes().any(|b| b.is_ascii_digit() && b != b'0')
+    {
+        "-"
+    } else if s.plus {
+        "+"
+    } else {
+        ""
+    };
+    let len = sign.len() + digits.len();
+    match s.width {
+        Some(w) if w > len && s.zero => format!("{sign}{}{digits}", "0".repeat(w - len)),
+        Some(w) if w > len => format!("{}{sign}{digits}", " ".repeat(w - len)),
+        _ => format!("{sign}{digits}"),
+    }
+}
+
+/// The value of a direction in a name: its index, or its angle in degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DirectionValue {
+    /// `{direction}` or an index column `direction`.
+    Index(i64),
+    /// `{angle}` or an index column `angle_deg`.
+    Angle(f64),
+}
+
+/// What a name says, field by field (a field named twice must say the same both times).
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Said {
+    position: Option<String>,
+    direction: Option<DirectionValue>,
+    pulse: Option<i64>,
+}
+
+/// How `{position}` reads: the poses' labels (a run naming one of them is preferred) and
+/// whether they are all numbers (then `{position}` is a run of digits, `{position:03}`
+/// exactly three).
+struct LabelSet<'a> {
+    labels: &'a [String],
+    numeric: bool,
+}
+
+/// Match the name `s` from byte `at` against `pieces`, filling `said`.
+fn match_name(pieces: &[Piece], s: &str, at: usize, labels: &LabelSet<'_>, said: &mut Said) -> bool {
+    let Some((first, rest)) = pieces.split_first() else {
+        return at == s.len();
+    };
+    let t = &s[at..];
     match first {
-        Piece::Lit(l) => s
-            .strip_prefix(l.as_str())
-            .is_some_and(|t| match_name(rest, t, vals)),
-        Piece::Field(f, width) => {
-            let digits = s.bytes().take_while(u8::is_ascii_digit).count();
-            let lens: Vec<usize> = match width {
-                Some(w) if *w <= digits => vec![*w],
-                Some(_) => vec![],
-                None => (1..=digits).rev().collect(),
+        Piece::Lit(l) => t.starts_with(l.as_str()) && match_name(rest, s, at + l.len(), labels, said),
+        Piece::Field(f, spec) => {
+            let digits = t.bytes().take_while(u8::is_ascii_digit).count();
+            let exact = |n: usize| -> Vec<usize> {
+                match spec.width {
+                    Some(w) if w <= n => vec![w],
+                    Some(_) => vec![],
+                    None => (1..=n).rev().collect(),
+                }
+            };
+            let lens: Vec<usize> = match f {
+                Field::Position if labels.numeric => exact(digits),
+                Field::Position => {
+                    // a label the poses name first (longest first), then any other run
+                    let mut v: Vec<usize> = labels
+                        .labels
+                        .iter()
+                        .filter(|l| t.starts_with(l.as_str()))
+                        .map(String::len)
+                        .collect();
+                    v.sort_unstable_by(|a, b| b.cmp(a));
+                    for n in (1..=t.len()).rev().filter(|&n| t.is_char_boundary(n)) {
+                        if !v.contains(&n) {
+                            v.push(n);
+                        }
+                    }
+                    v
+                }
+                // an index is unsigned: digits after a `+` are a signed number (an
+                // angle), never read as an index (`az+05` is not direction 5)
+                Field::Direction | Field::Pulse if s[..at].ends_with('+') => vec![],
+                Field::Direction | Field::Pulse => exact(digits),
+                Field::Angle => {
+                    // (spaces first: a width without `0` pads with them)
+                    let lead = t.bytes().take_while(|&b| b == b' ').count();
+                    let u = &t[lead..];
+                    let sg = usize::from(u.starts_with(['+', '-']));
+                    let int = u[sg..].bytes().take_while(u8::is_ascii_digit).count();
+                    let mut ends = Vec::new();
+                    if int > 0 {
+                        let frac = u[sg + int..]
+                            .strip_prefix('.')
+                            .map(|r| r.bytes().take_while(u8::is_ascii_digit).count())
+                            .unwrap_or(0);
+                        if frac > 0 {
+                            ends.push(lead + sg + int + 1 + frac);
+                        }
+                        ends.extend((1..=int).rev().map(|i| lead + sg + i));
+                    }
+                    ends
+                }
             };
             for n in lens {
-                let v: i64 = match s[..n].parse() {
-                    Ok(v) => v,
-                    Err(_) => continue,
+                let text = &t[..n];
+                let value = match f {
+                    Field::Position => Some(text.to_string()),
+                    _ => None,
                 };
-                if vals[*f].is_some_and(|old| old != v) {
-                    continue;
-                }
-                let saved = vals[*f];
-                vals[*f] = Some(v);
-                if match_name(rest, &s[n..], vals) {
+                let saved = said.clone();
+                let ok = match f {
+                    Field::Position => {
+                        let v = value.expect("position");
+                        if said.position.as_ref().is_some_and(|old| *old != v) {
+                            false
+                        } else {
+                            said.position = Some(v);
+                            true
+                        }
+                    }
+                    Field::Direction | Field::Pulse => match text.parse::<i64>() {
+                        Ok(v) if *f == Field::Pulse => {
+                            if said.pulse.is_some_and(|old| old != v) {
+                                false
+                            } else {
+                                said.pulse = Some(v);
+                                true
+                            }
+                        }
+                        Ok(v) => {
+                            let v = DirectionValue::Index(v);
+                            if said.direction.is_some_and(|old| old != v) {
+                                false
+                            } else {
+                                said.direction = Some(v);
+                                true
+                            }
+                        }
+                        Err(_) => false,
+                    },
+                    Field::Angle => match text.trim_start().parse::<f64>() {
+                        // the name must be the angle as the format writes it
+                        Ok(v) if v.is_finite() && format_angle(v, spec) == text => {
+                            let v = DirectionValue::Angle(v);
+                            if said.direction.is_some_and(|old| old != v) {
+                                false
+                            } else {
+                                said.direction = Some(v);
+                                true
+                            }
+                        }
+                        _ => false,
+                    },
+                };
+                if ok && match_name(rest, s, at + n, labels, said) {
                     return true;
                 }
-                vals[*f] = saved;
+                *said = saved;
             }
             false
         }
@@ -482,15 +801,33 @@ fn walk(dir: &Path, parts: &[String], found: &mut Vec<PathBuf>) -> Result<()> {
     Ok(())
 }
 
-/// (position label, direction, pulse) → files naming that cell; and files naming none.
-type Cells = (
-    BTreeMap<(i64, i64, i64), Vec<PathBuf>>,
-    Vec<(PathBuf, String)>,
-);
+/// One sweep file as a name or an index row gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepEntry {
+    /// The position's label as written (`P03`, `7`, `007`).
+    pub label: String,
+    /// The direction, as an index or an angle.
+    pub direction: DirectionValue,
+    /// The pulse (0 when not named).
+    pub pulse: i64,
+    /// The file.
+    pub path: PathBuf,
+}
 
-fn cells_from_glob(glob_pat: &str, pattern: &str) -> Result<Cells> {
+/// The files naming a sweep, and the files naming none (with the reason).
+type Cells = (Vec<SweepEntry>, Vec<(PathBuf, String)>);
+
+/// Whether a file name holds a signed number (`az+05`, `_-45`): the hint that a pattern's
+/// `{direction}` should be `{angle}`.
+fn signed_number(name: &str) -> bool {
+    let b = name.as_bytes();
+    b.windows(2)
+        .any(|w| (w[0] == b'+' || w[0] == b'-') && w[1].is_ascii_digit())
+}
+
+fn cells_from_glob(glob_pat: &str, pattern: &str, labels: &LabelSet<'_>) -> Result<Cells> {
     let pieces = parse_pattern(pattern)?;
-    let mut cells: BTreeMap<(i64, i64, i64), Vec<PathBuf>> = BTreeMap::new();
+    let mut entries = Vec::new();
     let mut extra = Vec::new();
     let files = glob(glob_pat)?;
     if files.is_empty() {
@@ -499,61 +836,123 @@ fn cells_from_glob(glob_pat: &str, pattern: &str) -> Result<Cells> {
             format!("`{glob_pat}` matches no file"),
         ));
     }
+    let n_files = files.len();
     for f in files {
         let name = f
             .file_name()
             .unwrap_or_default()
             .to_string_lossy()
             .into_owned();
-        let mut v = [None; 3];
-        if match_name(&pieces, &name, &mut v) {
-            cells
-                .entry((v[0].unwrap_or(0), v[1].unwrap_or(0), v[2].unwrap_or(0)))
-                .or_default()
-                .push(f);
+        let mut said = Said::default();
+        if match_name(&pieces, &name, 0, labels, &mut said) {
+            entries.push(SweepEntry {
+                label: said.position.unwrap_or_default(),
+                direction: said.direction.unwrap_or(DirectionValue::Index(0)),
+                pulse: said.pulse.unwrap_or(0),
+                path: f,
+            });
         } else {
             extra.push((f, format!("name does not match `{pattern}`")));
         }
     }
-    Ok((cells, extra))
+    if entries.is_empty() {
+        // one line, not one per file: the pattern is wrong, not the files
+        let (f, _) = &extra[0];
+        let name = f.file_name().unwrap_or_default().to_string_lossy();
+        let uses_index = pieces
+            .iter()
+            .any(|q| matches!(q, Piece::Field(Field::Direction, _)));
+        let hint = if uses_index && signed_number(&name) {
+            " (the names hold signed numbers: if they are steering angles in degrees, name them with {angle}, e.g. `az{angle:+03}`)"
+        } else {
+            ""
+        };
+        return Err(Error::param(
+            "--name-pattern",
+            format!(
+                "`{pattern}` matches none of the {n_files} file(s) of `{glob_pat}`, e.g. not `{name}`{hint}"
+            ),
+        ));
+    }
+    Ok((entries, extra))
 }
 
 fn cells_from_index(path: &Path) -> Result<Cells> {
-    index_from(path, read_csv(path)?)
+    Ok((index_from(path, read_csv(path)?)?, Vec::new()))
 }
 
 /// The sweep files an index CSV's text lists, as `import --index` reads them (`path` names
-/// the file in errors, and relative paths are taken from its folder): per (position,
-/// direction, pulse) the files naming it. The entry point of the index target of
-/// [`crate::fuzz`].
-pub fn parse_index(text: &str, path: &Path) -> Result<BTreeMap<(i64, i64, i64), Vec<PathBuf>>> {
-    Ok(index_from(path, parse_csv(text, path)?)?.0)
+/// the file in errors, and relative paths are taken from its folder): columns `position`
+/// (or `pos`, `label`), `direction` (an index) or `angle_deg` (signed degrees), optionally
+/// `pulse`, and `path`. The entry point of the index target of [`crate::fuzz`].
+pub fn parse_index(text: &str, path: &Path) -> Result<Vec<SweepEntry>> {
+    index_from(path, parse_csv(text, path)?)
 }
 
-fn index_from(path: &Path, (h, rows): CsvRows) -> Result<Cells> {
+fn index_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<SweepEntry>> {
     bound_rows(path, rows.len(), MAX_INDEX_ROWS, "sweep files")?;
-    let cp = column(path, &h, &["position"])?;
-    let cd = column(path, &h, &["direction"])?;
+    let cp = column(path, &h, &POSITION_NAMES)?;
+    let cd = match (
+        optional_column(&h, &["direction"]),
+        optional_column(&h, &ANGLE_NAMES),
+    ) {
+        (Some(c), None) => Ok(c),
+        (None, Some(c)) => Err(c),
+        (Some(_), Some(_)) => {
+            return Err(Error::input(
+                path,
+                "both a `direction` and an `angle_deg` column: give the direction once",
+            ))
+        }
+        (None, None) => {
+            return Err(Error::input(
+                path,
+                format!(
+                    "no direction column in the header `{}` (accepted: direction — an index 0..n−1 — or {} — signed degrees)",
+                    h.join(","),
+                    ANGLE_NAMES.join(", ")
+                ),
+            ))
+        }
+    };
     let ck = optional_column(&h, &["pulse"]);
-    let cf = column(path, &h, &["path"])?;
+    let cf = column(path, &h, &["path", "file", "filename"])?;
     let dir = path.parent().unwrap_or(Path::new(""));
-    let mut cells: BTreeMap<(i64, i64, i64), Vec<PathBuf>> = BTreeMap::new();
+    let mut out = Vec::with_capacity(rows.len());
     for (n, r) in &rows {
-        let key = (
-            cell(path, *n, r, cp, "position (integer)")?,
-            cell(path, *n, r, cd, "direction (integer)")?,
-            match ck {
-                Some(c) => cell(path, *n, r, c, "pulse (integer)")?,
-                None => 0,
-            },
-        );
+        let label = r.get(cp).map(|v| v.trim()).unwrap_or("");
+        if label.is_empty() {
+            return Err(Error::input(path, format!("line {n}: empty position")));
+        }
+        let direction = match cd {
+            Ok(c) => DirectionValue::Index(cell(path, *n, r, c, "direction (integer)")?),
+            Err(c) => {
+                let a: f64 = cell(path, *n, r, c, "angle (degrees)")?;
+                if !a.is_finite() {
+                    return Err(Error::input(
+                        path,
+                        format!("line {n}: the angle must be finite"),
+                    ));
+                }
+                DirectionValue::Angle(a)
+            }
+        };
+        let pulse = match ck {
+            Some(c) => cell(path, *n, r, c, "pulse (integer)")?,
+            None => 0,
+        };
         let f = r
             .get(cf)
             .filter(|s| !s.is_empty())
             .ok_or_else(|| Error::input(path, format!("line {n}: empty path")))?;
-        cells.entry(key).or_default().push(dir.join(f));
+        out.push(SweepEntry {
+            label: label.to_string(),
+            direction,
+            pulse,
+            path: dir.join(f),
+        });
     }
-    Ok((cells, Vec::new()))
+    Ok(out)
 }
 
 /// `path` relative to `dir` when inside it, else absolute.
@@ -613,7 +1012,7 @@ fn out_dir(p: &ImportParams) -> &Path {
 fn refuse_inputs(
     p: &ImportParams,
     base: &toml::Table,
-    cells: &BTreeMap<(i64, i64, i64), Vec<PathBuf>>,
+    entries: &[SweepEntry],
     extra: &[(PathBuf, String)],
 ) -> Result<()> {
     let dir = out_dir(p);
@@ -642,7 +1041,7 @@ fn refuse_inputs(
         SweepFiles::Index(_) => "sweep file (of --index)",
         SweepFiles::Glob { .. } => "sweep file (of --sweeps)",
     };
-    inputs.extend(cells.values().flatten().map(|f| (f.as_path(), what)));
+    inputs.extend(entries.iter().map(|e| (e.path.as_path(), what)));
     inputs.extend(extra.iter().map(|(f, _)| (f.as_path(), what)));
     crate::io::refuse_overwrite(&outputs, &inputs)
 }
@@ -686,60 +1085,153 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         })?),
         None => None,
     };
-    let (cells, extra_names) = match &p.sweeps {
-        SweepFiles::Glob { glob, pattern } => cells_from_glob(glob, pattern)?,
+    let labels: Vec<String> = poses.iter().map(|q| q.0.clone()).collect();
+    let numeric = labels.iter().all(|l| l.parse::<i64>().is_ok());
+    let lset = LabelSet {
+        labels: &labels,
+        numeric,
+    };
+    let (entries, extra_names) = match &p.sweeps {
+        SweepFiles::Glob { glob, pattern } => cells_from_glob(glob, pattern, &lset)?,
         SweepFiles::Index(i) => cells_from_index(i)?,
+    };
+    // a label names a pose exactly, or by number when the poses are numbered (`007` = 7)
+    let by_label: std::collections::HashMap<String, usize> = labels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let key = if numeric {
+                l.parse::<i64>().map(|v| v.to_string()).unwrap_or_else(|_| l.clone())
+            } else {
+                l.clone()
+            };
+            (key, i)
+        })
+        .collect();
+    let resolve = |l: &str| -> Option<usize> {
+        let key = if numeric {
+            l.parse::<i64>().map(|v| v.to_string()).ok()?
+        } else {
+            l.to_string()
+        };
+        by_label.get(&key).copied()
     };
     let nd = directions.count();
     let np = poses.len();
-    let labels: BTreeMap<i64, usize> = poses.iter().enumerate().map(|(i, q)| (q.0, i)).collect();
-    let nk = cells.keys().map(|k| k.2).max().unwrap_or(0).max(0) as usize + 1;
+    let grid = format!(
+        "{}:{}:{}",
+        directions.start_deg, directions.stop_deg, directions.step_deg
+    );
+    let dname = |d: usize| format!("{d} ({}°)", directions.angle_deg(d));
+    let nk = entries.iter().map(|e| e.pulse).max().unwrap_or(0).max(0) as usize + 1;
+    let cell_name = |pi: usize, d: usize, k: usize| {
+        let mut s = format!("position {}, direction {}", labels[pi], dname(d));
+        if nk > 1 {
+            s.push_str(&format!(", pulse {k}"));
+        }
+        s
+    };
     let mut problems = Vec::new();
     for (f, why) in &extra_names {
         problems.push(format!("extra: {}: {why}", f.display()));
     }
-    // cell → file, in manifest order
-    let mut table: Vec<Option<PathBuf>> = vec![None; np * nd * nk];
-    for ((pl, d, k), files) in &cells {
-        let why = if !labels.contains_key(pl) {
-            Some(format!("position {pl} is not in {}", p.poses.display()))
-        } else if *d < 0 || *d as usize >= nd {
-            Some(format!(
-                "direction {d} outside 0..{} ({nd} directions)",
+    // cell → files, in manifest order
+    let mut cells: BTreeMap<(usize, usize, usize), Vec<PathBuf>> = BTreeMap::new();
+    for e in &entries {
+        let d = match e.direction {
+            DirectionValue::Index(d) if d >= 0 && (d as usize) < nd => Ok(d as usize),
+            DirectionValue::Index(d) => Err(format!(
+                "direction {d} outside 0..{} ({nd} directions over {grid}°)",
                 nd - 1
-            ))
-        } else if *k < 0 {
-            Some(format!("pulse {k} is negative"))
-        } else {
-            None
+            )),
+            DirectionValue::Angle(a) => directions.index_of(a).ok_or_else(|| {
+                format!("angle {a}° is not on the --directions grid ({grid}°)")
+            }),
         };
-        if let Some(why) = why {
-            for f in files {
-                problems.push(format!("extra: {}: {why}", f.display()));
-            }
-            continue;
+        let why = match (resolve(&e.label), d) {
+            (None, _) => Err(format!(
+                "position {} is not in {}",
+                e.label,
+                p.poses.display()
+            )),
+            (_, Err(w)) => Err(w),
+            (Some(_), Ok(_)) if e.pulse < 0 => Err(format!("pulse {} is negative", e.pulse)),
+            (Some(pi), Ok(d)) => Ok((pi, d, e.pulse as usize)),
+        };
+        match why {
+            Ok(key) => cells.entry(key).or_default().push(e.path.clone()),
+            Err(why) => problems.push(format!("extra: {}: {why}", e.path.display())),
         }
+    }
+    let mut table: Vec<Option<PathBuf>> = vec![None; np * nd * nk];
+    for (&(pi, d, k), files) in &cells {
         if files.len() > 1 {
             let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             problems.push(format!(
-                "duplicated: position {pl}, direction {d}, pulse {k}: {}",
+                "duplicated: {}: {}",
+                cell_name(pi, d, k),
                 names.join(", ")
             ));
         }
-        table[(labels[pl] * nd + *d as usize) * nk + *k as usize] = Some(files[0].clone());
+        table[(pi * nd + d) * nk + k] = Some(files[0].clone());
     }
-    for (i, f) in table.iter().enumerate() {
-        if f.is_none() {
-            let (pi, d, k) = (i / (nd * nk), (i / nk) % nd, i % nk);
-            problems.push(format!(
-                "missing: position {}, direction {d}, pulse {k}: no file",
-                poses[pi].0
+    // what is missing: whole positions, or (position, direction) sweeps
+    let mut warnings = Vec::new();
+    let mut dropped = vec![false; np];
+    let mut missing_pd = vec![false; np * nd];
+    for pi in 0..np {
+        let cell_missing =
+            |d: usize| (0..nk).any(|k| table[(pi * nd + d) * nk + k].is_none());
+        let none_at_all = (0..nd * nk).all(|i| table[pi * nd * nk + i].is_none());
+        if p.allow_missing && none_at_all {
+            dropped[pi] = true;
+            warnings.push(format!(
+                "dropped position {}: no sweep file at all (left out of the manifest)",
+                labels[pi]
             ));
+            continue;
+        }
+        for d in 0..nd {
+            if !cell_missing(d) {
+                continue;
+            }
+            let absent: Vec<usize> = (0..nk)
+                .filter(|&k| table[(pi * nd + d) * nk + k].is_none())
+                .collect();
+            if p.allow_missing {
+                missing_pd[pi * nd + d] = true;
+                let what = if nk > 1 {
+                    format!(" (pulse(s) {absent:?} missing; the others are not used)")
+                } else {
+                    String::new()
+                };
+                warnings.push(format!(
+                    "dropped position {}, direction {}: no file{what}",
+                    labels[pi],
+                    dname(d)
+                ));
+            } else {
+                for k in absent {
+                    problems.push(format!("missing: {}: no file", cell_name(pi, d, k)));
+                }
+            }
         }
     }
+    if p.allow_missing && dropped.iter().all(|&x| x) {
+        problems.push("missing: no position has a sweep file".into());
+    }
     // no output may be an input (checked before any file is read)
-    let present: Vec<&PathBuf> = table.iter().flatten().collect();
-    refuse_inputs(p, &base, &cells, &extra_names)?;
+    let used = |i: usize| {
+        let (pi, d) = (i / (nd * nk), (i / nk) % nd);
+        !dropped[pi] && !missing_pd[pi * nd + d]
+    };
+    let present: Vec<&PathBuf> = table
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| used(*i))
+        .filter_map(|(_, f)| f.as_ref())
+        .collect();
+    refuse_inputs(p, &base, &entries, &extra_names)?;
     // read every file (in parallel): grid, parameter, reader refusals
     let done = std::sync::atomic::AtomicUsize::new(0);
     let reads: Vec<FileRead> = present
@@ -786,9 +1278,11 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
             }
         }
     }
+    let kept: Vec<usize> = (0..np).filter(|&pi| !dropped[pi]).collect();
     let mut outcome = ImportOutcome {
-        shape: (np, nd, nk),
+        shape: (kept.len(), nd, nk),
         files: present.len() + extra_names.len(),
+        warnings,
         notes: notes
             .into_iter()
             .map(|(n, c)| format!("{n} in {c} file(s)"))
@@ -889,8 +1383,9 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
             t.insert(k.into(), v.clone());
         }
     }
-    let poses_toml: Vec<toml::Value> = poses
+    let poses_toml: Vec<toml::Value> = kept
         .iter()
+        .map(|&pi| &poses[pi])
         .map(|q| {
             let mut m = toml::Table::new();
             m.insert("x_m".into(), q.1.into());
@@ -900,20 +1395,30 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         })
         .collect();
     t.insert("poses".into(), poses_toml.into());
+    // the lab's labels beside the indices: every later message, table and plot names them
+    let kept_labels: Vec<toml::Value> = kept.iter().map(|&pi| labels[pi].clone().into()).collect();
+    t.insert("labels".into(), kept_labels.into());
     let mut sweeps = toml::Table::new();
     sweeps.insert("format".into(), "touchstone".into());
     if let Some(par) = param {
         sweeps.insert("parameter".into(), par.to_string().into());
     }
+    // manifest index of each kept position
+    let new_index: Vec<Option<usize>> = {
+        let mut v = vec![None; np];
+        for (j, &pi) in kept.iter().enumerate() {
+            v[pi] = Some(j);
+        }
+        v
+    };
     let files: Vec<toml::Value> = table
         .iter()
         .enumerate()
+        .filter(|(i, _)| used(*i))
         .map(|(i, f)| {
             let mut m = toml::Table::new();
-            m.insert(
-                "position".into(),
-                toml::Value::Integer((i / (nd * nk)) as i64),
-            );
+            let pi = new_index[i / (nd * nk)].expect("a used sweep's position is kept");
+            m.insert("position".into(), toml::Value::Integer(pi as i64));
             m.insert(
                 "direction".into(),
                 toml::Value::Integer(((i / nk) % nd) as i64),
@@ -925,6 +1430,28 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         })
         .collect();
     sweeps.insert("files".into(), files.into());
+    let missing: Vec<toml::Value> = (0..np * nd)
+        .filter(|&i| missing_pd[i] && !dropped[i / nd])
+        .map(|i| {
+            let mut m = toml::Table::new();
+            let pi = new_index[i / nd].expect("kept");
+            m.insert("position".into(), toml::Value::Integer(pi as i64));
+            m.insert("direction".into(), toml::Value::Integer((i % nd) as i64));
+            m.into()
+        })
+        .collect();
+    outcome.missing = missing.len();
+    outcome.dropped = dropped.iter().filter(|&&x| x).count();
+    if !missing.is_empty() {
+        sweeps.insert("missing".into(), missing.into());
+    }
+    let dropped_labels: Vec<toml::Value> = (0..np)
+        .filter(|&pi| dropped[pi])
+        .map(|pi| labels[pi].clone().into())
+        .collect();
+    if !dropped_labels.is_empty() {
+        sweeps.insert("dropped_positions".into(), dropped_labels.into());
+    }
     t.insert("sweeps".into(), sweeps.clone().into());
     let text = toml::to_string(&t).map_err(|e| Error::input(&p.out, e.to_string()))?;
     // validate as `energy` will read it (layout present, every field in range)
@@ -933,15 +1460,15 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         let pq = out_dir.join("sweeps.parquet");
         let reader = SweepReader::open(&c)?;
         let mut stream = crate::table::ParquetStream::create(&pq)?;
-        for pos in 0..np {
+        for pos in 0..kept.len() {
             let sw = reader.read_position(pos)?;
             stream.write(&parquet_batch(&pq, &c.manifest.band, &sw)?)?;
         }
         stream.finish(None)?;
-        let mut s = toml::Table::new();
-        s.insert("format".into(), "parquet".into());
-        s.insert("path".into(), "sweeps.parquet".into());
-        t.insert("sweeps".into(), s.into());
+        // the Parquet table, with the files it was made from kept as its provenance
+        sweeps.insert("format".into(), "parquet".into());
+        sweeps.insert("path".into(), "sweeps.parquet".into());
+        t.insert("sweeps".into(), sweeps.into());
         outcome.parquet = Some(pq);
     }
     let text = toml::to_string(&t).map_err(|e| Error::input(&p.out, e.to_string()))?;
@@ -976,20 +1503,104 @@ mod tests {
             .contains("inside unquoted cell 2"));
     }
 
+    fn said(pattern: &str, labels: &[&str], name: &str) -> Option<Said> {
+        let pcs = parse_pattern(pattern).unwrap();
+        let labels: Vec<String> = labels.iter().map(|l| l.to_string()).collect();
+        let set = LabelSet {
+            numeric: labels.iter().all(|l| l.parse::<i64>().is_ok()),
+            labels: &labels,
+        };
+        let mut v = Said::default();
+        match_name(&pcs, name, 0, &set, &mut v).then_some(v)
+    }
+
     #[test]
     fn naming_patterns_match_with_and_without_widths() {
-        let pcs = parse_pattern("pos{position}_dir{direction:02}_k{pulse}.s2p").unwrap();
-        let mut v = [None; 3];
-        assert!(match_name(&pcs, "pos12_dir07_k1.s2p", &mut v));
-        assert_eq!(v, [Some(12), Some(7), Some(1)]);
-        let mut v = [None; 3];
-        assert!(!match_name(&pcs, "pos12_dir7_k1.s2p", &mut v));
-        let pcs = parse_pattern("{position}{direction:02}.s1p").unwrap();
-        let mut v = [None; 3];
-        assert!(match_name(&pcs, "10312.s1p", &mut v));
-        assert_eq!(v, [Some(103), Some(12), None]);
+        let v = said("pos{position}_dir{direction:02}_k{pulse}.s2p", &["12"], "pos12_dir07_k1.s2p").unwrap();
+        assert_eq!(v.position.as_deref(), Some("12"));
+        assert_eq!(v.direction, Some(DirectionValue::Index(7)));
+        assert_eq!(v.pulse, Some(1));
+        assert!(said("pos{position}_dir{direction:02}_k{pulse}.s2p", &["12"], "pos12_dir7_k1.s2p").is_none());
+        let v = said("{position}{direction:02}.s1p", &["103"], "10312.s1p").unwrap();
+        assert_eq!(v.position.as_deref(), Some("103"));
+        assert_eq!(v.direction, Some(DirectionValue::Index(12)));
         assert!(parse_pattern("p{position}.s2p").is_err());
-        assert!(parse_pattern("p{position}_{angle}.s2p").is_err());
+        assert!(parse_pattern("p{position}_{azimuth}.s2p").is_err());
+        assert!(parse_pattern("p{position}_{direction}_{angle}.s2p").is_err());
+    }
+
+    #[test]
+    fn angles_and_labels_in_names() {
+        let pat = "{position}_az{angle:+03}.s2p";
+        let labels = ["P01", "P02", "P10"];
+        for (name, label, angle) in [
+            ("P01_az+05.s2p", "P01", 5.0),
+            ("P10_az-45.s2p", "P10", -45.0),
+            ("P02_az+00.s2p", "P02", 0.0),
+            ("P02_az+90.s2p", "P02", 90.0),
+            ("P02_az-90.s2p", "P02", -90.0),
+        ] {
+            let v = said(pat, &labels, name).unwrap_or_else(|| panic!("{name}"));
+            assert_eq!(v.position.as_deref(), Some(label), "{name}");
+            assert_eq!(v.direction, Some(DirectionValue::Angle(angle)), "{name}");
+        }
+        // not as the format writes it: no sign, no padding, a decimal point
+        for name in ["P01_az5.s2p", "P01_az+5.s2p", "P01_az05.s2p", "P01_az+05.0.s2p"] {
+            assert!(said(pat, &labels, name).is_none(), "{name}");
+        }
+        // an unknown label is read (and refused later, naming the file)
+        let v = said(pat, &labels, "P13_az+05.s2p").unwrap();
+        assert_eq!(v.position.as_deref(), Some("P13"));
+        // precision and plain forms
+        let v = said("p{position}_{angle:.1}.s2p", &["1"], "p1_-2.5.s2p").unwrap();
+        assert_eq!(v.direction, Some(DirectionValue::Angle(-2.5)));
+        assert!(said("p{position}_{angle:.1}.s2p", &["1"], "p1_-2.50.s2p").is_none());
+        let v = said("p{position}_{angle}.s2p", &["1"], "p1_-45.s2p").unwrap();
+        assert_eq!(v.direction, Some(DirectionValue::Angle(-45.0)));
+        // `az+05` is a signed number, never direction index 5
+        assert!(said("P{position:02}_az+{direction}.s2p", &["3"], "P03_az+05.s2p").is_none());
+        assert!(said("P{position:02}_az{direction}.s2p", &["3"], "P03_az+05.s2p").is_none());
+        assert_eq!(
+            said("P{position:02}_az{direction:02}.s2p", &["3"], "P03_az05.s2p")
+                .unwrap()
+                .direction,
+            Some(DirectionValue::Index(5))
+        );
+    }
+
+    #[test]
+    fn angle_formats_as_rust_and_python_do() {
+        let sp = |s: &str| parse_spec("p", "angle", s, Field::Angle).unwrap();
+        assert_eq!(format_angle(5.0, &sp("+03")), format!("{:+03}", 5.0));
+        assert_eq!(format_angle(-45.0, &sp("+03")), format!("{:+03}", -45.0));
+        assert_eq!(format_angle(0.0, &sp("+03")), "+00");
+        assert_eq!(format_angle(-2.5, &sp(".1")), format!("{:.1}", -2.5));
+        assert_eq!(format_angle(7.5, &sp("05.1")), format!("{:05.1}", 7.5));
+        assert_eq!(format_angle(-90.0, &sp("")), "-90");
+        assert!(parse_spec("p", "angle", "x3", Field::Angle).is_err());
+    }
+
+    #[test]
+    fn lab_headers_are_folded() {
+        assert_eq!(header_name("X [m]"), "x_m");
+        assert_eq!(header_name("Heading [deg]"), "heading_deg");
+        assert_eq!(header_name("heading (°)"), "heading_deg");
+        assert_eq!(header_name(" Pos "), "pos");
+        assert_eq!(header_name("Angle [deg]"), "angle_deg");
+        let rows = parse_poses(
+            "Pos,X [m],Y [m],Heading [deg]\nP02,1,2,0\nP01,0.5,1.2,90\n",
+            Path::new("poses.csv"),
+        )
+        .unwrap();
+        // file order for text labels
+        assert_eq!(rows[0].0, "P02");
+        let e = parse_poses("Pos,X [mm],Y [m],Heading [deg]\nP01,1,2,0\n", Path::new("poses.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x, x_m"), "{e}");
+        let rows = parse_poses("position,x,y,heading\n10,1,2,0\n2,0.5,1.2,90\n", Path::new("p.csv")).unwrap();
+        assert_eq!(rows[0].0, "2");
+        assert!(parse_poses("position,x,y,heading\n7,1,2,0\n07,0.5,1.2,90\n", Path::new("p.csv")).is_err());
     }
 
     #[test]

@@ -204,6 +204,14 @@ impl Directions {
     pub fn angle_deg(&self, d: usize) -> f64 {
         self.start_deg + d as f64 * self.step_deg
     }
+    /// The index of the direction at `angle_deg` (within 1e-6 of a step of a grid
+    /// angle), if the grid has one.
+    pub fn index_of(&self, angle_deg: f64) -> Option<usize> {
+        let x = (angle_deg - self.start_deg) / self.step_deg;
+        let i = x.round();
+        ((x - i).abs() <= 1e-6 && i >= 0.0 && (i as usize) < self.count()).then_some(i as usize)
+    }
+
     /// All relative angles, degrees.
     pub fn angles_deg(&self) -> Vec<f64> {
         (0..self.count()).map(|d| self.angle_deg(d)).collect()
@@ -448,6 +456,25 @@ pub struct SweepsConfig {
     /// S21, or S11 for a one-port file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parameter: Option<crate::campaign::touchstone::SParam>,
+    /// (position, direction) sweeps the campaign does not have (`import --allow-missing`):
+    /// the energy stage writes their profiles as NaN and lists them in the table's
+    /// metadata; extraction, the maps and the statistics skip them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub missing: Vec<MissingSweep>,
+    /// Labels of the positions `import --allow-missing` left out (no sweep at all), with the
+    /// reason; they are not among `[[poses]]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dropped_positions: Vec<String>,
+}
+
+/// A (position, direction) without a sweep (every pulse of it left out).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+#[serde(deny_unknown_fields)]
+pub struct MissingSweep {
+    /// Position index.
+    pub position: usize,
+    /// Direction index.
+    pub direction: usize,
 }
 
 /// `[calibration]`: calibration sweeps applied by the energy stage
@@ -491,6 +518,10 @@ pub struct Manifest {
     pub processing: Processing,
     /// `[[poses]]`.
     pub poses: Vec<Pose>,
+    /// The lab's label of every position (`P01`, `12`, …; one per pose, in pose order),
+    /// written by `import`; absent: positions are named by their index.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub labels: Vec<String>,
     /// `[sweeps]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweeps: Option<SweepsConfig>,
@@ -585,7 +616,9 @@ impl Manifest {
         if self.layout.as_os_str().is_empty() {
             return Err(Error::param("layout", "missing layout path"));
         }
+        self.check_labels()?;
         if let Some(s) = &self.sweeps {
+            self.check_missing(&s.missing)?;
             match s.format {
                 SweepFormat::Touchstone => {
                     if s.pattern.is_none() && s.files.is_empty() {
@@ -603,6 +636,8 @@ impl Manifest {
                     if s.path.is_none() {
                         return Err(Error::param("sweeps.path", "parquet sweeps need `path`"));
                     }
+                    // the files the table was made from (`import --to-parquet`): provenance
+                    self.check_files(&s.files)?;
                 }
             }
         }
@@ -612,6 +647,114 @@ impl Manifest {
     /// Number of positions.
     pub fn positions(&self) -> usize {
         self.poses.len()
+    }
+
+    /// The name of position `p` in messages, tables and plots: the lab's label when the
+    /// manifest has labels, else the index.
+    pub fn label(&self, p: usize) -> String {
+        match self.labels.get(p) {
+            Some(l) => l.clone(),
+            None => p.to_string(),
+        }
+    }
+
+    /// Direction `d` as messages show it: "index (angle°)".
+    pub fn direction_name(&self, d: usize) -> String {
+        format!("{d} ({}°)", self.directions.angle_deg(d))
+    }
+
+    /// Whether the campaign has the sweep of (position `p`, direction `d`) (`[sweeps]
+    /// missing` lists those it does not).
+    pub fn has_sweep(&self, p: usize, d: usize) -> bool {
+        !self.sweeps.as_ref().is_some_and(|s| {
+            s.missing
+                .iter()
+                .any(|m| m.position == p && m.direction == d)
+        })
+    }
+
+    /// The missing (position, direction) sweeps, sorted.
+    pub fn missing(&self) -> Vec<(usize, usize)> {
+        let mut v: Vec<(usize, usize)> = self
+            .sweeps
+            .as_ref()
+            .map(|s| s.missing.iter().map(|m| (m.position, m.direction)).collect())
+            .unwrap_or_default();
+        v.sort_unstable();
+        v
+    }
+
+    /// `labels`: none, or one non-empty label per pose, all distinct, without control
+    /// characters.
+    fn check_labels(&self) -> Result<()> {
+        if self.labels.is_empty() {
+            return Ok(());
+        }
+        if self.labels.len() != self.poses.len() {
+            return Err(Error::param(
+                "labels",
+                format!(
+                    "{} labels for {} poses (one per pose, in pose order)",
+                    self.labels.len(),
+                    self.poses.len()
+                ),
+            ));
+        }
+        let mut seen = std::collections::HashSet::new();
+        for (i, l) in self.labels.iter().enumerate() {
+            if l.trim().is_empty() || l.chars().any(char::is_control) || l.len() > 200 {
+                return Err(Error::param(
+                    format!("labels[{i}]"),
+                    "a label is a non-empty line of at most 200 bytes",
+                ));
+            }
+            if !seen.insert(l) {
+                return Err(Error::param(
+                    format!("labels[{i}]"),
+                    format!("`{l}` names two poses"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `[sweeps] missing`: inside the campaign, listed once, and leaving every position at
+    /// least one direction.
+    fn check_missing(&self, missing: &[MissingSweep]) -> Result<()> {
+        let (np, nd) = (self.poses.len(), self.directions.count());
+        let mut seen = std::collections::HashSet::new();
+        let mut per = vec![0usize; np];
+        for (i, m) in missing.iter().enumerate() {
+            if m.position >= np || m.direction >= nd {
+                return Err(Error::param(
+                    format!("sweeps.missing[{i}]"),
+                    format!(
+                        "(position {}, direction {}) outside the campaign ({np} positions, {nd} directions)",
+                        m.position, m.direction
+                    ),
+                ));
+            }
+            if !seen.insert((m.position, m.direction)) {
+                return Err(Error::param(
+                    format!("sweeps.missing[{i}]"),
+                    format!(
+                        "position {}, direction {} listed twice",
+                        m.position, m.direction
+                    ),
+                ));
+            }
+            per[m.position] += 1;
+            if per[m.position] == nd {
+                return Err(Error::param(
+                    format!("sweeps.missing[{i}]"),
+                    format!(
+                        "position {} would have no sweep at all (leave the position out instead)",
+                        m.position
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// `[sweeps] files`: every index inside the campaign, no (position, direction, pulse)

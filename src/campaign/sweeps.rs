@@ -32,11 +32,18 @@ pub struct PositionSweeps {
     pub pulses: usize,
     /// Frequency points.
     pub points: usize,
-    /// The swept parameter (`[sweeps] parameter`, S21 by default).
+    /// The swept parameter (`[sweeps] parameter`, S21 by default); NaN for a missing sweep.
     pub s21: Vec<Complex64>,
+    /// Per direction: the campaign has no sweep there (`[sweeps] missing`); empty when
+    /// none is missing.
+    pub missing: Vec<bool>,
 }
 
 impl PositionSweeps {
+    /// Whether direction `d` was swept (not listed in `[sweeps] missing`).
+    pub fn has(&self, d: usize) -> bool {
+        !self.missing.get(d).copied().unwrap_or(false)
+    }
     /// The sweep of one (direction, pulse).
     pub fn sweep(&self, direction: usize, pulse: usize) -> &[Complex64] {
         let i = (direction * self.pulses + pulse) * self.points;
@@ -55,6 +62,8 @@ pub struct SweepReader {
     positions: usize,
     directions: usize,
     pulses: usize,
+    /// Per (position, direction): listed in `[sweeps] missing`.
+    missing: Vec<bool>,
     source: Source,
 }
 
@@ -147,6 +156,10 @@ impl SweepReader {
         })?;
         let (np, nd, nk) = (m.positions(), m.directions.count(), m.pulses);
         let dir = c.dir();
+        let mut missing = vec![false; np * nd];
+        for (p, d) in m.missing() {
+            missing[p * nd + d] = true;
+        }
         let source = match cfg.format {
             SweepFormat::Touchstone => {
                 let mut paths = vec![PathBuf::new(); np * nd * nk];
@@ -170,7 +183,11 @@ impl SweepReader {
                         }
                         paths[(f.position * nd + f.direction) * nk + f.pulse] = dir.join(&f.path);
                     }
-                    if let Some(i) = paths.iter().position(|p| p.as_os_str().is_empty()) {
+                    if let Some(i) = paths
+                        .iter()
+                        .enumerate()
+                        .position(|(i, p)| p.as_os_str().is_empty() && !missing[i / nk])
+                    {
                         let (p, d, k) = (i / (nd * nk), (i / nk) % nd, i % nk);
                         return Err(Error::input(
                             &c.path,
@@ -180,17 +197,27 @@ impl SweepReader {
                         ));
                     }
                 }
+                // a missing sweep names no file, whatever a template would give
+                for (i, p) in paths.iter_mut().enumerate() {
+                    if missing[i / nk] {
+                        *p = PathBuf::new();
+                    }
+                }
                 // every file a regular one, before any is opened (a FIFO would block, a
                 // device never end)
                 let what = format!("sweep file listed in {}", c.path.display());
-                for p in &paths {
+                for p in paths.iter().filter(|p| !p.as_os_str().is_empty()) {
                     crate::io::regular_input(p, &what)?;
                 }
                 // the band is checked on the first file now, before anything is computed
                 // from [band] (a wrong `points` would otherwise surface as a processing
                 // range problem)
                 let mut first = vec![Complex64::new(0.0, 0.0); m.band.points];
-                read_sweep(&paths[0], cfg.parameter, &m.band, &mut first)?;
+                let first_path = paths
+                    .iter()
+                    .find(|p| !p.as_os_str().is_empty())
+                    .ok_or_else(|| Error::input(&c.path, "sweeps: no sweep file"))?;
+                read_sweep(first_path, cfg.parameter, &m.band, &mut first)?;
                 Source::Touchstone(paths, cfg.parameter)
             }
             SweepFormat::Parquet => {
@@ -215,6 +242,7 @@ impl SweepReader {
             positions: np,
             directions: nd,
             pulses: nk,
+            missing,
             source,
         })
     }
@@ -265,6 +293,10 @@ impl SweepReader {
                     s21.par_chunks_mut(nf)
                         .enumerate()
                         .try_for_each(|(i, out)| -> Result<()> {
+                            if self.missing[p * nd + i / nk] {
+                                out.fill(Complex64::new(f64::NAN, f64::NAN));
+                                return Ok(());
+                            }
                             let path = &paths[base + i];
                             read_sweep(path, *param, &self.band, out)
                         })?;
@@ -274,6 +306,7 @@ impl SweepReader {
                         pulses: nk,
                         points: nf,
                         s21,
+                        missing: self.missing[p * nd..(p + 1) * nd].to_vec(),
                     });
                 }
             }
@@ -308,6 +341,17 @@ impl SweepReader {
                             ));
                         }
                         let bound = crate::campaign::touchstone::MAX_VALUE;
+                        if self.missing[p * nd + d] {
+                            // a missing sweep is NaN in the table (`import --allow-missing`)
+                            if !(re[r].is_nan() && im[r].is_nan()) {
+                                return Err(Error::input(
+                                    path,
+                                    format!("row {}: position {p}, direction {d} is listed in [sweeps] missing but holds a value (NaN expected)", p0 * n + r),
+                                ));
+                            }
+                            *v = Complex64::new(f64::NAN, f64::NAN);
+                            continue;
+                        }
                         if !(re[r].abs() <= bound && im[r].abs() <= bound) {
                             return Err(Error::input(
                                 path,
@@ -322,6 +366,7 @@ impl SweepReader {
                         pulses: nk,
                         points: nf,
                         s21,
+                        missing: self.missing[p * nd..(p + 1) * nd].to_vec(),
                     });
                 }
             }

@@ -301,7 +301,9 @@ pub fn check(
         let part: Vec<Statistics> = (start..(start + chunk).min(r))
             .into_par_iter()
             .map(|i| -> Result<Statistics> {
-                let e = sim.energies(model, draw_seed(seed, i))?;
+                let mut e = sim.energies(model, draw_seed(seed, i))?;
+                // the measured campaign's missing sweeps are missing from the draws too
+                energy.meta.mask_missing(energy.directions(), energy.bins, &mut e);
                 Ok(Statistics::of(&ctx, &e))
             })
             .collect::<Result<_>>()?;

@@ -97,6 +97,11 @@ impl Statistics {
         for p in 0..np {
             for (d, w) in per_dir.iter_mut().enumerate() {
                 let prof = &e[(p * nd + d) * nb..(p * nd + d + 1) * nb];
+                if prof.first().is_some_and(|v| v.is_nan()) {
+                    // no sweep (`[sweeps] missing`): not a profile of the sample
+                    *w = 0.0;
+                    continue;
+                }
                 let (mut m0, mut m1, mut n, mut k) = (0.0, 0.0, 0usize, 0usize);
                 let mut t0 = None;
                 for b in ctx.first_bin..nb {

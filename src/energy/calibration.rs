@@ -226,6 +226,9 @@ impl Calibration {
         }
         let nf = sw.points;
         for d in 0..sw.directions {
+            if !sw.has(d) {
+                continue; // a missing sweep stays NaN
+            }
             let b = self
                 .background
                 .as_ref()

@@ -49,9 +49,29 @@ pub struct EnergyMeta {
     pub coupling: String,
     /// Every key-value pair as stored.
     pub all: Vec<(String, String)>,
+    /// The (position, direction) profiles without a sweep (metadata `missing`), sorted:
+    /// their energies are NaN.
+    pub missing: Vec<(usize, usize)>,
 }
 
 impl EnergyMeta {
+    /// Set the profiles this table lacks to NaN in energies `e` of the same grid (`nd`
+    /// directions of `nb` bins per position): a model's draws then miss what the
+    /// measurement misses.
+    pub fn mask_missing(&self, nd: usize, nb: usize, e: &mut [f64]) {
+        for &(p, d) in &self.missing {
+            let i = (p * nd + d) * nb;
+            if let Some(prof) = e.get_mut(i..i + nb) {
+                prof.fill(f64::NAN);
+            }
+        }
+    }
+
+    /// Whether (position `p`, direction `d`) has no sweep (its profile is NaN).
+    pub fn is_missing(&self, p: usize, d: usize) -> bool {
+        !self.missing.is_empty() && self.missing.binary_search(&(p, d)).is_ok()
+    }
+
     /// The noise statistics a detector or an observation model needs: `n0` a positive
     /// number, `tw` positive, `pulses` ≥ 1 (`file` names the energy table in errors).
     pub fn check_noise(&self, file: &Path) -> Result<()> {
@@ -119,6 +139,11 @@ impl EnergyMatrix {
         let per = (self.directions() * self.bins).max(1);
         self.first..self.first + self.data.len() / per
     }
+    /// Whether the campaign has a sweep of (position `p`, direction `d`): a missing one's
+    /// profile is NaN, and every reader of profiles skips it.
+    pub fn has(&self, p: usize, d: usize) -> bool {
+        !self.meta.is_missing(p, d)
+    }
     /// The profile of one (position, direction); `p` must be [`held`](Self::held).
     pub fn profile(&self, p: usize, d: usize) -> &[f64] {
         debug_assert!(
@@ -177,18 +202,19 @@ impl EnergyMatrix {
             ));
         }
         let mut data = vec![f64::NAN; np * nd * nb];
+        let mut filled = vec![false; np * nd * nb];
         let mut angles = vec![f64::NAN; nd];
         let mut headings = vec![f64::NAN; np];
         for i in 0..df.height() {
             let (p, d, b) = (pos[i] as usize, dir[i] as usize, bin[i] as usize);
             let idx = (p * nd + d) * nb + b;
-            if !data[idx].is_nan() {
+            if std::mem::replace(&mut filled[idx], true) {
                 return Err(Error::input(
                     path,
                     format!("row {i}: duplicate (position {p}, direction {d}, bin {b})"),
                 ));
             }
-            check_energy(path, i, energy[i])?;
+            check_energy(path, i, energy[i], meta.is_missing(p, d))?;
             data[idx] = energy[i];
             angles[d] = arel[i];
             headings[p] = wrap_deg(aglob[i] - arel[i]);
@@ -273,6 +299,7 @@ fn meta_from(path: &Path, kv: Vec<(String, String)>) -> Result<EnergyMeta> {
         array: get("array")?,
         coupling: get("coupling").unwrap_or_default(),
         all: kv.clone(),
+        missing: missing_from(path, &kv)?,
     };
     if meta.schema_version != SCHEMA_VERSION {
         return Err(Error::input(
@@ -285,6 +312,31 @@ fn meta_from(path: &Path, kv: Vec<(String, String)>) -> Result<EnergyMeta> {
     }
     check_physical(path, &meta)?;
     Ok(meta)
+}
+
+/// The `missing` metadata: space-separated `position:direction` pairs, sorted on return.
+fn missing_from(path: &Path, kv: &[(String, String)]) -> Result<Vec<(usize, usize)>> {
+    let Some((_, v)) = kv.iter().find(|(k, _)| k == "missing") else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for tok in v.split_ascii_whitespace() {
+        let pair = tok
+            .split_once(':')
+            .and_then(|(p, d)| Some((p.parse::<usize>().ok()?, d.parse::<usize>().ok()?)));
+        match pair {
+            Some(pd) if out.len() < crate::campaign::manifest::limits::MAX_SWEEPS => out.push(pd),
+            _ => {
+                return Err(Error::input(
+                    path,
+                    format!("metadata `missing`: `{}` is not position:direction", tok.chars().take(40).collect::<String>()),
+                ))
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
 }
 
 /// Relative tolerance of the bin width against `1e9 / B` of the recorded band.
@@ -515,7 +567,7 @@ impl EnergyTable {
                     canonical = false;
                     break;
                 }
-                check_energy(path, row, energy[i])?;
+                check_energy(path, row, energy[i], meta.is_missing(p, d))?;
                 angles[d] = arel[i];
                 headings[p] = wrap_deg(aglob[i] - arel[i]);
             }
@@ -653,15 +705,35 @@ impl EnergyTable {
                 ),
             ));
         }
+        let nb = self.header.bins.max(1);
+        let nd = self.header.directions().max(1);
         for (i, &e) in data.iter().enumerate() {
-            check_energy(&self.path, q0 * per + i, e)?;
+            let row = q0 * per + i;
+            let missing = self.header.meta.is_missing(row / (nd * nb), (row / nb) % nd);
+            check_energy(&self.path, row, e, missing)?;
         }
         Ok(data)
     }
 }
 
-/// A bin energy must be non-negative and at most [`MAX_ENERGY`] (`row` names it).
-fn check_energy(path: &Path, row: usize, e: f64) -> Result<()> {
+/// A bin energy must be non-negative and at most [`MAX_ENERGY`] (`row` names it); NaN
+/// exactly where the metadata lists the profile as `missing`.
+fn check_energy(path: &Path, row: usize, e: f64, missing: bool) -> Result<()> {
+    if missing {
+        if !e.is_nan() {
+            return Err(Error::input(
+                path,
+                format!("column `energy` row {row}: {e:e} in a profile the metadata lists as `missing` (NaN expected)"),
+            ));
+        }
+        return Ok(());
+    }
+    if e.is_nan() {
+        return Err(Error::input(
+            path,
+            format!("column `energy` row {row}: NaN outside the profiles the metadata lists as `missing`"),
+        ));
+    }
     if e < 0.0 {
         return Err(Error::input(path, format!("row {row}: negative energy")));
     }

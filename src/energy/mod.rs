@@ -151,6 +151,11 @@ pub fn run(
                     let e = proc.position_energy(&sw);
                     let mut energies = Vec::with_capacity(nd * nb);
                     for d in 0..nd {
+                        if !sw.has(d) {
+                            // a missing sweep: NaN in the table, listed in its metadata
+                            energies.extend(std::iter::repeat_n(f64::NAN, nb));
+                            continue;
+                        }
                         let prof = &e[d * nbf..(d + 1) * nbf];
                         if let Some(b) = prof.iter().position(|v| !v.is_finite()) {
                             return Err(not_finite(campaign, &cal, sw.position, d, b));

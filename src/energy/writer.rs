@@ -16,8 +16,9 @@ use crate::table;
 use std::path::Path;
 
 /// The key-value metadata of an energy table (DESIGN §3 plus `tw`, `window`, `coupling`,
-/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `campaign`, `band`, and
-/// `parameter` when `[sweeps] parameter` is not S21).
+/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `campaign`, `band`,
+/// `parameter` when `[sweeps] parameter` is not S21, and `missing` — the `position:direction`
+/// pairs without a sweep, space-separated — when the campaign lists any).
 pub fn table_metadata(
     m: &Manifest,
     proc: &EnergyProcessor,
@@ -57,6 +58,13 @@ pub fn table_metadata(
             format!("{} {} {}", m.band.start_hz, m.band.stop_hz, m.band.points),
         ),
     ];
+    // the (position, direction) profiles without a sweep, NaN in the table; absent when
+    // every sweep is there (a complete campaign's table is unchanged)
+    let missing = m.missing();
+    if !missing.is_empty() {
+        let v: Vec<String> = missing.iter().map(|(p, d)| format!("{p}:{d}")).collect();
+        meta.push(("missing".into(), v.join(" ")));
+    }
     // recorded only when not the default, so default campaigns' tables are unchanged
     if let Some(p) = m.sweeps.as_ref().and_then(|s| s.parameter) {
         if p != crate::campaign::touchstone::SParam::S21 {

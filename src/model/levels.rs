@@ -103,9 +103,12 @@ pub const LEVEL_SEEDS: [u64; 8] = [11, 12, 13, 14, 15, 16, 17, 18];
 /// The mean number of signal bins (E > 10μ, after the gate) per profile of energies `e`
 /// (one or more matrices of `nb`-bin profiles; module docs, step 3).
 pub fn mean_signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> f64 {
-    let profiles = (e.len() / nb.max(1)).max(1);
+    // a profile without a sweep (NaN, `[sweeps] missing`) is not counted
+    let present = |prof: &&[f64]| !prof.first().is_some_and(|v| v.is_nan());
+    let profiles = e.chunks(nb.max(1)).filter(present).count().max(1);
     let n: usize = e
-        .chunks(nb)
+        .chunks(nb.max(1))
+        .filter(present)
         .map(|prof| {
             prof[first_bin.min(nb)..]
                 .iter()
@@ -161,6 +164,9 @@ pub fn fit_levels(
         for foot in &f {
             let rel = wrap_rad(foot.bearing - heading.to_radians()).to_degrees();
             let Some(d) = nearest(rel) else { continue };
+            if !em.has(p, d) {
+                continue; // no sweep there
+            }
             let b = bin_of(crate::units::delay_s(foot.d_m));
             // the bins ±2 around the echo, or, for an echo inside the coupling gate, the
             // first 3 bins after it (where its range side lobes show)
@@ -264,7 +270,7 @@ pub fn fit_levels(
             let (at, heading) = sim.pose(p);
             for d in 0..nd {
                 let ang = heading.to_radians() + em.angles_rel_deg[d].to_radians();
-                if near_foot(p, ang) {
+                if near_foot(p, ang) || !em.has(p, d) {
                     continue;
                 }
                 let Some((range, _, _)) = layout.first_hit(at, ang) else {
@@ -306,6 +312,9 @@ pub fn fit_levels(
             };
             let rel = wrap_rad(bearing - heading.to_radians()).to_degrees();
             let Some(d) = nearest(rel) else { continue };
+            if !em.has(p, d) {
+                continue; // no sweep there
+            }
             if near_foot(p, bearing) {
                 continue;
             }

@@ -168,8 +168,12 @@ impl<'a> PositionView<'a> {
         &self.em.angles_rel_deg
     }
 
-    /// The (original) energy of cell (d, b).
+    /// The (original) energy of cell (d, b); 0 in a direction without a sweep (`[sweeps]
+    /// missing`: nothing is extracted there, and no neighbour's refinement reads it).
     pub(crate) fn energy(&self, d: usize, b: usize) -> f64 {
+        if !self.em.has(self.p, d) {
+            return 0.0;
+        }
         self.em.profile(self.p, d)[b]
     }
 
@@ -194,11 +198,12 @@ impl<'a> PositionView<'a> {
         let b_min = ((min_delay_ns / self.tb).ceil() as usize).min(self.nb);
         (0..self.nd)
             .flat_map(|d| {
+                let has = self.em.has(self.p, d);
                 self.em
                     .profile(self.p, d)
                     .iter()
                     .enumerate()
-                    .map(move |(b, &v)| if b < b_min { 0.0 } else { v })
+                    .map(move |(b, &v)| if b < b_min || !has { 0.0 } else { v })
             })
             .collect()
     }

@@ -585,7 +585,8 @@ fn write_plots(s: &Data, a: &Analysis, out: &Path, progress: Progress) -> Result
             .map(|m| (m.angle_rel_deg, crate::units::range_m(m.delay_ns)))
             .collect();
         let heat = out.join(format!("energy_p{p:02}.png"));
-        report::energy_heatmap(em, p, &heat, -60.0, &marks)?;
+        let label = s.campaign.manifest.label(p);
+        report::energy_heatmap(em, p, &label, &heat, -60.0, &marks)?;
         // the position's MPCs with their labels local to the position (None: diffuse)
         let mut labels = clustering.positions[p].labels.iter();
         let (pts, local): (Vec<Point3>, Vec<Option<usize>>) = mpcs
@@ -602,7 +603,7 @@ fn write_plots(s: &Data, a: &Analysis, out: &Path, progress: Progress) -> Result
         report::mpc_clusters_plot(
             &out.join(format!("clusters_p{p:02}.png")),
             &format!(
-                "position {p}: {} MPCs ({} diffuse) in {} clusters",
+                "position {label}: {} MPCs ({} diffuse) in {} clusters",
                 pts.len(),
                 local.iter().filter(|l| l.is_none()).count(),
                 clustering.positions[p].k

@@ -182,6 +182,7 @@ pub fn simulate(
             pulses: nk,
             points: nf,
             s21: synth.position(p, pose.heading_deg.to_radians(), &paths),
+            missing: vec![],
         };
         sweeps.write(&m.band, &sw, &m.name)?;
         let rows = truth::truth_rays(&scene, &ids, &paths, g0, lc);

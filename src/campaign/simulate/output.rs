@@ -89,6 +89,7 @@ pub(super) fn write_manifest(c: &Campaign, out_dir: &Path, format: SweepFormat) 
             files: vec![],
             path: None,
             parameter: None,
+            ..Default::default()
         },
         SweepFormat::Parquet => SweepsConfig {
             format,
@@ -96,6 +97,7 @@ pub(super) fn write_manifest(c: &Campaign, out_dir: &Path, format: SweepFormat) 
             files: vec![],
             path: Some("sweeps.parquet".into()),
             parameter: None,
+            ..Default::default()
         },
     };
     t.insert(

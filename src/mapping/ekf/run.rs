@@ -98,6 +98,14 @@ pub fn ekf_run(
             .map_init(
                 || vec![0.0; n],
                 |scratch, d| {
+                    if !energy.has(p, d) {
+                        // no sweep: no rows, no evidence
+                        let none = Observation {
+                            ptr: vec![0],
+                            ..Default::default()
+                        };
+                        return (none, 0);
+                    }
                     let prof = energy.profile(p, d);
                     let mut bins = prof.len().min(model.bins);
                     let mut withheld = 0;

@@ -77,7 +77,12 @@ impl Detector {
             .into_par_iter()
             .map(|d| {
                 let mut det = Vec::new();
-                self.detect(em.profile(p, d), &mut det);
+                if em.has(p, d) {
+                    self.detect(em.profile(p, d), &mut det);
+                } else {
+                    // a direction without a sweep detects nothing (and the mappers skip it)
+                    det.resize(em.bins, false);
+                }
                 det
             })
             .collect()

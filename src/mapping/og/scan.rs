@@ -259,12 +259,20 @@ impl<'a> ScanContext<'a> {
                 let vis = self.occlusion.visibility(self.model, g, &echoes);
                 (0..nd)
                     .into_par_iter()
-                    .map(|d| self.scan_direction_og(d, g, &echoes, &vis, bel))
+                    .map(|d| {
+                        if !em.has(p, d) {
+                            return (Vec::new(), 0, 0, 0); // no sweep: no evidence
+                        }
+                        self.scan_direction_og(d, g, &echoes, &vis, bel)
+                    })
                     .collect()
             }
             _ => (0..nd)
                 .into_par_iter()
                 .map(|d| {
+                    if !em.has(p, d) {
+                        return (Vec::new(), 0, 0, 0); // no sweep: no evidence
+                    }
                     let ray = self.model.boresight_ray(p, d);
                     let mut out = Vec::new();
                     let dets = scan_boresight(
