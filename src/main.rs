@@ -1,8 +1,8 @@
 //! `pradar` command line: parses arguments ([`cli`]) and calls one library function per
 //! subcommand ([`pradar::pipeline::commands`], [`pradar::pipeline::reproduce`]).
 //!
-//! Each `fn <subcommand>` turns its arguments into the library's parameter structs, runs the
-//! library entry with a progress bar (none with `--quiet`) and prints the returned summary.
+//! Each subcommand's arguments become the library's command struct ([`cli::params`]); the
+//! library entry runs with a progress bar (none with `--quiet`) and its summary is printed.
 //! Errors are printed as one line `error: …` with exit status 1: the library's (whose
 //! `Display` names the file, line or field) and every usage error clap reports (invalid,
 //! out-of-range or missing flag values, conflicting flags, a required flag absent, an
@@ -15,14 +15,9 @@ mod cli;
 use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::Parser;
-use cli::{
-    CalibrateArgs, CheckArgs, Cli, ClusterArgs, Cmd, EnergyArgs, ExperimentArgs, ExtractArgs,
-    FitArgs, ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
-};
+use cli::{CheckArgs, Cli, Cmd, ImportArgs};
 use indicatif::{ProgressBar, ProgressStyle};
-use pradar::params::ParamGuard;
-use pradar::pipeline::commands;
-use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
+use pradar::pipeline::commands::{self, ImportProblems};
 
 fn main() {
     let cli = parse_args();
@@ -72,21 +67,68 @@ fn one_line(text: &str) -> String {
 
 fn run(cli: Cli) -> Result<()> {
     let quiet = cli.quiet;
+    let stages = |label: &str, total: usize| stage_bar(quiet, label, total);
     match cli.cmd {
-        Cmd::Import(a) => import(a, quiet),
-        Cmd::Simulate(a) => simulate(a, quiet),
-        Cmd::Energy(a) => energy(a, quiet),
-        Cmd::Synth(a) => synth(a, quiet),
-        Cmd::Map(a) => map(a, quiet),
-        Cmd::Extract(a) => extract(a, quiet),
-        Cmd::Cluster(a) => cluster(a, quiet),
-        Cmd::Fit(a) => fit(a, quiet),
-        Cmd::Calibrate(a) => calibrate(a, quiet),
-        Cmd::Check(a) => check(a, quiet),
-        Cmd::Report(a) => report_cmd(a, quiet),
-        Cmd::Reproduce(a) => reproduce(a, quiet),
-        Cmd::Experiment(a) => experiment(a, quiet),
+        Cmd::Import(a) => import(a, quiet)?,
+        Cmd::Simulate(a) => {
+            let cmd = a.into_command();
+            report(
+                quiet,
+                with_bar(quiet, "simulate", |p| commands::simulate(&cmd, p))?,
+            )
+        }
+        Cmd::Energy(a) => {
+            let cmd = a.into_command();
+            report(
+                quiet,
+                with_bar(quiet, "energy", |p| commands::energy(&cmd, p))?,
+            )
+        }
+        Cmd::Synth(a) => {
+            let cmd = a.into_command();
+            report(
+                quiet,
+                with_bar(quiet, "synth", |p| commands::synth(&cmd, p))?,
+            )
+        }
+        Cmd::Map(a) => {
+            let cmd = a.into_command();
+            report(quiet, with_bar(quiet, "map", |p| commands::map(&cmd, p))?)
+        }
+        Cmd::Extract(a) => report(quiet, commands::extract(&a.into_command())?),
+        Cmd::Cluster(a) => {
+            let summary = commands::cluster(&a.into_command())?;
+            if let Some(w) = summary.warning() {
+                eprintln!("warning: {w}");
+            }
+            report(quiet, summary)
+        }
+        Cmd::Fit(a) => {
+            let summary = commands::fit(&a.into_command())?;
+            for w in summary.warnings() {
+                eprintln!("warning: {w}");
+            }
+            report(quiet, summary)
+        }
+        Cmd::Calibrate(a) => {
+            let cmd = a.into_command();
+            report(
+                quiet,
+                with_bar(quiet, "calibrate", |p| commands::calibrate(&cmd, p))?,
+            )
+        }
+        Cmd::Check(a) => check(a, quiet)?,
+        Cmd::Report(a) => {
+            let index = pradar::pipeline::report(&a.into_options()?, &stages)?;
+            report(quiet, format_args!("report: {}", index.display()))
+        }
+        Cmd::Reproduce(a) => {
+            let index = pradar::pipeline::reproduce(&a.into_options()?, &stages)?;
+            report(quiet, format_args!("report: {}", index.display()))
+        }
+        Cmd::Experiment(a) => report(quiet, commands::experiments(&a.into_command(), &stages)?),
     }
+    Ok(())
 }
 
 /// Print a command's summary unless `--quiet`.
@@ -139,283 +181,24 @@ fn stage_bar(quiet: bool, label: &str, total: usize) -> Box<dyn Fn(usize, usize)
 /// `import`: the problems found before processing go to stderr one per line, then one
 /// `error:` line with their count (exit 1, nothing written).
 fn import(a: ImportArgs, quiet: bool) -> Result<()> {
-    use pradar::campaign::import::{ImportParams, SweepFiles};
-    let sweeps = match (a.sweeps, a.name_pattern, a.index) {
-        (Some(glob), Some(pattern), _) => SweepFiles::Glob { glob, pattern },
-        (_, _, Some(index)) => SweepFiles::Index(index),
-        _ => anyhow::bail!("import: give --sweeps GLOB --name-pattern PATTERN, or --index CSV"),
-    };
-    let params = ImportParams {
-        poses: a.poses,
-        sweeps,
-        directions: a.directions,
-        layout: a.layout,
-        base: a.base,
-        name: a.name,
-        elements: a.elements,
-        out: a.out,
-        to_parquet: a.to_parquet,
-    };
-    let pb = bar(quiet, "import", 0);
-    let r = pradar::campaign::import::run(&params, &|d, t| {
-        pb.set_length(t as u64);
-        pb.set_position(d as u64)
-    });
-    pb.finish_and_clear();
-    let outcome = r?;
-    if !outcome.problems.is_empty() {
-        for p in &outcome.problems {
-            eprintln!("{p}");
-        }
-        let count = |k: &str| outcome.problems.iter().filter(|p| p.starts_with(k)).count();
-        anyhow::bail!(
-            "import: {} problem(s) before processing ({} missing, {} duplicated, {} extra, {} unreadable, {} grid); nothing written",
-            outcome.problems.len(),
-            count("missing"),
-            count("duplicated"),
-            count("extra"),
-            count("unreadable"),
-            count("grid")
-        );
+    let params = a.into_params()?;
+    let outcome = with_bar(quiet, "import", |p| commands::import(&params, p))?;
+    if let Some(problems) = ImportProblems::of(&outcome) {
+        eprintln!("{problems}");
+        anyhow::bail!("{}", problems.summary);
     }
     report(quiet, outcome);
     Ok(())
 }
 
-fn simulate(a: SimulateArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Simulate {
-        campaign: a.campaign,
-        out: a.out,
-        elements: a.elements,
-        format: a.format,
-    };
-    report(
-        quiet,
-        with_bar(quiet, "simulate", |p| commands::simulate(&cmd, p))?,
-    );
-    Ok(())
-}
-
-fn energy(a: EnergyArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Energy {
-        campaign: a.campaign,
-        out: a.out,
-    };
-    report(
-        quiet,
-        with_bar(quiet, "energy", |p| commands::energy(&cmd, p))?,
-    );
-    Ok(())
-}
-
-fn synth(a: SynthArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Synth {
-        model: a.model,
-        campaign: a.campaign,
-        out: a.out,
-        elements: a.elements,
-        values: a.set.into_iter().collect(),
-        params: pradar::model::SynthParams {
-            seed: a.seed,
-            truth_dir: a.truth,
-            ..Default::default()
-        },
-    };
-    report(
-        quiet,
-        with_bar(quiet, "synth", |p| commands::synth(&cmd, p))?,
-    );
-    Ok(())
-}
-
-fn calibrate(a: CalibrateArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Calibrate {
-        energy: a.energy,
-        campaign: a.campaign,
-        out: a.out,
-        prior: a.prior,
-        report: a.report,
-        chain: a.chain,
-        params: pradar::calibrate::CalibrateParams {
-            simulations: a.simulations,
-            population: a.population,
-            seed: a.seed,
-            ..Default::default()
-        },
-    };
-    report(
-        quiet,
-        with_bar(quiet, "calibrate", |p| commands::calibrate(&cmd, p))?,
-    );
-    Ok(())
-}
-
+/// `check`: the summary, then with `--fail-below` an error when the check fails.
 fn check(a: CheckArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Check {
-        model: a.model,
-        campaign: a.campaign,
-        energy: a.energy,
-        out: a.out,
-        params: pradar::check::CheckParams {
-            draws: a.draws,
-            seed: a.seed,
-            ..Default::default()
-        },
-    };
+    let fail_below = a.fail_below;
+    let cmd = a.into_command();
     let summary = with_bar(quiet, "check", |p| commands::check(&cmd, p))?;
-    let r = &summary.result;
     report(quiet, &summary);
-    if let Some(p) = a.fail_below {
-        if r.corrected_p() < p || r.max_ratio() > pradar::check::MAX_RATIO {
-            anyhow::bail!("check failed (--fail-below {p}): {}", r.verdict());
-        }
+    if let Some(msg) = fail_below.and_then(|p| summary.failure(p)) {
+        anyhow::bail!(msg);
     }
-    Ok(())
-}
-
-fn map(a: MapArgs, quiet: bool) -> Result<()> {
-    use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, OgParams};
-    let single = a
-        .campaign
-        .zip(a.energy)
-        .map(|(campaign, energy)| MapRun { campaign, energy });
-    let cmd = commands::Map {
-        options: MapOptions {
-            method: a.method,
-            runs: single.into_iter().collect(),
-            out: a.out,
-            elements: a.elements,
-            grid: GridParams {
-                cell_m: a.cell_m,
-                ..Default::default()
-            },
-            og: OgParams {
-                pfa: a.pfa,
-                prior: a.prior,
-                passes: a.passes as usize,
-                ..Default::default()
-            },
-            ekf: EkfParams {
-                variant: a.ekf,
-                mu0: a.mu0,
-                sigma0: a.sigma0,
-                ..Default::default()
-            },
-            pose_noise: pradar::mapping::job::PoseNoise {
-                position_m: a.pose_noise_m,
-                heading_deg: a.pose_noise_deg,
-                seed: a.pose_seed,
-            },
-        },
-        run_specs: a.run,
-    };
-    report(quiet, with_bar(quiet, "map", |p| commands::map(&cmd, p))?);
-    Ok(())
-}
-
-fn extract(a: ExtractArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Extract {
-        energy: a.energy,
-        campaign: a.campaign,
-        out: a.out,
-        params: pradar::mpc::ExtractParams {
-            diffuse: pradar::mpc::DiffuseParams {
-                enabled: !a.no_diffuse,
-                discrete_db: a.diffuse_db,
-                ..Default::default()
-            },
-            ..pradar::mpc::ExtractParams::default()
-                .method(a.method)
-                .margin_db(a.margin_db)
-                .dynamic_range_db(a.dynamic_range_db)
-        },
-    };
-    report(quiet, commands::extract(&cmd)?);
-    Ok(())
-}
-
-fn cluster(a: ClusterArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Cluster {
-        mpcs: a.mpcs,
-        out: a.out,
-        params: pradar::cluster::ClusterParams::default()
-            .k_max(a.k_max)
-            .seed(a.seed)
-            .criterion(a.criterion),
-    };
-    let summary = commands::cluster(&cmd)?;
-    if let Some(w) = summary.warning() {
-        eprintln!("warning: {w}");
-    }
-    report(quiet, summary);
-    Ok(())
-}
-
-fn fit(a: FitArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Fit {
-        clusters: a.clusters,
-        campaign: a.campaign,
-        out: a.out,
-        table: a.table,
-        truth: a.truth,
-        energy: a.energy,
-        params: pradar::fit::channel::FitParams {
-            bootstrap: a.bootstrap,
-            seed: a.seed,
-        },
-    };
-    let summary = commands::fit(&cmd)?;
-    for w in summary.warnings() {
-        eprintln!("warning: {w}");
-    }
-    report(quiet, summary);
-    Ok(())
-}
-
-fn reproduce(a: ReproduceArgs, quiet: bool) -> Result<()> {
-    let opts = pradar::pipeline::ReproduceOptions {
-        out: a.out,
-        campaign: a.campaign,
-        elements: a.elements,
-        experiments: !a.skip_experiments,
-        experiment_params: ExperimentParams::default().seeds(a.seeds).check()?,
-    }
-    .check()?;
-    let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
-    let index = pradar::pipeline::reproduce(&opts, &progress)?;
-    report(quiet, format_args!("report: {}", index.display()));
-    Ok(())
-}
-
-fn report_cmd(a: ReportArgs, quiet: bool) -> Result<()> {
-    let opts = pradar::pipeline::ReportOptions {
-        out: a.out,
-        campaign: a.campaign,
-        energy: a.energy,
-        model: a.model,
-        truth: a.truth,
-        experiments: !a.skip_experiments,
-        experiment_params: ExperimentParams::default().seeds(a.seeds).check()?,
-    }
-    .check()?;
-    let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
-    let index = pradar::pipeline::report(&opts, &progress)?;
-    report(quiet, format_args!("report: {}", index.display()));
-    Ok(())
-}
-
-fn experiment(a: ExperimentArgs, quiet: bool) -> Result<()> {
-    let cmd = commands::Experiments {
-        name: a.name,
-        inputs: InputOptions {
-            campaign: a.campaign,
-            energy: a.energy,
-            model: a.model,
-        },
-        params: ExperimentParams::default().seeds(a.seeds),
-        out: a.out,
-    };
-    let progress = |label: &str, total: usize| stage_bar(quiet, label, total);
-    report(quiet, commands::experiments(&cmd, &progress)?);
     Ok(())
 }

@@ -8,6 +8,7 @@
 //! Numeric flags with a range are checked while parsing ([`ranges`]), so an out-of-range
 //! value fails before any file is read, with a message naming the flag.
 
+pub mod params;
 pub mod ranges;
 
 use clap::{Args, Parser, Subcommand};

@@ -1,0 +1,255 @@
+//! How each subcommand's arguments become the library's command structs
+//! ([`pradar::pipeline::commands`], [`pradar::pipeline::ReproduceOptions`],
+//! [`pradar::pipeline::ReportOptions`]): one `into_…` method per `…Args`, taking the
+//! parsed flags and giving the struct the library entry runs. Nothing here reads a file.
+
+use super::{
+    CalibrateArgs, CheckArgs, ClusterArgs, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs,
+    ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
+};
+use anyhow::Result;
+use pradar::campaign::import::{ImportParams, SweepFiles};
+use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, OgParams};
+use pradar::params::ParamGuard;
+use pradar::pipeline::commands;
+use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
+use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
+
+impl ImportArgs {
+    /// The import's parameters: the one place they are built from the flags.
+    pub fn into_params(self) -> Result<ImportParams> {
+        let sweeps = match (self.sweeps, self.name_pattern, self.index) {
+            (Some(glob), Some(pattern), _) => SweepFiles::Glob { glob, pattern },
+            (_, _, Some(index)) => SweepFiles::Index(index),
+            _ => anyhow::bail!("import: give --sweeps GLOB --name-pattern PATTERN, or --index CSV"),
+        };
+        Ok(ImportParams {
+            poses: self.poses,
+            sweeps,
+            directions: self.directions,
+            layout: self.layout,
+            base: self.base,
+            name: self.name,
+            elements: self.elements,
+            out: self.out,
+            to_parquet: self.to_parquet,
+        })
+    }
+}
+
+impl SimulateArgs {
+    /// `simulate`'s command.
+    pub fn into_command(self) -> commands::Simulate {
+        commands::Simulate {
+            campaign: self.campaign,
+            out: self.out,
+            elements: self.elements,
+            format: self.format,
+        }
+    }
+}
+
+impl EnergyArgs {
+    /// `energy`'s command.
+    pub fn into_command(self) -> commands::Energy {
+        commands::Energy {
+            campaign: self.campaign,
+            out: self.out,
+        }
+    }
+}
+
+impl SynthArgs {
+    /// `synth`'s command.
+    pub fn into_command(self) -> commands::Synth {
+        commands::Synth {
+            model: self.model,
+            campaign: self.campaign,
+            out: self.out,
+            elements: self.elements,
+            values: self.set.into_iter().collect(),
+            params: pradar::model::SynthParams {
+                seed: self.seed,
+                truth_dir: self.truth,
+                ..Default::default()
+            },
+        }
+    }
+}
+
+impl CalibrateArgs {
+    /// `calibrate`'s command.
+    pub fn into_command(self) -> commands::Calibrate {
+        commands::Calibrate {
+            energy: self.energy,
+            campaign: self.campaign,
+            out: self.out,
+            prior: self.prior,
+            report: self.report,
+            chain: self.chain,
+            params: pradar::calibrate::CalibrateParams {
+                simulations: self.simulations,
+                population: self.population,
+                seed: self.seed,
+                ..Default::default()
+            },
+        }
+    }
+}
+
+impl CheckArgs {
+    /// `check`'s command (`--fail-below` stays with the arguments).
+    pub fn into_command(self) -> commands::Check {
+        commands::Check {
+            model: self.model,
+            campaign: self.campaign,
+            energy: self.energy,
+            out: self.out,
+            params: pradar::check::CheckParams {
+                draws: self.draws,
+                seed: self.seed,
+                ..Default::default()
+            },
+        }
+    }
+}
+
+impl MapArgs {
+    /// `map`'s command: `--campaign` + `--energy` as the first run, then the `--run`s.
+    pub fn into_command(self) -> commands::Map {
+        let single = self
+            .campaign
+            .zip(self.energy)
+            .map(|(campaign, energy)| MapRun { campaign, energy });
+        commands::Map {
+            options: MapOptions {
+                method: self.method,
+                runs: single.into_iter().collect(),
+                out: self.out,
+                elements: self.elements,
+                grid: GridParams {
+                    cell_m: self.cell_m,
+                    ..Default::default()
+                },
+                og: OgParams {
+                    pfa: self.pfa,
+                    prior: self.prior,
+                    passes: self.passes as usize,
+                    ..Default::default()
+                },
+                ekf: EkfParams {
+                    variant: self.ekf,
+                    mu0: self.mu0,
+                    sigma0: self.sigma0,
+                    ..Default::default()
+                },
+                pose_noise: pradar::mapping::job::PoseNoise {
+                    position_m: self.pose_noise_m,
+                    heading_deg: self.pose_noise_deg,
+                    seed: self.pose_seed,
+                },
+            },
+            run_specs: self.run,
+        }
+    }
+}
+
+impl ExtractArgs {
+    /// `extract`'s command.
+    pub fn into_command(self) -> commands::Extract {
+        commands::Extract {
+            energy: self.energy,
+            campaign: self.campaign,
+            out: self.out,
+            params: pradar::mpc::ExtractParams {
+                diffuse: pradar::mpc::DiffuseParams {
+                    enabled: !self.no_diffuse,
+                    discrete_db: self.diffuse_db,
+                    ..Default::default()
+                },
+                ..pradar::mpc::ExtractParams::default()
+                    .method(self.method)
+                    .margin_db(self.margin_db)
+                    .dynamic_range_db(self.dynamic_range_db)
+            },
+        }
+    }
+}
+
+impl ClusterArgs {
+    /// `cluster`'s command.
+    pub fn into_command(self) -> commands::Cluster {
+        commands::Cluster {
+            mpcs: self.mpcs,
+            out: self.out,
+            params: pradar::cluster::ClusterParams::default()
+                .k_max(self.k_max)
+                .seed(self.seed)
+                .criterion(self.criterion),
+        }
+    }
+}
+
+impl FitArgs {
+    /// `fit`'s command.
+    pub fn into_command(self) -> commands::Fit {
+        commands::Fit {
+            clusters: self.clusters,
+            campaign: self.campaign,
+            out: self.out,
+            table: self.table,
+            truth: self.truth,
+            energy: self.energy,
+            params: pradar::fit::channel::FitParams {
+                bootstrap: self.bootstrap,
+                seed: self.seed,
+            },
+        }
+    }
+}
+
+impl ReproduceArgs {
+    /// `reproduce`'s options, checked.
+    pub fn into_options(self) -> Result<ReproduceValid> {
+        Ok(ReproduceOptions {
+            out: self.out,
+            campaign: self.campaign,
+            elements: self.elements,
+            experiments: !self.skip_experiments,
+            experiment_params: ExperimentParams::default().seeds(self.seeds).check()?,
+        }
+        .check()?)
+    }
+}
+
+impl ReportArgs {
+    /// `report`'s options, checked.
+    pub fn into_options(self) -> Result<ReportValid> {
+        Ok(ReportOptions {
+            out: self.out,
+            campaign: self.campaign,
+            energy: self.energy,
+            model: self.model,
+            truth: self.truth,
+            experiments: !self.skip_experiments,
+            experiment_params: ExperimentParams::default().seeds(self.seeds).check()?,
+        }
+        .check()?)
+    }
+}
+
+impl ExperimentArgs {
+    /// `experiment`'s command.
+    pub fn into_command(self) -> commands::Experiments {
+        commands::Experiments {
+            name: self.name,
+            inputs: InputOptions {
+                campaign: self.campaign,
+                energy: self.energy,
+                model: self.model,
+            },
+            params: ExperimentParams::default().seeds(self.seeds),
+            out: self.out,
+        }
+    }
+}

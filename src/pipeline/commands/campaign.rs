@@ -1,0 +1,249 @@
+//! The campaign commands: `import` (a poses CSV and sweep files into a manifest, and the
+//! problem report when the files do not fit: [`ImportProblems`]), `simulate` (a manifest
+//! with `[scene]` into sweeps, a manifest and its truth), `energy` (a campaign's sweeps into
+//! an energy table) and `synth` (a model file and a campaign into an energy table and its
+//! truth). Each takes its command struct and gives a summary whose `Display` is printed.
+
+use super::{campaign_inputs, load_campaign, refuse, StepProgress};
+use crate::campaign::import::{ImportOutcome, ImportParams};
+use crate::campaign::manifest::{Campaign, SweepFormat};
+use crate::campaign::modelfile::ModelConfig;
+use crate::campaign::simulate::SimReport;
+use crate::energy::EnergyReport;
+use crate::error::Result;
+use crate::model::{SynthParams, SynthReport};
+use crate::params::ParamGuard;
+use std::fmt;
+use std::path::PathBuf;
+
+/// Run `pradar import` ([`crate::campaign::import::run`]): a manifest (and optionally the
+/// Parquet sweep table) from a poses CSV and sweep files. The outcome's `Display` is what
+/// the command prints; an outcome with problems wrote nothing ([`ImportProblems::of`]).
+pub fn import(params: &ImportParams, progress: StepProgress) -> Result<ImportOutcome> {
+    crate::campaign::import::run(params, progress)
+}
+
+/// The problems an import found before processing, as the command line reports them:
+/// [`ImportProblems::lines`] one per line (its `Display`, printed to stderr), then
+/// [`ImportProblems::summary`] (the command's error).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ImportProblems {
+    /// One line per problem.
+    pub lines: Vec<String>,
+    /// "import: N problem(s) before processing (… missing, … duplicated, … extra, …
+    /// unreadable, … grid); nothing written".
+    pub summary: String,
+}
+
+impl ImportProblems {
+    /// The problems of `outcome`, or `None` when it has none (then it wrote its outputs).
+    pub fn of(outcome: &ImportOutcome) -> Option<ImportProblems> {
+        let problems = &outcome.problems;
+        if problems.is_empty() {
+            return None;
+        }
+        let count = |k: &str| problems.iter().filter(|p| p.starts_with(k)).count();
+        let summary = format!(
+            "import: {} problem(s) before processing ({} missing, {} duplicated, {} extra, {} unreadable, {} grid); nothing written",
+            problems.len(),
+            count("missing"),
+            count("duplicated"),
+            count("extra"),
+            count("unreadable"),
+            count("grid")
+        );
+        Some(ImportProblems {
+            lines: problems.clone(),
+            summary,
+        })
+    }
+}
+
+impl fmt::Display for ImportProblems {
+    /// The problems, one per line.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.lines.join("\n"))
+    }
+}
+
+/// `pradar simulate`: a manifest with `[scene]` simulated into a folder.
+#[derive(Debug, Clone)]
+pub struct Simulate {
+    /// Input manifest with `[scene]` (and optionally `[clutter]`).
+    pub campaign: PathBuf,
+    /// Output folder.
+    pub out: PathBuf,
+    /// `[array] elements` override.
+    pub elements: Option<usize>,
+    /// Sweep file format.
+    pub format: SweepFormat,
+}
+
+/// What `simulate` wrote.
+#[derive(Debug, Clone)]
+pub struct SimulateSummary(pub SimReport);
+
+impl fmt::Display for SimulateSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.0;
+        write!(
+            f,
+            "simulated {} sweeps ({} scatterers, {} clutter clusters) -> {}",
+            r.sweeps,
+            r.scatterers,
+            r.clusters,
+            r.manifest.display()
+        )
+    }
+}
+
+/// Run `pradar simulate` ([`crate::campaign::simulate::simulate`]).
+pub fn simulate(cmd: &Simulate, progress: StepProgress) -> Result<SimulateSummary> {
+    let c = load_campaign(&cmd.campaign, cmd.elements)?;
+    let truth = cmd.out.join("truth");
+    let outputs: Vec<(PathBuf, &str)> = [
+        cmd.out.join("campaign.toml"),
+        cmd.out.join("layout.geojson"),
+        cmd.out.join("sweeps.parquet"),
+        truth.join("rays.parquet"),
+        truth.join("scatterers.csv"),
+        truth.join("clusters.csv"),
+    ]
+    .into_iter()
+    .map(|p| (p, "--out"))
+    .collect();
+    refuse(&outputs, &campaign_inputs(&c))?;
+    let r = crate::campaign::simulate::simulate(&c, &cmd.out, cmd.format, progress)?;
+    Ok(SimulateSummary(r))
+}
+
+/// `pradar energy`: the energy table of a campaign's sweeps.
+#[derive(Debug, Clone)]
+pub struct Energy {
+    /// Manifest with `[sweeps]`.
+    pub campaign: PathBuf,
+    /// Output energy Parquet.
+    pub out: PathBuf,
+}
+
+/// What `energy` wrote.
+#[derive(Debug, Clone)]
+pub struct EnergySummary {
+    /// The stage's report.
+    pub report: EnergyReport,
+    /// The energy Parquet written.
+    pub out: PathBuf,
+}
+
+impl fmt::Display for EnergySummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.report;
+        write!(
+            f,
+            "{} sweeps -> {} rows in {} (N0 {:.3e}, noise bin mean {:.3e})",
+            r.sweeps,
+            r.rows,
+            self.out.display(),
+            r.n0,
+            r.noise_bin_mean
+        )
+    }
+}
+
+/// Run `pradar energy` ([`crate::energy::run`]).
+pub fn energy(cmd: &Energy, progress: StepProgress) -> Result<EnergySummary> {
+    let c = Campaign::load(&cmd.campaign)?;
+    let reader = crate::campaign::sweeps::SweepReader::open(&c)?;
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.extend(
+        reader
+            .files()
+            .into_iter()
+            .map(|p| (p.to_path_buf(), "sweep file (of --campaign)")),
+    );
+    drop(reader);
+    inputs.extend(crate::energy::calibration::Calibration::files(&c));
+    refuse(&[(cmd.out.clone(), "--out")], &inputs)?;
+    let report = crate::energy::run(&c, &cmd.out, progress)?;
+    Ok(EnergySummary {
+        report,
+        out: cmd.out.clone(),
+    })
+}
+
+/// `pradar synth`: an energy table (and its truth) drawn from a model file.
+#[derive(Debug, Clone)]
+pub struct Synth {
+    /// Model file (DESIGN §3 "Model").
+    pub model: PathBuf,
+    /// Campaign manifest (layout, poses, directions, band, array, noise).
+    pub campaign: PathBuf,
+    /// Output energy Parquet.
+    pub out: PathBuf,
+    /// `[array] elements` override.
+    pub elements: Option<usize>,
+    /// Values for model quantities (`--set NAME=VALUE`), e.g. ones marked not estimable.
+    pub values: std::collections::BTreeMap<String, f64>,
+    /// Seed and truth folder.
+    pub params: SynthParams,
+}
+
+/// What `synth` wrote.
+#[derive(Debug, Clone)]
+pub struct SynthSummary {
+    /// The stage's report.
+    pub report: SynthReport,
+    /// The energy Parquet written.
+    pub out: PathBuf,
+}
+
+impl fmt::Display for SynthSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.report;
+        write!(
+            f,
+            "synthesised {} profiles ({} clusters, {:.1} rays seen per position{}) -> {} (truth in {})",
+            r.profiles,
+            r.clusters,
+            r.rays_per_position,
+            if r.diffuse_points > 0 {
+                format!(
+                    "; {} diffuse wall points, {:.0} seen per position",
+                    r.diffuse_points, r.diffuse_per_position
+                )
+            } else {
+                String::new()
+            },
+            self.out.display(),
+            r.truth_dir.display()
+        )
+    }
+}
+
+/// Run `pradar synth` ([`crate::model::synth()`]).
+pub fn synth(cmd: &Synth, progress: StepProgress) -> Result<SynthSummary> {
+    let c = load_campaign(&cmd.campaign, cmd.elements)?;
+    let truth = cmd
+        .params
+        .truth_dir
+        .clone()
+        .unwrap_or_else(|| crate::model::synth::default_truth_dir(&cmd.out));
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.push((cmd.model.clone(), "--model"));
+    refuse(
+        &[
+            (cmd.out.clone(), "--out"),
+            (truth.join("rays.parquet"), "--truth"),
+            (truth.join("model.toml"), "--truth"),
+        ],
+        &inputs,
+    )?;
+    let m = ModelConfig::load(&cmd.model)?
+        .require_estimable(&cmd.values)
+        .map_err(|e| crate::error::Error::input(&cmd.model, e.to_string()))?;
+    let report = crate::model::synth(&c, &m, &cmd.out, &cmd.params.check()?, progress)?;
+    Ok(SynthSummary {
+        report,
+        out: cmd.out.clone(),
+    })
+}

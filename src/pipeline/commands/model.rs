@@ -1,0 +1,218 @@
+//! The model commands: `calibrate` (an energy table and its campaign into a model file by
+//! ABC-SMC, with its posterior CSV and an optional report) and `check` (a model file
+//! against an energy table: the posterior-predictive check, its table and plots, and the
+//! `--fail-below` verdict). Each takes its command struct and gives a summary whose
+//! `Display` is printed.
+
+use super::{campaign_inputs, refuse, StepProgress};
+use crate::campaign::manifest::Campaign;
+use crate::campaign::modelfile::ModelConfig;
+use crate::error::Result;
+use crate::params::ParamGuard;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// `pradar calibrate`: the channel model fitted without clustering (ABC-SMC with `synth`
+/// as the simulator, [`crate::calibrate`]).
+#[derive(Debug, Clone)]
+pub struct Calibrate {
+    /// Energy Parquet (measured or synthesised).
+    pub energy: PathBuf,
+    /// The campaign (analysis view: `[scene]`/`[clutter]` are never read).
+    pub campaign: PathBuf,
+    /// Output model file; the final population is written beside it as
+    /// `<stem>_posterior.csv`.
+    pub out: PathBuf,
+    /// Prior file (model schema; default: [`crate::calibrate::DEFAULT_PRIOR`]).
+    pub prior: Option<PathBuf>,
+    /// Budget, population, seed.
+    pub params: crate::calibrate::CalibrateParams,
+    /// Report folder (`index.html` with the marginal posteriors and correlations).
+    pub report: Option<PathBuf>,
+    /// The cluster chain's model file (`fit` output), shown beside the posterior in the
+    /// report.
+    pub chain: Option<PathBuf>,
+}
+
+/// What `calibrate` wrote.
+#[derive(Debug, Clone)]
+pub struct CalibrateSummary {
+    /// The calibration.
+    pub calibration: crate::calibrate::Calibration,
+    /// The model file written.
+    pub out: PathBuf,
+    /// The posterior CSV written.
+    pub posterior: PathBuf,
+}
+
+impl fmt::Display for CalibrateSummary {
+    /// One line per free quantity (median and 95 % credible interval), then the run.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let c = &self.calibration;
+        for name in &c.free {
+            let q = c.model.quantity(name).expect("a free quantity exists");
+            let [lo, hi] = q.interval.unwrap_or([f64::NAN; 2]);
+            writeln!(
+                f,
+                "{name:<26} {:>10.4} {:<5} 95 % [{lo:.4}, {hi:.4}]",
+                q.value, q.unit
+            )?;
+        }
+        let p = &c.posterior;
+        write!(
+            f,
+            "calibrated with {} simulations in {} generations ({:.1} s, {:.1} simulations/s, final ε {:.3}, acceptance {:.3}) -> {} (posterior in {})",
+            p.simulations,
+            p.generations,
+            c.wall_s,
+            p.simulations as f64 / c.wall_s.max(1e-9),
+            p.epsilon,
+            p.acceptance,
+            self.out.display(),
+            self.posterior.display()
+        )
+    }
+}
+
+/// The posterior CSV beside a calibrated model file: `<stem>_posterior.csv`.
+pub fn posterior_csv(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "calibrated".into());
+    out.with_file_name(format!("{stem}_posterior.csv"))
+}
+
+/// Run `pradar calibrate` ([`crate::calibrate::calibrate()`]).
+pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSummary> {
+    let c = Campaign::load(&cmd.campaign)?;
+    let posterior = posterior_csv(&cmd.out);
+    let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+    inputs.push((cmd.energy.clone(), "--energy"));
+    if let Some(p) = &cmd.prior {
+        inputs.push((p.clone(), "--prior"));
+    }
+    if let Some(p) = &cmd.chain {
+        inputs.push((p.clone(), "--chain"));
+    }
+    let mut outputs = vec![
+        (cmd.out.clone(), "--out"),
+        (posterior.clone(), "--out (its posterior CSV)"),
+    ];
+    if let Some(r) = &cmd.report {
+        outputs.push((r.join("index.html"), "--report"));
+        outputs.push((r.join("posterior.png"), "--report"));
+    }
+    refuse(&outputs, &inputs)?;
+    let chain = match &cmd.chain {
+        Some(p) => Some(ModelConfig::load(p)?),
+        None => None,
+    };
+    let params = cmd.params.check()?;
+    let prior = match &cmd.prior {
+        Some(p) => crate::calibrate::Prior::load(p)?,
+        None => crate::calibrate::Prior::default_prior(),
+    };
+    let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
+    let calibration = crate::calibrate::calibrate(&c, &em, &cmd.energy, &prior, &params, progress)?;
+    calibration.write_posterior_csv(&posterior)?;
+    if let Some(r) = &cmd.report {
+        std::fs::create_dir_all(r).map_err(|e| crate::error::Error::io(r, e))?;
+        let sec =
+            crate::report::calibrate::section(r, "posterior.png", &calibration, chain.as_ref())?;
+        crate::report::write_index(&r.join("index.html"), "pradar calibrate", &[sec])?;
+    }
+    calibration.model.save(&cmd.out)?;
+    Ok(CalibrateSummary {
+        calibration,
+        out: cmd.out.clone(),
+        posterior,
+    })
+}
+
+/// `pradar check`: the posterior-predictive check of a model against an energy table.
+#[derive(Debug, Clone)]
+pub struct Check {
+    /// Model file (fitted, calibrated or hand-made).
+    pub model: PathBuf,
+    /// Campaign manifest (poses, directions, band, array, noise, processing, layout).
+    pub campaign: PathBuf,
+    /// The measured energy table of the campaign.
+    pub energy: PathBuf,
+    /// Output folder (`check.csv`, `check.md`, `check_cdfs.png`, `index.html`), if any.
+    pub out: Option<PathBuf>,
+    /// Draws, seed, cull.
+    pub params: crate::check::CheckParams,
+}
+
+/// What `check` found.
+#[derive(Debug, Clone)]
+pub struct CheckSummary {
+    /// The result.
+    pub result: crate::check::CheckResult,
+    /// The output folder, if any.
+    pub out: Option<PathBuf>,
+}
+
+impl fmt::Display for CheckSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.result.table().to_markdown())?;
+        write!(
+            f,
+            "{} ({} draws, {:.1} s)",
+            self.result.verdict(),
+            self.result.draws.len(),
+            self.result.wall_s
+        )?;
+        if let Some(o) = &self.out {
+            write!(f, " -> {}", o.display())?;
+        }
+        Ok(())
+    }
+}
+
+impl CheckSummary {
+    /// The check against `check --fail-below P`: the message the command fails with when
+    /// the corrected p-value is below `fail_below` or a ratio exceeds
+    /// [`crate::check::MAX_RATIO`], `None` when it passes.
+    pub fn failure(&self, fail_below: f64) -> Option<String> {
+        let r = &self.result;
+        (r.corrected_p() < fail_below || r.max_ratio() > crate::check::MAX_RATIO)
+            .then(|| format!("check failed (--fail-below {fail_below}): {}", r.verdict()))
+    }
+}
+
+/// Run `pradar check` ([`crate::check::check()`]); writes the table and plots when `out`
+/// is set.
+pub fn check(cmd: &Check, progress: StepProgress) -> Result<CheckSummary> {
+    let c = Campaign::load(&cmd.campaign)?;
+    if let Some(o) = &cmd.out {
+        let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+        inputs.push((cmd.model.clone(), "--model"));
+        inputs.push((cmd.energy.clone(), "--energy"));
+        let outputs: Vec<(PathBuf, &str)> =
+            ["check.csv", "check.md", "check_cdfs.png", "index.html"]
+                .iter()
+                .map(|n| (o.join(n), "--out"))
+                .collect();
+        refuse(&outputs, &inputs)?;
+    }
+    let model = ModelConfig::load(&cmd.model)?
+        .require_estimable(&Default::default())
+        .map_err(|e| crate::error::Error::input(&cmd.model, e.to_string()))?;
+    let params = cmd.params.check()?;
+    let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
+    let result = crate::check::check(&c, &em, &cmd.energy, &model, &params, progress)?;
+    if let Some(o) = &cmd.out {
+        let what = format!(
+            "model {} against {}",
+            cmd.model.display(),
+            cmd.energy.display()
+        );
+        crate::report::check::write(o, &what, &result)?;
+    }
+    Ok(CheckSummary {
+        result,
+        out: cmd.out.clone(),
+    })
+}
