@@ -151,6 +151,7 @@ fn floor_energy(c: &Campaign) -> EnergyMatrix {
             array: m.array.label(),
             coupling: "gate".into(),
             all: vec![("gate_ns".into(), m.processing.gate_ns.to_string())],
+            missing: vec![],
         },
         positions: np,
         angles_rel_deg: m.directions.angles_deg(),

@@ -17,7 +17,7 @@ use clap::error::ErrorKind;
 use clap::Parser;
 use cli::{CheckArgs, Cli, Cmd, ImportArgs};
 use indicatif::{ProgressBar, ProgressStyle};
-use pradar::pipeline::commands::{self, ImportProblems};
+use pradar::pipeline::commands;
 
 fn main() {
     let cli = parse_args();
@@ -183,9 +183,16 @@ fn stage_bar(quiet: bool, label: &str, total: usize) -> Box<dyn Fn(usize, usize)
 fn import(a: ImportArgs, quiet: bool) -> Result<()> {
     let params = a.into_params()?;
     let outcome = with_bar(quiet, "import", |p| commands::import(&params, p))?;
-    if let Some(problems) = ImportProblems::of(&outcome) {
-        eprintln!("{problems}");
-        anyhow::bail!("{}", problems.summary);
+    for w in &outcome.warnings {
+        eprintln!("warning: {w}");
+    }
+    // the summary first, then at most 20 problems (the rest counted); exit 1
+    if let Some((summary, lines)) = outcome.problem_report() {
+        eprintln!("error: {summary}");
+        for l in lines {
+            eprintln!("  {l}");
+        }
+        std::process::exit(1);
     }
     report(quiet, outcome);
     Ok(())

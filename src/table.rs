@@ -464,6 +464,13 @@ pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// An f64 column whose NaN (or null) cells mean "no value" (a sweep a campaign does not
+/// have); the caller decides where that is allowed. Infinite values are an error.
+pub fn f64_column_nan(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
+    f64_column_or_nan(path, df, name)?
+        .ok_or_else(|| Error::input(path, format!("missing column `{name}`")))
+}
+
 /// An optional f64 column whose NaN cells mean "not applicable" (nulls read as NaN too);
 /// `Ok(None)` when the table has no such column. Infinite values are an error.
 pub fn f64_column_or_nan(path: &Path, df: &DataFrame, name: &str) -> Result<Option<Vec<f64>>> {

@@ -2,6 +2,9 @@
 //! scheme, with its poses in a CSV, gives a manifest whose energy is byte-identical to the
 //! original's (from the Touchstone files, from an index CSV, and through `--to-parquet`);
 //! missing, duplicated, extra and mismatched files are each listed, exit 1, nothing written.
+//! Issue 32: files named by steering angle (`{angle:+03}`, an `angle_deg` index column),
+//! the lab's labels and headers kept, one-line refusals of a pattern that matches nothing,
+//! the summary first, and `--allow-missing` through energy and the report.
 
 use crate::common::*;
 use pradar::campaign::manifest::SweepFormat;
@@ -178,8 +181,8 @@ fn missing_duplicated_extra_and_mismatched_files_are_listed() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(!err.contains("panicked"));
     for want in [
-        "missing: position 10, direction 5, pulse 0",
-        "duplicated: position 10, direction 6, pulse 0:",
+        "missing: position 10, direction 5 (-65°): no file",
+        "duplicated: position 10, direction 6 (-60°):",
         "extra: ",
         "pos99_dir7.s2p: position 99 is not in",
         "notes.s2p: name does not match",
@@ -206,4 +209,262 @@ fn missing_duplicated_extra_and_mismatched_files_are_listed() {
             && err.contains("pos10_dir5.s2p: line 3: 3 numbers on a continuation line"),
         "{err}"
     );
+}
+
+/// The measured folder of [`measured`] renamed as a lab names it: `lab/P01_az-45.s2p`
+/// (labels P01, P02 in pose order, signed degrees), poses under `Pos,X [m],Y [m],Heading
+/// [deg]`; returns the labels' original names (`10`, `20`).
+fn lab_folder(dir: &Path) {
+    let poses = std::fs::read_to_string(dir.join("poses.csv")).unwrap();
+    let mut rows: Vec<Vec<String>> = poses
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    rows.sort_by_key(|r| r[0].parse::<i64>().unwrap());
+    std::fs::create_dir_all(dir.join("lab")).unwrap();
+    let mut csv = String::from("Pos,X [m],Y [m],Heading [deg]\n");
+    for (i, r) in rows.iter().enumerate() {
+        csv.push_str(&format!("P{:02},{},{},{}\n", i + 1, r[1], r[2], r[3]));
+        for d in 0..37 {
+            let angle = -90 + 5 * d as i64;
+            std::fs::copy(
+                dir.join(format!("raw/pos{}_dir{d}.s2p", r[0])),
+                dir.join(format!("lab/P{:02}_az{angle:+03}.s2p", i + 1)),
+            )
+            .unwrap();
+        }
+    }
+    std::fs::write(dir.join("lab_poses.csv"), csv).unwrap();
+}
+
+fn import_lab(dir: &Path, out: &Path, pattern: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "import",
+        "--poses",
+        s(&dir.join("lab_poses.csv")).to_owned().leak(),
+        "--directions",
+        "-90:90:5",
+        "--layout",
+        s(&dir.join("sim/layout.geojson")).to_owned().leak(),
+        "--base",
+        s(&dir.join("base.toml")).to_owned().leak(),
+        "--out",
+        s(out).to_owned().leak(),
+        "--sweeps",
+        s(&dir.join("lab/*.s2p")).to_owned().leak(),
+        "--name-pattern",
+        pattern.to_owned().leak(),
+    ];
+    args.extend(extra);
+    pradar(&args)
+}
+
+#[test]
+fn angle_names_lab_labels_and_headers_give_the_same_energy() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    measured(dir);
+    lab_folder(dir);
+    let original = std::fs::read(dir.join("energy.parquet")).unwrap();
+    let m = dir.join("lab_glob/campaign.toml");
+    let o = import_lab(dir, &m, "{position}_az{angle:+03}.s2p", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let manifest = std::fs::read_to_string(&m).unwrap();
+    assert!(
+        manifest.contains(r#"labels = ["P01", "P02"]"#),
+        "{manifest}"
+    );
+    assert_eq!(energy(&m), original, "energy of the angle-named lab folder");
+    // an index CSV with the lab's labels and an angle_deg column
+    let mut index = String::from("Pos,Angle [deg],Path\n");
+    for p in 1..=2 {
+        for d in 0..37 {
+            let a = -90 + 5 * d;
+            index.push_str(&format!("P{p:02},{a},lab/P{p:02}_az{a:+03}.s2p\n"));
+        }
+    }
+    std::fs::write(dir.join("lab_index.csv"), &index).unwrap();
+    let m2 = dir.join("lab_index/campaign.toml");
+    let mut args = vec![
+        "import",
+        "--poses",
+        s(&dir.join("lab_poses.csv")).to_owned().leak(),
+        "--directions",
+        "-90:90:5",
+        "--layout",
+        s(&dir.join("sim/layout.geojson")).to_owned().leak(),
+        "--base",
+        s(&dir.join("base.toml")).to_owned().leak(),
+        "--out",
+        s(&m2),
+    ];
+    let idx = dir.join("lab_index.csv");
+    args.extend(["--index", s(&idx)]);
+    let o = pradar(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(energy(&m2), original, "energy of the angle_deg index");
+    // an angle off the grid is refused, naming the file
+    std::fs::write(
+        &idx,
+        index.replace("P02,-85,lab/P02_az-85.s2p", "P02,-87.5,lab/P02_az-85.s2p"),
+    )
+    .unwrap();
+    let o = pradar(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("P02_az-85.s2p: angle -87.5° is not on the --directions grid (-90:90:5°)"),
+        "{err}"
+    );
+    assert!(
+        err.contains("missing: position P02, direction 1 (-85°): no file"),
+        "{err}"
+    );
+}
+
+#[test]
+fn name_patterns_that_cannot_be_right_are_one_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    measured(dir);
+    lab_folder(dir);
+    let m = dir.join("x/campaign.toml");
+    // an index field over angle names: matches none, one line naming the pattern and a file
+    for pattern in [
+        "{position}_az{direction}.s2p",
+        "{position}_az+{direction}.s2p",
+    ] {
+        let o = import_lab(dir, &m, pattern, &[]);
+        assert_one_line_error(&o, pattern);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("matches none of the 74 file(s)"), "{err}");
+        assert!(err.contains("e.g. not `P01_az"), "{err}");
+        assert!(err.contains("{angle}"), "the hint names {{angle}}: {err}");
+        assert!(!m.exists());
+    }
+    // `az+05` is never direction index 5, even where an index field could read it
+    std::fs::copy(dir.join("lab/P01_az+05.s2p"), dir.join("lab/P01_az05.s2p")).unwrap();
+    let o = import_lab(dir, &m, "{position}_az{direction:02}.s2p", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let first = err.lines().next().unwrap();
+    assert!(
+        first.starts_with("error: import: ") && first.contains("problem(s) before processing"),
+        "the summary comes first: {err}"
+    );
+    assert!(err.contains("P01_az+05.s2p: name does not match"), "{err}");
+    // at most 20 problem lines after the summary, then the count of the rest
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 22, "{err}");
+    assert!(lines[21].trim().starts_with("… and "), "{err}");
+    std::fs::remove_file(dir.join("lab/P01_az05.s2p")).unwrap();
+    // a lab header that cannot be read lists the accepted names
+    std::fs::write(
+        dir.join("lab_poses.csv"),
+        std::fs::read_to_string(dir.join("lab_poses.csv"))
+            .unwrap()
+            .replace("X [m]", "East [m]"),
+    )
+    .unwrap();
+    let o = import_lab(dir, &m, "{position}_az{angle:+03}.s2p", &[]);
+    assert_one_line_error(&o, "lab_poses.csv");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("accepted names") && err.contains("x, x_m"),
+        "{err}"
+    );
+}
+
+#[test]
+fn allow_missing_goes_on_to_energy_and_the_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    measured(dir);
+    lab_folder(dir);
+    let original = pradar::energy::EnergyMatrix::read(&dir.join("energy.parquet")).unwrap();
+    std::fs::remove_file(dir.join("lab/P02_az+10.s2p")).unwrap();
+    // a third pose without any file
+    let mut poses = std::fs::read_to_string(dir.join("lab_poses.csv")).unwrap();
+    let first = poses.lines().nth(1).unwrap().replacen("P01", "P03", 1);
+    poses.push_str(&first);
+    poses.push('\n');
+    std::fs::write(dir.join("lab_poses.csv"), poses).unwrap();
+    let m = dir.join("lab_missing/campaign.toml");
+    let pattern = "{position}_az{angle:+03}.s2p";
+    let o = import_lab(dir, &m, pattern, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("missing: position P02, direction 20 (10°): no file"),
+        "{err}"
+    );
+    assert!(err.contains("--allow-missing"), "{err}");
+    let o = import_lab(dir, &m, pattern, &["--allow-missing"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: dropped position P02, direction 20 (10°): no file"),
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: dropped position P03: no sweep file at all"),
+        "{err}"
+    );
+    let manifest = std::fs::read_to_string(&m).unwrap();
+    assert!(
+        manifest.contains("dropped_positions = [\"P03\"]"),
+        "{manifest}"
+    );
+    assert!(manifest.contains("[[sweeps.missing]]"), "{manifest}");
+    // the energy: NaN where the sweep is missing, every other profile as the original's
+    let e = m.with_file_name("energy.parquet");
+    let o = pradar(&["energy", "--campaign", s(&m), "--out", s(&e)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let em = pradar::energy::EnergyMatrix::read(&e).unwrap();
+    assert_eq!(em.meta.missing, vec![(1, 20)]);
+    assert!(!em.has(1, 20) && em.has(1, 19) && em.has(0, 20));
+    assert!(em.profile(1, 20).iter().all(|v| v.is_nan()));
+    for p in 0..2 {
+        for d in 0..37 {
+            if (p, d) == (1, 20) {
+                continue;
+            }
+            for (a, b) in em.profile(p, d).iter().zip(original.profile(p, d)) {
+                // N0 differs (one profile fewer in its estimate); the energies do not
+                assert_eq!(a, b, "position {p}, direction {d}");
+            }
+        }
+    }
+    // --to-parquet keeps the gap (NaN rows) and the original file list
+    let m2 = dir.join("lab_missing_pq/campaign.toml");
+    let o = import_lab(dir, &m2, pattern, &["--allow-missing", "--to-parquet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let manifest = std::fs::read_to_string(&m2).unwrap();
+    assert!(
+        manifest.contains("format = \"parquet\"") && manifest.contains("P01_az-90.s2p"),
+        "{manifest}"
+    );
+    let e2 = m2.with_file_name("energy.parquet");
+    let o = pradar(&["energy", "--campaign", s(&m2), "--out", s(&e2)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let em2 = pradar::energy::EnergyMatrix::read(&e2).unwrap();
+    assert_eq!(em2.meta.missing, em.meta.missing);
+    assert_eq!(em2.meta.n0, em.meta.n0);
+    // the whole report runs on it
+    let rep = dir.join("report");
+    let o = pradar(&[
+        "report",
+        "--campaign",
+        s(&m),
+        "--energy",
+        s(&e),
+        "--out",
+        s(&rep),
+        "--skip-experiments",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let page = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    assert!(page.contains("P02"), "the page names the lab's labels");
 }

@@ -23,6 +23,7 @@ mod fit_estimators;
 mod fuzz;
 mod import;
 mod kill;
+mod lab;
 mod mapping;
 mod mpc;
 mod occlusion;

@@ -287,7 +287,9 @@ pub fn calibrate(
     let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
         let mut e = sim.energies(&prior.model_at(x), s)?;
         // the measured campaign's missing sweeps are missing from the simulations too
-        energy.meta.mask_missing(energy.directions(), energy.bins, &mut e);
+        energy
+            .meta
+            .mask_missing(energy.directions(), energy.bins, &mut e);
         Ok(summaries::summaries(&ctx, &e))
     };
     let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;

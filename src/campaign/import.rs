@@ -1,29 +1,56 @@
 //! `pradar import`: a campaign manifest built and validated from what a measurement
 //! campaign leaves on disk.
 //!
-//! Takes ([`ImportParams`]): a poses table (CSV with a header `position, x, y, heading` —
-//! `x_m, y_m, heading_deg` also accepted — metres and degrees; position labels are any
-//! distinct integers, mapped to manifest positions in increasing order), the sweep files —
-//! either a glob (`raw/*.s2p`; `*` and `?` within a path component) plus a naming pattern
-//! for the file names with `{position}`, `{direction}` and `{pulse}` (`{position:03}` fixes
-//! the width; without a width any run of digits), or an index CSV `position, direction,
-//! [pulse,] path` (paths relative to the CSV) — the directions (indices 0..n−1 over
-//! `start:stop:step` degrees), the layout, and optionally a base manifest fragment giving
-//! `name`, `seed`, `[array]`, `[noise]`, `[processing]`, `[calibration]` and `[sweeps]
-//! parameter`, which cannot be read from the files.
+//! Takes ([`ImportParams`]):
+//! * a poses table: CSV with a position label, x, y and heading (metres, degrees). Header
+//!   names are read in any case with a unit in brackets folded in (`X [m]` → `x_m`):
+//!   position `position | pos | label | position_label | pose`, `x | x_m`, `y | y_m`,
+//!   `heading | heading_deg | theta_deg`; a header without one of them is refused listing
+//!   the accepted names. Labels are any text (`P01`, `7`); the manifest keeps them
+//!   (`labels`, beside the indices) and every later message, table and plot names them.
+//!   Order: by number when every label is an integer (`7` and `07` are then one label),
+//!   else as the file lists them;
+//! * the sweep files: a glob (`raw/*.s2p`; `*` and `?` within a path component) plus a
+//!   naming pattern with `{position}` (a label of the poses: a run of digits when they are
+//!   numbers, `{position:03}` exactly three), the direction as `{direction}` (index
+//!   0..n−1, `{direction:02}` exactly two digits) or `{angle}` (signed degrees, formatted
+//!   as Rust and Python format numbers: `{angle:+03}` reads `+05`, `-45`, `+00`;
+//!   `{angle:.1}` reads `-2.5`; the name must be the angle exactly as that format writes
+//!   it), and optionally `{pulse}`; or an index CSV `position, direction | angle_deg,
+//!   [pulse,] path` (paths relative to the CSV). An angle maps onto `--directions`
+//!   exactly (within 1e-6 of a step); one off the grid is a problem naming the file. An
+//!   index field never reads digits after a `+`: `az+05` is a signed number (an angle),
+//!   never direction 5;
+//! * the directions (`start:stop:step` degrees), the layout, and optionally a base
+//!   manifest fragment giving `name`, `seed`, `[array]`, `[noise]`, `[processing]`,
+//!   `[calibration]` and `[sweeps] parameter`, which cannot be read from the files.
 //!
 //! Gives: the band and grid read from the files (start, stop and point count of the first
 //! file; every file must have the same grid, uniform to 1e-6 of a step), the pulse count
 //! (largest `{pulse}` + 1), and, **before any processing**, the list of problems: missing
 //! (position, direction, pulse) cells, duplicated cells (two files naming one cell), extra
 //! files (matching the glob but not the pattern, or naming a position not in the poses
-//! table, a direction or pulse out of range), unreadable files (the reader's one-line
-//! refusal, naming file, line and reason; also a file without the `[sweeps] parameter`) and
-//! files whose grid differs from the first's. With any problem nothing is written
-//! ([`ImportOutcome::problems`]; the command exits 1). Otherwise the manifest is written
-//! atomically with an explicit `[sweeps] files` list (paths relative to the manifest), and
-//! with `to_parquet` the sweeps are also converted to the Parquet sweep table
-//! `sweeps.parquet` beside it (which the manifest then names; later stages read it faster).
+//! table, a direction, angle or pulse out of range), unreadable files (the reader's
+//! one-line refusal, naming file, line and reason; also a file without the `[sweeps]
+//! parameter`) and files whose grid differs from the first's. With any problem nothing is
+//! written; the command prints the summary first, then at most
+//! [`SHOWN_PROBLEMS`] problems and the count of the rest
+//! ([`ImportOutcome::problem_report`]), exit 1. A pattern that matches none of the files is
+//! refused at once in one line naming the pattern and one file.
+//!
+//! With `allow_missing` the missing cells are not problems: a position without any file is
+//! left out of the manifest (`[sweeps] dropped_positions` keeps its label), a (position,
+//! direction) without a file for some pulse is listed in `[sweeps] missing` (its other
+//! pulses are not used); one warning each. The energy stage then writes those profiles as
+//! NaN and lists them in the table's metadata, and extraction, the maps and the statistics
+//! skip them.
+//!
+//! Otherwise the manifest is written atomically with the labels, every `[processing]`
+//! setting written out (the base's over the defaults: window Hann, oversample 5, coupling
+//! gate 3 ns, max_delay_ns 100, noise_from_ns 80), and an explicit `[sweeps] files` list
+//! (paths relative to the manifest); with `to_parquet` the sweeps are also converted to the
+//! Parquet sweep table `sweeps.parquet` beside it, which the manifest then names, keeping
+//! the file list as the table's provenance.
 //!
 //! `[noise]` from the base, else `floor_dbm = -100`, `tx_power_dbm = 0`: only `simulate` and
 //! `synth` read it (a measured campaign's N0 is estimated from its signal-free bins).
@@ -138,7 +165,10 @@ impl ImportOutcome {
         );
         let mut lines: Vec<String> = self.problems.iter().take(SHOWN_PROBLEMS).cloned().collect();
         if self.problems.len() > SHOWN_PROBLEMS {
-            lines.push(format!("… and {} more", self.problems.len() - SHOWN_PROBLEMS));
+            lines.push(format!(
+                "… and {} more",
+                self.problems.len() - SHOWN_PROBLEMS
+            ));
         }
         Some((summary, lines))
     }
@@ -512,7 +542,9 @@ fn parse_spec(p: &str, name: &str, spec: &str, field: Field) -> Result<Spec> {
         s.width = Some(
             rest.parse::<usize>()
                 .ok()
-                .filter(|&w| (1..=crate::campaign::manifest::limits::MAX_PATTERN_WIDTH).contains(&w))
+                .filter(|&w| {
+                    (1..=crate::campaign::manifest::limits::MAX_PATTERN_WIDTH).contains(&w)
+                })
                 .ok_or_else(|| {
                     bad(if field == Field::Angle {
                         "the format is [+][0][width][.precision], e.g. +03 or .1"
@@ -554,7 +586,10 @@ fn parse_pattern(p: &str) -> Result<Vec<Piece>> {
     if !rest.is_empty() {
         out.push(Piece::Lit(rest.to_string()));
     }
-    let has = |f: Field| out.iter().any(|q| matches!(q, Piece::Field(g, _) if *g == f));
+    let has = |f: Field| {
+        out.iter()
+            .any(|q| matches!(q, Piece::Field(g, _) if *g == f))
+    };
     if !has(Field::Position) {
         return Err(Error::param(
             "--name-pattern",
@@ -580,8 +615,7 @@ fn format_angle(v: f64, s: &Spec) -> String {
         Some(p) => format!("{:.p$}", v.abs()),
         None => format!("{}", v.abs()),
     };
-    let sign = if v.is_sign_negative() && digits.bytes().any(|b| b.is_ascii_digit() && b != b'0')
-    {
+    let sign = if v.is_sign_negative() && digits.bytes().any(|b| b.is_ascii_digit() && b != b'0') {
         "-"
     } else if s.plus {
         "+"
@@ -622,13 +656,21 @@ struct LabelSet<'a> {
 }
 
 /// Match the name `s` from byte `at` against `pieces`, filling `said`.
-fn match_name(pieces: &[Piece], s: &str, at: usize, labels: &LabelSet<'_>, said: &mut Said) -> bool {
+fn match_name(
+    pieces: &[Piece],
+    s: &str,
+    at: usize,
+    labels: &LabelSet<'_>,
+    said: &mut Said,
+) -> bool {
     let Some((first, rest)) = pieces.split_first() else {
         return at == s.len();
     };
     let t = &s[at..];
     match first {
-        Piece::Lit(l) => t.starts_with(l.as_str()) && match_name(rest, s, at + l.len(), labels, said),
+        Piece::Lit(l) => {
+            t.starts_with(l.as_str()) && match_name(rest, s, at + l.len(), labels, said)
+        }
         Piece::Field(f, spec) => {
             let digits = t.bytes().take_while(u8::is_ascii_digit).count();
             let exact = |n: usize| -> Vec<usize> {
@@ -1101,7 +1143,9 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         .enumerate()
         .map(|(i, l)| {
             let key = if numeric {
-                l.parse::<i64>().map(|v| v.to_string()).unwrap_or_else(|_| l.clone())
+                l.parse::<i64>()
+                    .map(|v| v.to_string())
+                    .unwrap_or_else(|_| l.clone())
             } else {
                 l.clone()
             };
@@ -1144,9 +1188,9 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
                 "direction {d} outside 0..{} ({nd} directions over {grid}°)",
                 nd - 1
             )),
-            DirectionValue::Angle(a) => directions.index_of(a).ok_or_else(|| {
-                format!("angle {a}° is not on the --directions grid ({grid}°)")
-            }),
+            DirectionValue::Angle(a) => directions
+                .index_of(a)
+                .ok_or_else(|| format!("angle {a}° is not on the --directions grid ({grid}°)")),
         };
         let why = match (resolve(&e.label), d) {
             (None, _) => Err(format!(
@@ -1180,8 +1224,7 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
     let mut dropped = vec![false; np];
     let mut missing_pd = vec![false; np * nd];
     for pi in 0..np {
-        let cell_missing =
-            |d: usize| (0..nk).any(|k| table[(pi * nd + d) * nk + k].is_none());
+        let cell_missing = |d: usize| (0..nk).any(|k| table[(pi * nd + d) * nk + k].is_none());
         let none_at_all = (0..nd * nk).all(|i| table[pi * nd * nk + i].is_none());
         if p.allow_missing && none_at_all {
             dropped[pi] = true;
@@ -1378,10 +1421,20 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         n.into()
     });
     t.insert("noise".into(), noise);
-    for k in ["processing", "calibration"] {
-        if let Some(v) = base.get(k) {
-            t.insert(k.into(), v.clone());
+    // every processing setting written out, the base's over the defaults, so the manifest
+    // states what the energy stage will do (a default nobody wrote is still visible)
+    let mut processing = match toml::Value::try_from(crate::campaign::manifest::Processing::default()) {
+        Ok(toml::Value::Table(t)) => t,
+        _ => toml::Table::new(),
+    };
+    if let Some(b) = base.get("processing").and_then(|v| v.as_table()) {
+        for (k, v) in b {
+            processing.insert(k.clone(), v.clone());
         }
+    }
+    t.insert("processing".into(), processing.into());
+    if let Some(v) = base.get("calibration") {
+        t.insert("calibration".into(), v.clone());
     }
     let poses_toml: Vec<toml::Value> = kept
         .iter()
@@ -1516,11 +1569,21 @@ mod tests {
 
     #[test]
     fn naming_patterns_match_with_and_without_widths() {
-        let v = said("pos{position}_dir{direction:02}_k{pulse}.s2p", &["12"], "pos12_dir07_k1.s2p").unwrap();
+        let v = said(
+            "pos{position}_dir{direction:02}_k{pulse}.s2p",
+            &["12"],
+            "pos12_dir07_k1.s2p",
+        )
+        .unwrap();
         assert_eq!(v.position.as_deref(), Some("12"));
         assert_eq!(v.direction, Some(DirectionValue::Index(7)));
         assert_eq!(v.pulse, Some(1));
-        assert!(said("pos{position}_dir{direction:02}_k{pulse}.s2p", &["12"], "pos12_dir7_k1.s2p").is_none());
+        assert!(said(
+            "pos{position}_dir{direction:02}_k{pulse}.s2p",
+            &["12"],
+            "pos12_dir7_k1.s2p"
+        )
+        .is_none());
         let v = said("{position}{direction:02}.s1p", &["103"], "10312.s1p").unwrap();
         assert_eq!(v.position.as_deref(), Some("103"));
         assert_eq!(v.direction, Some(DirectionValue::Index(12)));
@@ -1545,7 +1608,12 @@ mod tests {
             assert_eq!(v.direction, Some(DirectionValue::Angle(angle)), "{name}");
         }
         // not as the format writes it: no sign, no padding, a decimal point
-        for name in ["P01_az5.s2p", "P01_az+5.s2p", "P01_az05.s2p", "P01_az+05.0.s2p"] {
+        for name in [
+            "P01_az5.s2p",
+            "P01_az+5.s2p",
+            "P01_az05.s2p",
+            "P01_az+05.0.s2p",
+        ] {
             assert!(said(pat, &labels, name).is_none(), "{name}");
         }
         // an unknown label is read (and refused later, naming the file)
@@ -1561,9 +1629,13 @@ mod tests {
         assert!(said("P{position:02}_az+{direction}.s2p", &["3"], "P03_az+05.s2p").is_none());
         assert!(said("P{position:02}_az{direction}.s2p", &["3"], "P03_az+05.s2p").is_none());
         assert_eq!(
-            said("P{position:02}_az{direction:02}.s2p", &["3"], "P03_az05.s2p")
-                .unwrap()
-                .direction,
+            said(
+                "P{position:02}_az{direction:02}.s2p",
+                &["3"],
+                "P03_az05.s2p"
+            )
+            .unwrap()
+            .direction,
             Some(DirectionValue::Index(5))
         );
     }
@@ -1594,13 +1666,24 @@ mod tests {
         .unwrap();
         // file order for text labels
         assert_eq!(rows[0].0, "P02");
-        let e = parse_poses("Pos,X [mm],Y [m],Heading [deg]\nP01,1,2,0\n", Path::new("poses.csv"))
-            .unwrap_err()
-            .to_string();
+        let e = parse_poses(
+            "Pos,X [mm],Y [m],Heading [deg]\nP01,1,2,0\n",
+            Path::new("poses.csv"),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("x, x_m"), "{e}");
-        let rows = parse_poses("position,x,y,heading\n10,1,2,0\n2,0.5,1.2,90\n", Path::new("p.csv")).unwrap();
+        let rows = parse_poses(
+            "position,x,y,heading\n10,1,2,0\n2,0.5,1.2,90\n",
+            Path::new("p.csv"),
+        )
+        .unwrap();
         assert_eq!(rows[0].0, "2");
-        assert!(parse_poses("position,x,y,heading\n7,1,2,0\n07,0.5,1.2,90\n", Path::new("p.csv")).is_err());
+        assert!(parse_poses(
+            "position,x,y,heading\n7,1,2,0\n07,0.5,1.2,90\n",
+            Path::new("p.csv")
+        )
+        .is_err());
     }
 
     #[test]

@@ -678,7 +678,12 @@ impl Manifest {
         let mut v: Vec<(usize, usize)> = self
             .sweeps
             .as_ref()
-            .map(|s| s.missing.iter().map(|m| (m.position, m.direction)).collect())
+            .map(|s| {
+                s.missing
+                    .iter()
+                    .map(|m| (m.position, m.direction))
+                    .collect()
+            })
             .unwrap_or_default();
         v.sort_unstable();
         v

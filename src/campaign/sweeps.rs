@@ -192,7 +192,9 @@ impl SweepReader {
                         return Err(Error::input(
                             &c.path,
                             format!(
-                                "sweeps.files: no file for position {p}, direction {d}, pulse {k}"
+                                "sweeps.files: no file for position {} (index {p}), direction {}, pulse {k} (a sweep the campaign lacks is listed in [sweeps] missing: `import --allow-missing`)",
+                                m.label(p),
+                                m.direction_name(d)
                             ),
                         ));
                     }
@@ -319,8 +321,9 @@ impl SweepReader {
                     Err(_) => vec![0; n * count],
                 };
                 let f = table::f64_column(path, &df, "frequency_hz")?;
-                let re = table::f64_column(path, &df, "re")?;
-                let im = table::f64_column(path, &df, "im")?;
+                // NaN only in the sweeps `[sweeps] missing` lists (checked per row below)
+                let re = table::f64_column_nan(path, &df, "re")?;
+                let im = table::f64_column_nan(path, &df, "im")?;
                 let tol = (1e-6 * self.band.step_hz()).max(1.0);
                 for c in 0..count {
                     let p = p0 + c;

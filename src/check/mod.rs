@@ -303,7 +303,9 @@ pub fn check(
             .map(|i| -> Result<Statistics> {
                 let mut e = sim.energies(model, draw_seed(seed, i))?;
                 // the measured campaign's missing sweeps are missing from the draws too
-                energy.meta.mask_missing(energy.directions(), energy.bins, &mut e);
+                energy
+                    .meta
+                    .mask_missing(energy.directions(), energy.bins, &mut e);
                 Ok(Statistics::of(&ctx, &e))
             })
             .collect::<Result<_>>()?;

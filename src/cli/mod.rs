@@ -65,7 +65,8 @@ pub enum Cmd {
 // `pradar import`
 #[derive(Args)]
 pub struct ImportArgs {
-    /// Poses CSV: position, x, y, heading (m, degrees).
+    /// Poses CSV: position (any label: 7, P01), x, y, heading (m, degrees); lab headers
+    /// such as `Pos,X [m],Y [m],Heading [deg]` are read.
     #[arg(long)]
     pub poses: PathBuf,
     /// Sweep files: a glob, e.g. 'raw/*.s2p' (with --name-pattern).
@@ -76,7 +77,8 @@ pub struct ImportArgs {
         required_unless_present = "index"
     )]
     pub sweeps: Option<String>,
-    /// File-name pattern with {position}, {direction}, {pulse} ({position:03}: fixed width).
+    /// File-name pattern with {position} (a label of the poses), {direction} (index) or
+    /// {angle} (signed degrees, e.g. {angle:+03}), and {pulse} ({direction:02}: fixed width).
     #[arg(long)]
     pub name_pattern: Option<String>,
     /// Index CSV: position, direction, [pulse,] path (instead of --sweeps).
@@ -104,6 +106,11 @@ pub struct ImportArgs {
     /// Also convert the sweeps to the Parquet sweep table (sweeps.parquet beside --out).
     #[arg(long)]
     pub to_parquet: bool,
+    /// Go on without what is missing: a position without any sweep file is left out, a
+    /// (position, direction) without a file is recorded as missing in the manifest
+    /// (energy, extraction and maps skip it); one warning per item.
+    #[arg(long)]
+    pub allow_missing: bool,
 }
 
 // `pradar simulate`

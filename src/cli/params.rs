@@ -33,6 +33,7 @@ impl ImportArgs {
             elements: self.elements,
             out: self.out,
             to_parquet: self.to_parquet,
+            allow_missing: self.allow_missing,
         })
     }
 }

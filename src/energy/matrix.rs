@@ -261,7 +261,8 @@ impl Columns {
             bin: table::i64_column(path, df, b)?,
             arel: table::f64_column(path, df, ar)?,
             aglob: table::f64_column(path, df, ag)?,
-            energy: table::f64_column(path, df, e)?,
+            // NaN only where the metadata lists the profile as missing (check_energy)
+            energy: table::f64_column_nan(path, df, e)?,
         })
     }
 }
@@ -329,7 +330,10 @@ fn missing_from(path: &Path, kv: &[(String, String)]) -> Result<Vec<(usize, usiz
             _ => {
                 return Err(Error::input(
                     path,
-                    format!("metadata `missing`: `{}` is not position:direction", tok.chars().take(40).collect::<String>()),
+                    format!(
+                        "metadata `missing`: `{}` is not position:direction",
+                        tok.chars().take(40).collect::<String>()
+                    ),
                 ))
             }
         }
@@ -694,7 +698,7 @@ impl EnergyTable {
             (q0 * per, (q1 - q0) * per),
             &["energy"],
         )?;
-        let data = table::f64_column(&self.path, &df, "energy")?;
+        let data = table::f64_column_nan(&self.path, &df, "energy")?;
         if data.len() != (q1 - q0) * per {
             return Err(Error::input(
                 &self.path,
@@ -709,7 +713,10 @@ impl EnergyTable {
         let nd = self.header.directions().max(1);
         for (i, &e) in data.iter().enumerate() {
             let row = q0 * per + i;
-            let missing = self.header.meta.is_missing(row / (nd * nb), (row / nb) % nd);
+            let missing = self
+                .header
+                .meta
+                .is_missing(row / (nd * nb), (row / nb) % nd);
             check_energy(&self.path, row, e, missing)?;
         }
         Ok(data)

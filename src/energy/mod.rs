@@ -218,7 +218,11 @@ fn not_finite(c: &Campaign, cal: &Calibration, p: usize, d: usize, b: usize) -> 
     };
     Error::input(
         &c.path,
-        format!("energy: not finite at position {p}, direction {d}, bin {b} {step}: a sweep or calibration value overflows"),
+        format!(
+            "energy: not finite at position {}, direction {}, bin {b} {step}: a sweep or calibration value overflows",
+            c.manifest.label(p),
+            c.manifest.direction_name(d)
+        ),
     )
 }
 

@@ -155,6 +155,8 @@ pub fn synth_channel(
     rays_out.finish(None)?;
     write_truth(&truth_dir, channel)?;
     let mut meta = energy::table_metadata(m, &resp.proc, resp.n0, resp.noise_mean);
+    // the model gives every profile, also where the measured campaign has no sweep
+    meta.retain(|(k, _)| k != "missing");
     meta.push(("source".into(), "synth".into()));
     meta.push(("seed".into(), seed.to_string()));
     energy::write_table(out, m, nb, &energies, meta)?;

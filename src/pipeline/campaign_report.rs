@@ -396,11 +396,13 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
         title: format!("pradar report: {name}"),
         name: name.clone(),
         campaign: campaign_summary(&s),
-        positions: s.em.positions,
+        labels: (0..s.em.positions)
+            .map(|p| s.campaign.manifest.label(p))
+            .collect(),
         check,
         table1,
         geometry,
-        mpcs: mpc_summary(&a, s.em.positions),
+        mpcs: mpc_summary(&a, &s.campaign.manifest),
         maps,
         experiments,
         timings: timings.0,
@@ -717,7 +719,17 @@ fn campaign_summary(s: &Data) -> Vec<(String, String)> {
             "array".into(),
             format!("{} elements ({})", m.array.elements, m.array.label()),
         ),
-        ("positions".into(), m.positions().to_string()),
+        (
+            "positions".into(),
+            format!(
+                "{} ({})",
+                m.positions(),
+                (0..m.positions())
+                    .map(|p| m.label(p))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ),
         (
             "directions".into(),
             format!(
@@ -740,10 +752,31 @@ fn campaign_summary(s: &Data) -> Vec<(String, String)> {
             "sweeps".into(),
             format!(
                 "{} (manifest {})",
-                m.positions() * m.directions.count() * m.pulses,
+                (m.positions() * m.directions.count() - m.missing().len()) * m.pulses,
                 s.campaign.path.display()
             ),
         )),
+    }
+    let missing = m.missing();
+    if !missing.is_empty() {
+        rows.push((
+            "missing sweeps (skipped by every stage)".into(),
+            missing
+                .iter()
+                .map(|&(p, d)| {
+                    format!("position {}, direction {}", m.label(p), m.direction_name(d))
+                })
+                .collect::<Vec<_>>()
+                .join("; "),
+        ));
+    }
+    if let Some(dropped) = m
+        .sweeps
+        .as_ref()
+        .map(|s| &s.dropped_positions)
+        .filter(|d| !d.is_empty())
+    {
+        rows.push(("positions left out (no sweep)".into(), dropped.join(", ")));
     }
     rows.extend([
         (
@@ -775,9 +808,10 @@ fn campaign_summary(s: &Data) -> Vec<(String, String)> {
 }
 
 /// The MPC and cluster summary: counts, files and K per position.
-fn mpc_summary(a: &Analysis, positions: usize) -> Vec<(String, String)> {
-    let ks: Vec<String> = (a.clustering.positions.iter())
-        .map(|p| p.k.to_string())
+fn mpc_summary(a: &Analysis, m: &crate::campaign::manifest::Manifest) -> Vec<(String, String)> {
+    let positions = m.positions();
+    let ks: Vec<String> = (a.clustering.positions.iter().enumerate())
+        .map(|(p, c)| format!("{}: {}", m.label(p), c.k))
         .collect();
     vec![
         (

@@ -16,8 +16,8 @@ pub struct ReproducePage {
     pub name: String,
     /// Campaign summary (key, value).
     pub campaign: Vec<(String, String)>,
-    /// Positions (one heat map and one cluster plot each).
-    pub positions: usize,
+    /// The positions' labels (one heat map and one cluster plot each).
+    pub labels: Vec<String>,
     /// The predictive check of the fitted model (above Table 1).
     pub check: Section,
     /// Table 1 section body ([`table1_html`]).
@@ -46,7 +46,7 @@ pub fn write_index(path: &Path, page: &ReproducePage) -> Result<()> {
         },
         Section {
             title: "Energy matrices (range vs direction, dB re position peak)".into(),
-            html: heat_maps_html(page.positions),
+            html: heat_maps_html(&page.labels),
         },
         page.check.clone(),
         Section {
@@ -59,7 +59,7 @@ pub fn write_index(path: &Path, page: &ReproducePage) -> Result<()> {
         },
         Section {
             title: "MPCs (2-D CLEAN) and clusters (K-means)".into(),
-            html: mpcs_html(&page.mpcs, page.positions),
+            html: mpcs_html(&page.mpcs, &page.labels),
         },
         page.maps.clone(),
     ];
@@ -72,18 +72,22 @@ pub fn write_index(path: &Path, page: &ReproducePage) -> Result<()> {
 }
 
 /// The per-position energy heat maps `energy_pNN.png`.
-fn heat_maps_html(positions: usize) -> String {
-    (0..positions)
-        .map(|p| format!("<a href=\"energy_p{p:02}.png\"><img src=\"energy_p{p:02}.png\" alt=\"position {p}\"></a>\n"))
+fn heat_maps_html(labels: &[String]) -> String {
+    (labels.iter().enumerate())
+        .map(|(p, l)| {
+            let l = html_escape(l);
+            format!("<a href=\"energy_p{p:02}.png\" title=\"position {l}\"><img src=\"energy_p{p:02}.png\" alt=\"position {l}\"></a>\n")
+        })
         .collect()
 }
 
 /// The MPC summary, the global MPC map and the per-position cluster plots.
-fn mpcs_html(summary: &[(String, String)], positions: usize) -> String {
+fn mpcs_html(summary: &[(String, String)], labels: &[String]) -> String {
     let mut h = kv_table(summary);
     h.push_str("<p>MPCs are marked (white circles) on the energy heat maps above.</p>\n<a href=\"mpcs_global.png\"><img style=\"max-width:900px\" src=\"mpcs_global.png\" alt=\"global\"></a><br>\n");
-    for p in 0..positions {
-        h.push_str(&format!("<a href=\"clusters_p{p:02}.png\"><img src=\"clusters_p{p:02}.png\" alt=\"clusters {p}\"></a>\n"));
+    for (p, l) in labels.iter().enumerate() {
+        let l = html_escape(l);
+        h.push_str(&format!("<a href=\"clusters_p{p:02}.png\" title=\"position {l}\"><img src=\"clusters_p{p:02}.png\" alt=\"clusters {l}\"></a>\n"));
     }
     h
 }

@@ -1,5 +1,5 @@
 //! The campaign commands: `import` (a poses CSV and sweep files into a manifest, and the
-//! problem report when the files do not fit: [`ImportProblems`]), `simulate` (a manifest
+//! problem report when the files do not fit: [`ImportOutcome::problem_report`]), `simulate` (a manifest
 //! with `[scene]` into sweeps, a manifest and its truth), `energy` (a campaign's sweeps into
 //! an energy table) and `synth` (a model file and a campaign into an energy table and its
 //! truth). Each takes its command struct and gives a summary whose `Display` is printed.
@@ -18,52 +18,9 @@ use std::path::PathBuf;
 
 /// Run `pradar import` ([`crate::campaign::import::run`]): a manifest (and optionally the
 /// Parquet sweep table) from a poses CSV and sweep files. The outcome's `Display` is what
-/// the command prints; an outcome with problems wrote nothing ([`ImportProblems::of`]).
+/// the command prints; an outcome with problems wrote nothing ([`ImportOutcome::problem_report`]).
 pub fn import(params: &ImportParams, progress: StepProgress) -> Result<ImportOutcome> {
     crate::campaign::import::run(params, progress)
-}
-
-/// The problems an import found before processing, as the command line reports them:
-/// [`ImportProblems::lines`] one per line (its `Display`, printed to stderr), then
-/// [`ImportProblems::summary`] (the command's error).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ImportProblems {
-    /// One line per problem.
-    pub lines: Vec<String>,
-    /// "import: N problem(s) before processing (… missing, … duplicated, … extra, …
-    /// unreadable, … grid); nothing written".
-    pub summary: String,
-}
-
-impl ImportProblems {
-    /// The problems of `outcome`, or `None` when it has none (then it wrote its outputs).
-    pub fn of(outcome: &ImportOutcome) -> Option<ImportProblems> {
-        let problems = &outcome.problems;
-        if problems.is_empty() {
-            return None;
-        }
-        let count = |k: &str| problems.iter().filter(|p| p.starts_with(k)).count();
-        let summary = format!(
-            "import: {} problem(s) before processing ({} missing, {} duplicated, {} extra, {} unreadable, {} grid); nothing written",
-            problems.len(),
-            count("missing"),
-            count("duplicated"),
-            count("extra"),
-            count("unreadable"),
-            count("grid")
-        );
-        Some(ImportProblems {
-            lines: problems.clone(),
-            summary,
-        })
-    }
-}
-
-impl fmt::Display for ImportProblems {
-    /// The problems, one per line.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.lines.join("\n"))
-    }
 }
 
 /// `pradar simulate`: a manifest with `[scene]` simulated into a folder.

@@ -13,7 +13,7 @@
 //! pose headings of an MPC table ([`pose_headings`]), reading the scanned sector from the
 //! MPC table's metadata, the K = K_max warning, writing the model file beside Table 1,
 //! resolving `all` into the list of experiments, the problem report of an import that
-//! found problems ([`ImportProblems`]) and the `--fail-below` verdict of a check
+//! found problems ([`crate::campaign::import::ImportOutcome::problem_report`]) and the `--fail-below` verdict of a check
 //! ([`CheckSummary::failure`]).
 //!
 //! Every command first refuses to write over one of its own inputs
@@ -117,8 +117,8 @@ pub use analysis::{
     FitSummary,
 };
 pub use campaign::{
-    energy, import, simulate, synth, Energy, EnergySummary, ImportProblems, Simulate,
-    SimulateSummary, Synth, SynthSummary,
+    energy, import, simulate, synth, Energy, EnergySummary, Simulate, SimulateSummary, Synth,
+    SynthSummary,
 };
 pub use maps::{
     experiments, map, select_experiments, Experiments, ExperimentsSummary, Map, MapSummary,
