@@ -630,6 +630,25 @@ fn format_angle(v: f64, s: &Spec) -> String {
     }
 }
 
+/// Whether `text` is angle `v` as format `s` writes it; without a precision in the format
+/// any number of decimals the text has is taken as its precision (`{angle}` reads `5`
+/// as Rust writes 5.0 and `5.0` as Python does).
+fn written_as(v: f64, s: &Spec, text: &str) -> bool {
+    if format_angle(v, s) == text {
+        return true;
+    }
+    match (s.precision, text.split_once('.')) {
+        (None, Some((_, frac))) => {
+            let p = Spec {
+                precision: Some(frac.len()),
+                ..*s
+            };
+            format_angle(v, &p) == text
+        }
+        _ => false,
+    }
+}
+
 /// The value of a direction in a name: its index, or its angle in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DirectionValue {
@@ -761,7 +780,7 @@ fn match_name(
                     },
                     Field::Angle => match text.trim_start().parse::<f64>() {
                         // the name must be the angle as the format writes it
-                        Ok(v) if v.is_finite() && format_angle(v, spec) == text => {
+                        Ok(v) if v.is_finite() && written_as(v, spec, text) => {
                             let v = DirectionValue::Angle(v);
                             if said.direction.is_some_and(|old| old != v) {
                                 false
@@ -1626,6 +1645,10 @@ mod tests {
         assert!(said("p{position}_{angle:.1}.s2p", &["1"], "p1_-2.50.s2p").is_none());
         let v = said("p{position}_{angle}.s2p", &["1"], "p1_-45.s2p").unwrap();
         assert_eq!(v.direction, Some(DirectionValue::Angle(-45.0)));
+        // without a precision, the decimals the name has (Python writes 5.0 as `5.0`)
+        let v = said("p{position}_{angle}.s2p", &["1"], "p1_5.0.s2p").unwrap();
+        assert_eq!(v.direction, Some(DirectionValue::Angle(5.0)));
+        assert!(said("p{position}_{angle:+}.s2p", &["1"], "p1_5.0.s2p").is_none());
         // `az+05` is a signed number, never direction index 5
         assert!(said("P{position:02}_az+{direction}.s2p", &["3"], "P03_az+05.s2p").is_none());
         assert!(said("P{position:02}_az{direction}.s2p", &["3"], "P03_az+05.s2p").is_none());
