@@ -73,6 +73,9 @@ pub struct ScanEchoes {
     pub det: Vec<Vec<bool>>,
     /// Per direction: the occluder bin (None: nothing opaque detected).
     pub occluder: Vec<Option<usize>>,
+    /// Per direction: the campaign has no sweep there (`[sweeps] missing`); its occluder is
+    /// unknown, and the visible region is interpolated over it from its neighbours.
+    pub missing: Vec<bool>,
 }
 
 impl ScanEchoes {
@@ -214,7 +217,12 @@ impl Occlusion {
                 Some(confirmed.unwrap_or(strongest))
             })
             .collect();
-        ScanEchoes { det, occluder }
+        let missing = (0..nd).map(|d| !em.has(p, d)).collect();
+        ScanEchoes {
+            det,
+            occluder,
+            missing,
+        }
     }
 
     /// Ranges (m, ascending) at which the boresight ray of (pose `p`, direction `d`) enters an
@@ -265,6 +273,8 @@ impl Occlusion {
             .occluder
             .iter()
             .enumerate()
+            // a direction without a sweep saw nothing: its neighbours bound the region
+            .filter(|(d, _)| !echoes.missing.get(*d).copied().unwrap_or(false))
             .map(|(d, o)| {
                 let r = o.map_or(rmax, |k| (k as f64 * self.bin_m).max(self.bin_m));
                 (model.direction_rad(d), 1.0 / r)
@@ -360,6 +370,7 @@ mod tests {
         let e = ScanEchoes {
             det: vec![vec![false; 50]; 2],
             occluder: vec![Some(20), None],
+            missing: vec![false; 2],
         };
         assert_eq!(e.last_observed(0, 3, 50), 23);
         assert_eq!(
