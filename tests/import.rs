@@ -57,31 +57,46 @@ fn measured(dir: &Path) -> toml::Table {
     sim
 }
 
-fn import(dir: &Path, out: &Path, extra: &[&str]) -> Output {
-    let glob = dir.join("raw/*.s2p");
+/// `pradar import` of the folder `dir` with the poses CSV `poses`, into `out`: the files of
+/// `sweeps` = (glob relative to `dir`, name pattern), or none (then `extra` gives
+/// `--index`).
+fn import_with(
+    dir: &Path,
+    poses: &str,
+    out: &Path,
+    sweeps: Option<(&str, &str)>,
+    extra: &[&str],
+) -> Output {
+    let leak = |p: PathBuf| -> &'static str { s(&p).to_owned().leak() };
     let mut args = vec![
         "import",
         "--poses",
-        s(&dir.join("poses.csv")).to_owned().leak(),
+        leak(dir.join(poses)),
         "--directions",
         "-90:90:5",
         "--layout",
-        s(&dir.join("sim/layout.geojson")).to_owned().leak(),
+        leak(dir.join("sim/layout.geojson")),
         "--base",
-        s(&dir.join("base.toml")).to_owned().leak(),
+        leak(dir.join("base.toml")),
         "--out",
-        s(out).to_owned().leak(),
+        leak(out.to_path_buf()),
     ];
-    if !extra.contains(&"--index") {
+    if let Some((glob, pattern)) = sweeps {
         args.extend([
             "--sweeps",
-            s(&glob).to_owned().leak(),
+            leak(dir.join(glob)),
             "--name-pattern",
-            "pos{position}_dir{direction}.s2p",
+            pattern.to_owned().leak(),
         ]);
     }
     args.extend(extra);
     pradar(&args)
+}
+
+fn import(dir: &Path, out: &Path, extra: &[&str]) -> Output {
+    let sweeps =
+        (!extra.contains(&"--index")).then_some(("raw/*.s2p", "pos{position}_dir{direction}.s2p"));
+    import_with(dir, "poses.csv", out, sweeps, extra)
 }
 
 fn energy(manifest: &Path) -> Vec<u8> {
@@ -239,25 +254,13 @@ fn lab_folder(dir: &Path) {
 }
 
 fn import_lab(dir: &Path, out: &Path, pattern: &str, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "import",
-        "--poses",
-        s(&dir.join("lab_poses.csv")).to_owned().leak(),
-        "--directions",
-        "-90:90:5",
-        "--layout",
-        s(&dir.join("sim/layout.geojson")).to_owned().leak(),
-        "--base",
-        s(&dir.join("base.toml")).to_owned().leak(),
-        "--out",
-        s(out).to_owned().leak(),
-        "--sweeps",
-        s(&dir.join("lab/*.s2p")).to_owned().leak(),
-        "--name-pattern",
-        pattern.to_owned().leak(),
-    ];
-    args.extend(extra);
-    pradar(&args)
+    import_with(
+        dir,
+        "lab_poses.csv",
+        out,
+        Some(("lab/*.s2p", pattern)),
+        extra,
+    )
 }
 
 #[test]
@@ -286,22 +289,9 @@ fn angle_names_lab_labels_and_headers_give_the_same_energy() {
     }
     std::fs::write(dir.join("lab_index.csv"), &index).unwrap();
     let m2 = dir.join("lab_index/campaign.toml");
-    let mut args = vec![
-        "import",
-        "--poses",
-        s(&dir.join("lab_poses.csv")).to_owned().leak(),
-        "--directions",
-        "-90:90:5",
-        "--layout",
-        s(&dir.join("sim/layout.geojson")).to_owned().leak(),
-        "--base",
-        s(&dir.join("base.toml")).to_owned().leak(),
-        "--out",
-        s(&m2),
-    ];
     let idx = dir.join("lab_index.csv");
-    args.extend(["--index", s(&idx)]);
-    let o = pradar(&args);
+    let run = || import_with(dir, "lab_poses.csv", &m2, None, &["--index", s(&idx)]);
+    let o = run();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(energy(&m2), original, "energy of the angle_deg index");
     // an angle off the grid is refused, naming the file
@@ -310,7 +300,7 @@ fn angle_names_lab_labels_and_headers_give_the_same_energy() {
         index.replace("P02,-85,lab/P02_az-85.s2p", "P02,-87.5,lab/P02_az-85.s2p"),
     )
     .unwrap();
-    let o = pradar(&args);
+    let o = run();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
