@@ -178,8 +178,9 @@ fn stage_bar(quiet: bool, label: &str, total: usize) -> Box<dyn Fn(usize, usize)
     })
 }
 
-/// `import`: the problems found before processing go to stderr one per line, then one
-/// `error:` line with their count (exit 1, nothing written).
+/// `import`: a `warning:` line per item `--allow-missing` left out; with problems, the
+/// `error:` summary first, then at most 20 problems and the count of the rest (exit 1,
+/// nothing written).
 fn import(a: ImportArgs, quiet: bool) -> Result<()> {
     let params = a.into_params()?;
     let outcome = with_bar(quiet, "import", |p| commands::import(&params, p))?;

@@ -316,8 +316,10 @@ fn touchstone_values(dir: &Path, from: &str, to: &str, value: &str, first_only: 
 fn energy_meta(dir: &Path, key: &str, value: &str) {
     let p = dir.join("e.parquet");
     let mut meta = pradar::table::parquet_metadata(&p).unwrap();
-    let hit = meta.iter_mut().find(|(k, _)| k == key).unwrap();
-    hit.1 = value.into();
+    match meta.iter_mut().find(|(k, _)| k == key) {
+        Some(hit) => hit.1 = value.into(),
+        None => meta.push((key.into(), value.into())),
+    }
     let df = pradar::table::read_parquet(&p, None).unwrap();
     pradar::table::write_parquet(&p, &df, meta).unwrap();
 }
@@ -1084,6 +1086,38 @@ fn cases() -> Vec<Case> {
                 edit(d, "index.csv", "sim/sweeps/p000_d00_k00.s2p", "fifo");
             },
         ),
+        import_case(
+            "index row with pulse 10^11",
+            2,
+            IMPORT,
+            &[
+                "extra: sim/sweeps/p000_d00_k00.s2p: pulse 100000000000 beyond the 1000 repeats",
+                "missing: position 0, direction 0 (-90°): no file",
+            ],
+            |d| {
+                edit(
+                    d,
+                    "index.csv",
+                    "0,0,0,sim/sweeps/p000_d00_k00.s2p",
+                    "0,0,100000000000,sim/sweeps/p000_d00_k00.s2p",
+                )
+            },
+        ),
+        import_case(
+            "index with a NaN angle_deg",
+            0,
+            IMPORT,
+            &["index.csv", "line 2", "angle must be finite"],
+            |d| {
+                edit(
+                    d,
+                    "index.csv",
+                    "position,direction,pulse,path",
+                    "position,angle_deg,pulse,path",
+                );
+                edit(d, "index.csv", "0,0,0,sim", "0,NaN,0,sim");
+            },
+        ),
         // ---- issue 33: sizes bounded
         case(
             "poses CSV of 10^6 rows",
@@ -1235,6 +1269,57 @@ fn cases() -> Vec<Case> {
             EXTRACT,
             &["e.parquet", "metadata `bin_width_ns` = -0.5", "> 0"],
             |d| energy_meta(d, "bin_width_ns", "-0.5"),
+        ),
+        // ---- issue 32: labels, missing sweeps, NaN energies
+        case(
+            "manifest labels fewer than the poses",
+            ENERGY,
+            &[M, "labels", "3 poses"],
+            |d| toml_set(d, M, "labels", toml::Value::Array(vec!["P01".into()])),
+        ),
+        case(
+            "manifest labels naming one pose twice",
+            ENERGY,
+            &[M, "labels[2]", "names two poses"],
+            |d| {
+                let v = ["P01", "P02", "P01"].map(toml::Value::from).to_vec();
+                toml_set(d, M, "labels", toml::Value::Array(v))
+            },
+        ),
+        case(
+            "sweeps.missing outside the campaign",
+            ENERGY,
+            &[M, "sweeps.missing[0]", "outside the campaign"],
+            |d| {
+                let mut m = toml::Table::new();
+                m.insert("position".into(), 7i64.into());
+                m.insert("direction".into(), 0i64.into());
+                toml_set(d, M, "sweeps.missing", toml::Value::Array(vec![m.into()]))
+            },
+        ),
+        case(
+            "NaN energy outside a missing profile",
+            EXTRACT,
+            &["e.parquet", "column `energy` row 7", "NaN outside"],
+            |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "energy", 7, f64::NAN)),
+        ),
+        case(
+            "energy metadata `missing` that is not position:direction",
+            EXTRACT,
+            &["e.parquet", "metadata `missing`", "not position:direction"],
+            |d| energy_meta(d, "missing", "0-3"),
+        ),
+        case(
+            "energy metadata `missing` outside the table",
+            EXTRACT,
+            &["e.parquet", "metadata `missing`", "outside the table"],
+            |d| energy_meta(d, "missing", "0:99"),
+        ),
+        case(
+            "energy metadata `missing` on a profile that holds energies",
+            EXTRACT,
+            &["e.parquet", "lists as `missing`", "NaN expected"],
+            |d| energy_meta(d, "missing", "0:0"),
         ),
         // ---- issue 33: rows out of order, commas in index paths
         case(

@@ -374,36 +374,39 @@ fn allow_missing_goes_on_to_energy_and_the_report() {
     lab_folder(dir);
     let original = pradar::energy::EnergyMatrix::read(&dir.join("energy.parquet")).unwrap();
     std::fs::remove_file(dir.join("lab/P02_az+10.s2p")).unwrap();
-    // a third pose without any file
-    let mut poses = std::fs::read_to_string(dir.join("lab_poses.csv")).unwrap();
-    let first = poses.lines().nth(1).unwrap().replacen("P01", "P03", 1);
-    poses.push_str(&first);
-    poses.push('\n');
-    std::fs::write(dir.join("lab_poses.csv"), poses).unwrap();
+    // a pose without any file between P01 and P02: left out, P02 becomes index 1
+    let poses = std::fs::read_to_string(dir.join("lab_poses.csv")).unwrap();
+    let mut lines: Vec<String> = poses.lines().map(String::from).collect();
+    lines.insert(2, lines[1].replacen("P01", "P1b", 1));
+    std::fs::write(dir.join("lab_poses.csv"), lines.join("\n") + "\n").unwrap();
     let m = dir.join("lab_missing/campaign.toml");
     let pattern = "{position}_az{angle:+03}.s2p";
     let o = import_lab(dir, &m, pattern, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
+    // 37 of P1b and one of P02; the first 20 shown
+    assert!(err.contains("(38 missing, 0 duplicated"), "{err}");
     assert!(
-        err.contains("missing: position P02, direction 20 (10°): no file"),
+        err.contains("missing: position P1b, direction 0 (-90°): no file"),
         "{err}"
     );
+    assert!(err.contains("… and 18 more"), "{err}");
     assert!(err.contains("--allow-missing"), "{err}");
     let o = import_lab(dir, &m, pattern, &["--allow-missing"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(
-        err.contains("warning: dropped position P02, direction 20 (10°): no file"),
+        err.contains("warning: left out: position P02, direction 20 (10°): no file"),
         "{err}"
     );
     assert!(
-        err.contains("warning: dropped position P03: no sweep file at all"),
+        err.contains("warning: left out: position P1b: no sweep file at all"),
         "{err}"
     );
     let manifest = std::fs::read_to_string(&m).unwrap();
     assert!(
-        manifest.contains("dropped_positions = [\"P03\"]"),
+        manifest.contains("dropped_positions = [\"P1b\"]")
+            && manifest.contains(r#"labels = ["P01", "P02"]"#),
         "{manifest}"
     );
     assert!(manifest.contains("[[sweeps.missing]]"), "{manifest}");
@@ -457,4 +460,31 @@ fn allow_missing_goes_on_to_energy_and_the_report() {
     assert!(o.status.success(), "{err}");
     let page = std::fs::read_to_string(rep.join("index.html")).unwrap();
     assert!(page.contains("P02"), "the page names the lab's labels");
+    assert!(
+        page.contains("position P02, direction 20 (10°)"),
+        "the page lists the missing sweep"
+    );
+    // every stage ran: nothing failed on the page, the maps and the check are there
+    assert!(!page.contains(" failed: "), "a stage failed on the page");
+    for f in [
+        "check/check.csv",
+        "maps/og/metrics.json",
+        "maps/ekf/metrics.json",
+    ] {
+        assert!(rep.join(f).is_file(), "{f} missing from the report");
+    }
+    for f in ["maps/og/metrics.json", "maps/ekf/metrics.json"] {
+        let j = std::fs::read_to_string(rep.join(f)).unwrap();
+        assert!(!j.contains("NaN") && !j.contains("null"), "{f}: {j}");
+    }
+    // the coupling's mean over the directions of a position skips the missing one
+    let t = std::fs::read_to_string(&m)
+        .unwrap()
+        .replace("coupling = \"gate\"", "coupling = \"mean\"");
+    assert!(t.contains("coupling = \"mean\""), "{t}");
+    let mc = m.with_file_name("mean.toml");
+    std::fs::write(&mc, t).unwrap();
+    let em_mean = m.with_file_name("energy_mean.parquet");
+    let o = pradar(&["energy", "--campaign", s(&mc), "--out", s(&em_mean)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

@@ -63,6 +63,7 @@
 //! (device, FIFO, dangling link, symlink loop; [`crate::io::regular_input`]) is an
 //! `unreadable:` problem, never opened.
 
+use crate::campaign::manifest::limits::{MAX_PULSES, MAX_SWEEPS};
 use crate::campaign::manifest::{Campaign, Directions};
 use crate::campaign::sweeps::{parquet_batch, SweepReader};
 use crate::campaign::touchstone::{decode, parse_touchstone, SParam};
@@ -74,14 +75,15 @@ use std::path::{Path, PathBuf};
 /// Where the sweep files are and how they are named.
 #[derive(Debug, Clone)]
 pub enum SweepFiles {
-    /// A glob and a file-name pattern with `{position}`, `{direction}`, `{pulse}`.
+    /// A glob and a file-name pattern with `{position}`, `{direction}` or `{angle}`, and
+    /// optionally `{pulse}` (module docs).
     Glob {
         /// e.g. `raw/*.s2p`.
         glob: String,
-        /// e.g. `pos{position}_dir{direction:02}.s2p`.
+        /// e.g. `pos{position}_dir{direction:02}.s2p` or `{position}_az{angle:+03}.s2p`.
         pattern: String,
     },
-    /// An index CSV `position, direction, [pulse,] path`.
+    /// An index CSV `position, direction | angle_deg, [pulse,] path`.
     Index(PathBuf),
 }
 
@@ -119,7 +121,8 @@ pub struct ImportOutcome {
     pub problems: Vec<String>,
     /// Positions, directions, pulses.
     pub shape: (usize, usize, usize),
-    /// Sweep files matched.
+    /// Sweep files used (named by the manifest), plus those that matched the glob but
+    /// not the pattern.
     pub files: usize,
     /// Band (start, stop, points) read from the files.
     pub band: Option<(f64, f64, usize)>,
@@ -157,7 +160,7 @@ impl ImportOutcome {
             count("extra"),
             count("unreadable"),
             count("grid"),
-            if count("missing") > 0 {
+            if count("missing: position") > 0 {
                 " (--allow-missing goes on without the missing sweeps)"
             } else {
                 ""
@@ -1185,14 +1188,11 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
         "{}:{}:{}",
         directions.start_deg, directions.stop_deg, directions.step_deg
     );
-    let dname = |d: usize| format!("{d} ({}°)", directions.angle_deg(d));
-    let nk = entries.iter().map(|e| e.pulse).max().unwrap_or(0).max(0) as usize + 1;
-    let cell_name = |pi: usize, d: usize, k: usize| {
-        let mut s = format!("position {}, direction {}", labels[pi], dname(d));
-        if nk > 1 {
-            s.push_str(&format!(", pulse {k}"));
-        }
-        s
+    let dname = |d: usize| {
+        format!(
+            "{d} ({}°)",
+            crate::campaign::manifest::angle_text(directions.angle_deg(d))
+        )
     };
     let mut problems = Vec::new();
     for (f, why) in &extra_names {
@@ -1219,6 +1219,10 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
             )),
             (_, Err(w)) => Err(w),
             (Some(_), Ok(_)) if e.pulse < 0 => Err(format!("pulse {} is negative", e.pulse)),
+            (Some(_), Ok(_)) if e.pulse as u64 >= MAX_PULSES as u64 => Err(format!(
+                "pulse {} beyond the {MAX_PULSES} repeats a campaign may have",
+                e.pulse
+            )),
             (Some(pi), Ok(d)) => Ok((pi, d, e.pulse as usize)),
         };
         match why {
@@ -1226,7 +1230,23 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
             Err(why) => problems.push(format!("extra: {}: {why}", e.path.display())),
         }
     }
-    let mut table: Vec<Option<PathBuf>> = vec![None; np * nd * nk];
+    // pulses: the largest accepted + 1 (a refused file's number does not count)
+    let nk = cells.keys().map(|k| k.2).max().unwrap_or(0) + 1;
+    let cells_total = np.saturating_mul(nd).saturating_mul(nk);
+    if cells_total > MAX_SWEEPS {
+        return Err(Error::input(
+            &p.poses,
+            format!("{np} poses x {nd} directions x {nk} pulses = {cells_total} sweeps: more than {MAX_SWEEPS}"),
+        ));
+    }
+    let cell_name = |pi: usize, d: usize, k: usize| {
+        let mut s = format!("position {}, direction {}", labels[pi], dname(d));
+        if nk > 1 {
+            s.push_str(&format!(", pulse {k}"));
+        }
+        s
+    };
+    let mut table: Vec<Option<PathBuf>> = vec![None; cells_total];
     for (&(pi, d, k), files) in &cells {
         if files.len() > 1 {
             let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
@@ -1244,12 +1264,18 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
     let mut missing_pd = vec![false; np * nd];
     for pi in 0..np {
         let cell_missing = |d: usize| (0..nk).any(|k| table[(pi * nd + d) * nk + k].is_none());
-        let none_at_all = (0..nd * nk).all(|i| table[pi * nd * nk + i].is_none());
-        if p.allow_missing && none_at_all {
+        // a position without one complete direction is left out whole
+        if p.allow_missing && (0..nd).all(cell_missing) {
             dropped[pi] = true;
+            let none_at_all = (0..nd * nk).all(|i| table[pi * nd * nk + i].is_none());
             warnings.push(format!(
-                "dropped position {}: no sweep file at all (left out of the manifest)",
-                labels[pi]
+                "left out: position {}: {} (not in the manifest)",
+                labels[pi],
+                if none_at_all {
+                    "no sweep file at all"
+                } else {
+                    "no direction with every pulse"
+                }
             ));
             continue;
         }
@@ -1268,7 +1294,7 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
                     String::new()
                 };
                 warnings.push(format!(
-                    "dropped position {}, direction {}: no file{what}",
+                    "left out: position {}, direction {}: no file{what}",
                     labels[pi],
                     dname(d)
                 ));

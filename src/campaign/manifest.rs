@@ -461,8 +461,8 @@ pub struct SweepsConfig {
     /// metadata; extraction, the maps and the statistics skip them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub missing: Vec<MissingSweep>,
-    /// Labels of the positions `import --allow-missing` left out (no sweep at all), with the
-    /// reason; they are not among `[[poses]]`.
+    /// Labels of the positions `import --allow-missing` left out (no complete direction);
+    /// they are not among `[[poses]]`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dropped_positions: Vec<String>,
 }
@@ -543,6 +543,14 @@ pub struct Campaign {
     pub path: PathBuf,
 }
 
+/// An angle in degrees as messages write it: to 1e-9 of a degree, trailing zeros dropped
+/// (`-31.7`, not the `-31.700000000000003` of `-45 + 19·0.7`).
+pub fn angle_text(deg: f64) -> String {
+    let r = (deg * 1e9).round() / 1e9;
+    let r = if r == 0.0 { 0.0 } else { r };
+    format!("{r}")
+}
+
 /// Turn a (possibly multi-line) TOML error into one line.
 pub(crate) fn one_line(msg: &str) -> String {
     msg.split('\n')
@@ -619,6 +627,19 @@ impl Manifest {
         self.check_labels()?;
         if let Some(s) = &self.sweeps {
             self.check_missing(&s.missing)?;
+            if let Some((i, f)) = s.files.iter().enumerate().find(|(_, f)| {
+                s.missing
+                    .iter()
+                    .any(|m| m.position == f.position && m.direction == f.direction)
+            }) {
+                return Err(Error::param(
+                    format!("sweeps.files[{i}]"),
+                    format!(
+                        "a file for position {}, direction {}, which [sweeps] missing lists as not swept",
+                        f.position, f.direction
+                    ),
+                ));
+            }
             match s.format {
                 SweepFormat::Touchstone => {
                     if s.pattern.is_none() && s.files.is_empty() {
@@ -660,17 +681,7 @@ impl Manifest {
 
     /// Direction `d` as messages show it: "index (angle°)".
     pub fn direction_name(&self, d: usize) -> String {
-        format!("{d} ({}°)", self.directions.angle_deg(d))
-    }
-
-    /// Whether the campaign has the sweep of (position `p`, direction `d`) (`[sweeps]
-    /// missing` lists those it does not).
-    pub fn has_sweep(&self, p: usize, d: usize) -> bool {
-        !self.sweeps.as_ref().is_some_and(|s| {
-            s.missing
-                .iter()
-                .any(|m| m.position == p && m.direction == d)
-        })
+        format!("{d} ({}°)", angle_text(self.directions.angle_deg(d)))
     }
 
     /// The missing (position, direction) sweeps, sorted.

@@ -257,7 +257,12 @@ impl SweepReader {
     /// Every sweep file read (the Touchstone files, or the one Parquet table).
     pub fn files(&self) -> Vec<&Path> {
         match &self.source {
-            Source::Touchstone(paths, _) => paths.iter().map(PathBuf::as_path).collect(),
+            // a missing sweep has no file
+            Source::Touchstone(paths, _) => paths
+                .iter()
+                .filter(|p| !p.as_os_str().is_empty())
+                .map(PathBuf::as_path)
+                .collect(),
             Source::Parquet(p) => vec![p.as_path()],
         }
     }

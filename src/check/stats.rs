@@ -94,14 +94,18 @@ impl Statistics {
         let mut shares = Vec::new();
         let mut curve = vec![0.0; nb];
         let mut per_dir = vec![0.0; nd];
+        let mut swept = vec![true; nd];
+        let mut n_present = 0usize;
         for p in 0..np {
             for (d, w) in per_dir.iter_mut().enumerate() {
                 let prof = &e[(p * nd + d) * nb..(p * nd + d + 1) * nb];
-                if prof.first().is_some_and(|v| v.is_nan()) {
+                swept[d] = !prof.first().is_some_and(|v| v.is_nan());
+                if !swept[d] {
                     // no sweep (`[sweeps] missing`): not a profile of the sample
                     *w = 0.0;
                     continue;
                 }
+                n_present += 1;
                 let (mut m0, mut m1, mut n, mut k) = (0.0, 0.0, 0usize, 0usize);
                 let mut t0 = None;
                 for b in ctx.first_bin..nb {
@@ -161,11 +165,13 @@ impl Statistics {
                 shares.extend(
                     per_dir
                         .iter()
-                        .map(|w| (10.0 * (w / total).log10()).max(SHARE_FLOOR_DB)),
+                        .zip(&swept)
+                        .filter(|(_, &s)| s)
+                        .map(|(w, _)| (10.0 * (w / total).log10()).max(SHARE_FLOOR_DB)),
                 );
             }
         }
-        let n_prof = (np * nd).max(1) as f64;
+        let n_prof = n_present.max(1) as f64;
         curve.iter_mut().for_each(|v| *v /= n_prof);
         let sorted = |mut v: Vec<f64>| {
             v.sort_by(f64::total_cmp);

@@ -81,7 +81,8 @@ pub struct ImportArgs {
     /// {angle} (signed degrees, e.g. {angle:+03}), and {pulse} ({direction:02}: fixed width).
     #[arg(long)]
     pub name_pattern: Option<String>,
-    /// Index CSV: position, direction, [pulse,] path (instead of --sweeps).
+    /// Index CSV: position, direction (index) or angle_deg, [pulse,] path (instead of
+    /// --sweeps).
     #[arg(long)]
     pub index: Option<PathBuf>,
     /// Directions START:STOP:STEP, degrees (else the base's [directions]).

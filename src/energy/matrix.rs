@@ -201,6 +201,7 @@ impl EnergyMatrix {
                 ),
             ));
         }
+        check_missing_shape(path, &meta, np, nd)?;
         let mut data = vec![f64::NAN; np * nd * nb];
         let mut filled = vec![false; np * nd * nb];
         let mut angles = vec![f64::NAN; nd];
@@ -325,22 +326,39 @@ fn missing_from(path: &Path, kv: &[(String, String)]) -> Result<Vec<(usize, usiz
         let pair = tok
             .split_once(':')
             .and_then(|(p, d)| Some((p.parse::<usize>().ok()?, d.parse::<usize>().ok()?)));
-        match pair {
-            Some(pd) if out.len() < crate::campaign::manifest::limits::MAX_SWEEPS => out.push(pd),
-            _ => {
-                return Err(Error::input(
-                    path,
-                    format!(
-                        "metadata `missing`: `{}` is not position:direction",
-                        tok.chars().take(40).collect::<String>()
-                    ),
-                ))
-            }
+        let Some(pd) = pair else {
+            return Err(Error::input(
+                path,
+                format!(
+                    "metadata `missing`: `{}` is not position:direction",
+                    tok.chars().take(40).collect::<String>()
+                ),
+            ));
+        };
+        if out.len() >= crate::campaign::manifest::limits::MAX_SWEEPS {
+            return Err(Error::input(
+                path,
+                "metadata `missing`: more pairs than a campaign has sweeps",
+            ));
         }
+        out.push(pd);
     }
     out.sort_unstable();
     out.dedup();
     Ok(out)
+}
+
+/// The `missing` pairs inside the table's grid (`np` positions, `nd` directions).
+fn check_missing_shape(path: &Path, meta: &EnergyMeta, np: usize, nd: usize) -> Result<()> {
+    match meta.missing.iter().find(|&&(p, d)| p >= np || d >= nd) {
+        Some((p, d)) => Err(Error::input(
+            path,
+            format!(
+                "metadata `missing`: {p}:{d} outside the table ({np} positions, {nd} directions)"
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Relative tolerance of the bin width against `1e9 / B` of the recorded band.
@@ -546,6 +564,7 @@ impl EnergyTable {
                 format!("{rows} rows but {np} positions x {nd} directions x {nb} bins"),
             ));
         }
+        check_missing_shape(path, &meta, np, nd)?;
         // pass 2: order, values and axes
         let mut angles = vec![f64::NAN; nd];
         let mut headings = vec![f64::NAN; np];
@@ -789,7 +808,8 @@ pub fn check_campaign(c: &Campaign, em: &EnergyMatrix, path: &Path) -> Result<()
             return Err(Error::input(
                 path,
                 format!(
-                    "position {p} heading {}°, campaign {} has {}° (energy table from another campaign?)",
+                    "position {} heading {}°, campaign {} has {}° (energy table from another campaign?)",
+                    m.label(p),
                     em.headings_deg[p],
                     c.path.display(),
                     pose.heading_deg

@@ -200,7 +200,7 @@ pub fn run(
     meta.extend(cal.metadata());
     writer.finish(meta)?;
     Ok(EnergyReport {
-        sweeps: np * nd * m.pulses,
+        sweeps: (np * nd - m.missing().len()) * m.pulses,
         rows: np * nd * nb,
         n0,
         noise_bin_mean,

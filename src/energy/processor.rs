@@ -250,14 +250,16 @@ impl EnergyProcessor {
         let mean: Option<Vec<Complex64>> =
             (self.proc.coupling == CouplingRemoval::Mean).then(|| {
                 let mut m = vec![Complex64::new(0.0, 0.0); nk * nf];
-                for d in 0..nd {
+                // the mean over the directions swept (a missing one is NaN, not a sweep)
+                let swept = (0..nd).filter(|&d| sw.has(d)).count().max(1);
+                for d in (0..nd).filter(|&d| sw.has(d)) {
                     for k in 0..nk {
                         for (acc, v) in m[k * nf..(k + 1) * nf].iter_mut().zip(sw.sweep(d, k)) {
                             *acc += v;
                         }
                     }
                 }
-                m.iter_mut().for_each(|v| *v /= nd as f64);
+                m.iter_mut().for_each(|v| *v /= swept as f64);
                 m
             });
         let nb = self.nbins_full;

@@ -366,7 +366,10 @@ pub fn fit_levels(
         m.cluster_rrcs.value = sigma;
         let mut e = Vec::with_capacity(draws * np * nd * nb);
         for &s in &LEVEL_SEEDS[..draws] {
-            e.extend(sim.energies(&m, s)?);
+            let mut d = sim.energies(&m, s)?;
+            // the measured campaign's missing sweeps are missing from the draws too
+            em.meta.mask_missing(nd, nb, &mut d);
+            e.extend(d);
         }
         Ok(mean_signal_bins(&e, nb, first_bin, mu))
     };

@@ -721,14 +721,11 @@ fn campaign_summary(s: &Data) -> Vec<(String, String)> {
         ),
         (
             "positions".into(),
-            format!(
-                "{} ({})",
-                m.positions(),
-                (0..m.positions())
-                    .map(|p| m.label(p))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
+            if m.labels.is_empty() {
+                m.positions().to_string()
+            } else {
+                format!("{} ({})", m.positions(), m.labels.join(", "))
+            },
         ),
         (
             "directions".into(),
@@ -811,7 +808,10 @@ fn campaign_summary(s: &Data) -> Vec<(String, String)> {
 fn mpc_summary(a: &Analysis, m: &crate::campaign::manifest::Manifest) -> Vec<(String, String)> {
     let positions = m.positions();
     let ks: Vec<String> = (a.clustering.positions.iter().enumerate())
-        .map(|(p, c)| format!("{}: {}", m.label(p), c.k))
+        .map(|(p, c)| match m.labels.get(p) {
+            Some(l) => format!("{l}: {}", c.k),
+            None => c.k.to_string(),
+        })
         .collect();
     vec![
         (
