@@ -70,11 +70,20 @@ fn lab_campaign_script_passes() {
         assert!(global <= 1e-9 && per_row <= 1e-9, "{lab}: {energy}");
         let table = block.iter().find(|l| l.contains("Table 1:")).unwrap();
         assert!(table.contains("15 rows"), "{lab}: {table}");
-        assert!(figure(table, "worst relative").unwrap() <= 1e-9, "{lab}: {table}");
+        assert!(
+            figure(table, "worst relative").unwrap() <= 1e-9,
+            "{lab}: {table}"
+        );
         let page = block.iter().find(|l| l.contains("page:")).unwrap();
-        let title = page.split("title `").nth(1).and_then(|t| t.split('`').next());
+        let title = page
+            .split("title `")
+            .nth(1)
+            .and_then(|t| t.split('`').next());
         assert!(title.is_some_and(|t| t.contains(name)), "{lab}: {page}");
-        assert!(page.contains("labels on the page: 12 of 12"), "{lab}: {page}");
+        assert!(
+            page.contains("labels on the page: 12 of 12"),
+            "{lab}: {page}"
+        );
         assert_eq!(block.last().map(|l| l.trim()), Some("ok"), "{lab}");
     }
     assert!(text.contains("lab-campaign: ok"), "{text}");

@@ -1423,10 +1423,11 @@ pub fn run(p: &ImportParams, progress: &(dyn Fn(usize, usize) + Sync)) -> Result
     t.insert("noise".into(), noise);
     // every processing setting written out, the base's over the defaults, so the manifest
     // states what the energy stage will do (a default nobody wrote is still visible)
-    let mut processing = match toml::Value::try_from(crate::campaign::manifest::Processing::default()) {
-        Ok(toml::Value::Table(t)) => t,
-        _ => toml::Table::new(),
-    };
+    let mut processing =
+        match toml::Value::try_from(crate::campaign::manifest::Processing::default()) {
+            Ok(toml::Value::Table(t)) => t,
+            _ => toml::Table::new(),
+        };
     if let Some(b) = base.get("processing").and_then(|v| v.as_table()) {
         for (k, v) in b {
             processing.insert(k.clone(), v.clone());
