@@ -547,6 +547,7 @@ fn scalable_against_dense(strict: bool) {
     let region = pradar::mapping::job::Regions {
         observable: observable_region(&[&l.model], &l.layout),
         building: pradar::mapping::job::building_region(&l.layout, &reference),
+        objects: None,
     };
     let dp = EkfParams {
         variant: EkfVariant::Dense,

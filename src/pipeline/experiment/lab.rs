@@ -125,6 +125,9 @@ pub struct CaseFigures {
     pub all_free_wrong_interior: usize,
     /// The map's errors per reference class.
     pub classes: crate::mapping::job::ClassFigures,
+    /// The map against the three-class reference (structure, the data's truth objects,
+    /// free), when the data have a truth (simulated sweeps, model data).
+    pub three_class: Option<crate::mapping::job::ThreeClassFigures>,
 }
 
 fn count(rate: f64, cells: usize) -> usize {
@@ -155,6 +158,7 @@ impl CaseFigures {
             all_free_wrong_whole: count(m.whole_all_free.wrong_cell_rate, m.whole_all_free.cells),
             all_free_wrong_interior: count(m.building_all_free.wrong_cell_rate, i.cells),
             classes: m.classes,
+            three_class: m.three_class,
         }
     }
 }
