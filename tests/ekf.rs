@@ -506,7 +506,7 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
             );
             let lin = Linearized::new(&o, f.mean(), &noise);
             f.update(&o, &lin).unwrap();
-            f.project_positive(params.x_min());
+            f.project_positive(params.x_min(), params.reflect);
         }
         if p % 4 == 3 || p == np - 1 {
             let pm = f.covariance_matrix();

@@ -2,10 +2,11 @@
 //! simulated scene"): what is physically in the room but not in the layout. No mapper reads
 //! them; [`super::score`] scores every map against them beside the layout-only figures.
 //!
-//! Where the truth is found ([`find_truth`], first that exists): `truth/` beside the
-//! campaign manifest (what `simulate` writes), then `<energy stem>_truth/` beside the energy
-//! table (what `synth` writes by default). A measured campaign has neither, and is scored on
-//! the layout's classes only.
+//! Where the truth is found ([`find_truth`], first that exists): `<energy stem>_truth/`
+//! beside the energy table (what `synth` writes by default: model data are mapped with the
+//! campaign they were drawn for, whose own `truth/` is the simulator's scene, not what the
+//! model drew), then `truth/` beside the campaign manifest (what `simulate` writes). A
+//! measured campaign has neither, and is scored on the layout's classes only.
 //!
 //! What an object is ([`load_objects`]):
 //! * `simulate`'s truth (`scatterers.csv`): each clutter cluster (the cells of its
@@ -34,12 +35,12 @@ pub struct Objects {
 
 /// The truth folder of a run, if any (module docs).
 pub fn find_truth(campaign: &Path, energy: &Path) -> Option<PathBuf> {
-    let beside = campaign.parent().unwrap_or(Path::new(".")).join("truth");
-    if beside.join("scatterers.csv").is_file() {
-        return Some(beside);
-    }
     let synth = crate::model::synth::default_truth_dir(energy);
-    synth.join("clusters.csv").is_file().then_some(synth)
+    if synth.join("clusters.csv").is_file() {
+        return Some(synth);
+    }
+    let beside = campaign.parent().unwrap_or(Path::new(".")).join("truth");
+    beside.join("scatterers.csv").is_file().then_some(beside)
 }
 
 /// Rows of a plain CSV file (header, comma-separated, no quoting) as (header, rows).
@@ -180,13 +181,26 @@ mod tests {
         assert_eq!(o.cells[2], vec![r * s.cols + c]);
     }
 
-    /// synth's truth (no scatterers.csv): one object per cluster centroid; no truth at all
-    /// (a measured campaign): none found.
+    /// synth's truth (no scatterers.csv): one object per cluster centroid, and it wins over
+    /// the campaign's own `truth/` (model data drawn for a simulated campaign); no truth at
+    /// all (a measured campaign): none found.
     #[test]
     fn synth_truth_gives_centroids_and_no_truth_gives_none() {
         let dir = tempfile::tempdir().unwrap();
         let energy = dir.path().join("n16_s1.parquet");
         assert!(find_truth(&dir.path().join("campaign.toml"), &energy).is_none());
+        let sim = dir.path().join("truth");
+        std::fs::create_dir(&sim).unwrap();
+        std::fs::write(
+            sim.join("scatterers.csv"),
+            "scatterer_id,kind,x_m,y_m,rrcs_m,cluster_id,wall_id
+",
+        )
+        .unwrap();
+        assert_eq!(
+            find_truth(&dir.path().join("campaign.toml"), &energy),
+            Some(sim)
+        );
         let truth = dir.path().join("n16_s1_truth");
         std::fs::create_dir(&truth).unwrap();
         std::fs::write(

@@ -24,7 +24,7 @@
 //!   seeds 1, 2, 3 (`--seeds`): a seed draws a new channel (clusters, rays, shadowing) and new
 //!   detector noise;
 //! * **mappers**: the side-lobe-aware occupancy grid `og` (prior 0.5, P_fa 1e-3, binary
-//!   p > 0.5) and the scalable EKF (μ0 0.01 m, σ0 0.1 m, binary x̂ − 2σ̂ > μ0), 0.1 m cells —
+//!   p > 0.5) and the scalable EKF (μ0 0.01 m, σ0 0.1 m, binary x̂ − κσ̂ > μ0, κ = 3.09, free-space evidence), 0.1 m cells —
 //!   `pradar map`'s defaults, not tuned on the reference;
 //! * **figures** per map: ψ, F1 and the wrong-cell count on three regions, each the same
 //!   for every N, mapper, prior and pose noise of a campaign except (b): (a) the *whole map*
@@ -42,7 +42,7 @@
 //!   sweeps simulated at both N);
 //! * **prior-sensitivity**: at N = 16 on model data, the OG prior p0 and the EKF μ0 each
 //!   scaled by 1 ± 0.4 (p0 0.3 / 0.5 / 0.7, μ0 0.006 / 0.01 / 0.014 m) with everything else
-//!   fixed (the binary rules stay p > 0.5 and x̂ − 2σ̂ > μ0, so μ0 moves the EKF's threshold as
+//!   fixed (the binary rules stay p > 0.5 and x̂ − κσ̂ > μ0, so μ0 moves the EKF's threshold as
 //!   it moves its prior); relative change Δψ/ψ = (ψ̄(changed) − ψ̄(base))/ψ̄(base) of the mean ψ
 //!   over seeds;
 //! * **pose-noise**: at N = 100 on model data, the mapper is given poses with Gaussian noise

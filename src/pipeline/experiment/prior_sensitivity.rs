@@ -1,7 +1,7 @@
 //! prior-sensitivity: at N = 16 on model data, the OG prior p0 and the EKF μ0 each scaled by
 //! 1 ± `prior_change` with everything else fixed.
 //!
-//! The binary rules stay p > 0.5 and x̂ − 2σ̂ > μ0, so μ0 moves the EKF's threshold as it
+//! The binary rules stay p > 0.5 and x̂ − κσ̂ > μ0, so μ0 moves the EKF's threshold as it
 //! moves its prior. Reported: the relative change Δψ/ψ = (ψ̄(changed) − ψ̄(base))/ψ̄(base)
 //! of the mean ψ over seeds, on the observable region and on the whole map.
 
@@ -33,7 +33,7 @@ impl Lab<'_> {
         let first = self.params.seeds[0];
         Ok(result(
             "prior-sensitivity",
-            &format!("N = {n}, model data, seeds {}: the OG prior p0 = {} and the EKF μ0 = {} m each changed by ±{:.0} % (binary rules unchanged: p > 0.5, x̂ − 2σ̂ > μ0). The paper reports about +5 % for the OG and +220 % for the EKF; here is what is measured. Panel: seed {first}.", join_u(&self.params.seeds), self.params.og.prior, self.params.ekf.mu0, c * 100.0),
+            &format!("N = {n}, model data, seeds {}: the OG prior p0 = {} and the EKF μ0 = {} m each changed by ±{:.0} % (binary rules unchanged: p > 0.5, x̂ − {:.2}σ̂ > μ0). The paper reports about +5 % for the OG and +220 % for the EKF; here is what is measured. Panel: seed {first}.", join_u(&self.params.seeds), self.params.og.prior, self.params.ekf.mu0, c * 100.0, self.params.ekf.kappa),
             cases,
             findings,
             panel,
