@@ -202,7 +202,8 @@ mod tests {
             let e = bad.check().unwrap_err().to_string();
             assert!(e.contains(&format!("`{field}`")), "{e}");
         }
-        assert!((EkfParams::default().eta() - 0.97725).abs() < 1e-4);
+        // κ = Φ⁻¹(1 − 10⁻³): η = 0.999
+        assert!((EkfParams::default().eta() - 0.999).abs() < 1e-6);
         assert!(EkfVariant::parse("dense").is_ok() && EkfVariant::parse("x").is_err());
     }
 }
