@@ -16,6 +16,8 @@ use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
+pub use crate::export::LineChart;
+
 pub mod calibrate;
 pub mod check;
 pub mod experiments;
@@ -586,19 +588,6 @@ pub fn map_panel(
         root.present().map_err(|e| plot_err(path, e))?;
         Ok(())
     })
-}
-
-/// One chart of [`line_plots`]: named series of (x, y) points.
-#[derive(Debug, Clone)]
-pub struct LineChart {
-    /// Caption.
-    pub title: String,
-    /// x-axis label.
-    pub x_label: String,
-    /// y-axis label.
-    pub y_label: String,
-    /// (name, points) per series.
-    pub series: Vec<(String, Vec<(f64, f64)>)>,
 }
 
 /// Line charts side by side (one PNG, 480 × 380 pixels per chart), points marked, legend

@@ -539,6 +539,7 @@ fn two_trajectories_fused_beat_either_alone() {
     let region = pradar::mapping::job::Regions {
         observable: observable_region(&[&loaded[0].model, &loaded[1].model], &loaded[0].layout),
         building: pradar::mapping::job::building_region(&loaded[0].layout, &reference),
+        objects: None,
     };
     let sc = score(&f, &reference, &region);
     assert!((sc.observable.psi - fused).abs() < 1e-12);

@@ -277,6 +277,15 @@ pub struct MapArgs {
     /// EKF prior standard deviation σ0, m.
     #[arg(long, default_value_t = 0.1, value_parser = ranges::positive, allow_negative_numbers = true)]
     pub sigma0: f64,
+    /// EKF binary rule: occupied when x̂ − κ·σ̂ > μ0.
+    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().kappa, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    pub kappa: f64,
+    /// EKF free-space evidence (low-energy bins in front of an echo observed as RRCS ≈ 0).
+    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().free_space, action = clap::ArgAction::Set)]
+    pub ekf_free_space: bool,
+    /// EKF negative means: reflected (true) or clamped to the lowest mean (false).
+    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().reflect, action = clap::ArgAction::Set)]
+    pub ekf_reflect: bool,
     /// Pose noise given to the mapper: position standard deviation per axis, m.
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_m: f64,

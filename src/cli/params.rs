@@ -142,6 +142,9 @@ impl MapArgs {
                     variant: self.ekf,
                     mu0: self.mu0,
                     sigma0: self.sigma0,
+                    kappa: self.kappa,
+                    free_space: self.ekf_free_space,
+                    reflect: self.ekf_reflect,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {

@@ -1,4 +1,4 @@
-//! One table model, rendered to Markdown ([`markdown`]), CSV ([`csv`]) and HTML
+//! One table model (and [`LineChart`], curves as data), rendered to Markdown ([`markdown`]), CSV ([`csv`]) and HTML
 //! (`report::html_table`, all HTML lives in the report module), after sharkdp/hyperfine's
 //! `src/export/`.
 //!
@@ -19,6 +19,20 @@
 
 pub mod csv;
 pub mod markdown;
+
+/// Curves as data (the report draws them: `report::line_plots`): named series of (x, y)
+/// points under a title and axis labels.
+#[derive(Debug, Clone)]
+pub struct LineChart {
+    /// Caption.
+    pub title: String,
+    /// x-axis label.
+    pub x_label: String,
+    /// y-axis label.
+    pub y_label: String,
+    /// (name, points) per series.
+    pub series: Vec<(String, Vec<(f64, f64)>)>,
+}
 
 /// One cell of a [`Table`].
 #[derive(Debug, Clone, PartialEq)]

@@ -17,6 +17,25 @@
 //!
 //! The caller maps the reference's `Outside` cells to free for the whole-map figures and
 //! builds the region masks ([`crate::mapping::job`] states the observable region).
+//!
+//! **Three-class reference** ([`evaluate_three_class`], a simulated scene: DESIGN §2). The
+//! classes: *structure* S = the layout's wall cells (the reference's occupied cells);
+//! *objects*, each a set of cells (the truth's clutter clusters and targets, never read by a
+//! mapper), whose *zone* Z is their cells and the 8-neighbours of them that are not
+//! structure; *free* F = every other cell, split into the room's (reference free) and those
+//! beyond the walls (reference outside). M is the map's occupied cells; every count is
+//! restricted to the region R. Then:
+//! * walls found within one cell = |{s ∈ S : M ∩ N₈(s) ≠ ∅}| / |S|;
+//! * precision within one cell = |{m ∈ M : (S ∪ O) ∩ N₈(m) ≠ ∅}| / |M| (O the object cells:
+//!   an occupied cell next to a wall or an object is right);
+//! * F1 within one cell = their harmonic mean;
+//! * wrong cells = |S \ M| + |M ∩ F| (exact, as the layout-only rate; the zone Z is an
+//!   ignore region: neither an occupied nor a free cell there counts);
+//! * free cells marked occupied = |M ∩ F_room| / |F_room|; beyond the walls marked occupied
+//!   = |M ∩ F_beyond| / |F_beyond|;
+//! * objects found = objects with a cell of M in their zone, of the objects with a cell in R.
+//!
+//! The all-free map (M = ∅) has wrong cells |S|, and 0 for the rest.
 
 use serde::Serialize;
 
@@ -210,6 +229,154 @@ pub fn evaluate(
     }
 }
 
+/// Figures of one map on one region against the three-class reference (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ThreeClassMetrics {
+    /// Structure cells found within one cell (recall against the walls).
+    pub walls_found_1: f64,
+    /// Map occupied cells within one cell of structure or an object.
+    pub precision_1: f64,
+    /// F1 of the two.
+    pub f1_1: f64,
+    /// Wrong cells: structure not marked plus free (non-zone) cells marked occupied.
+    pub wrong: usize,
+    /// Cells scored for `wrong` (the region less the object zone).
+    pub scored_cells: usize,
+    /// Fraction of the room's free cells (outside every object zone) marked occupied.
+    pub free_marked_occupied: f64,
+    /// Room free cells.
+    pub free_cells: usize,
+    /// Fraction of the cells beyond the walls (outside every object zone) marked occupied.
+    pub beyond_marked_occupied: f64,
+    /// Cells beyond the walls.
+    pub beyond_cells: usize,
+    /// Objects with a map occupied cell in their zone.
+    pub objects_found: usize,
+    /// Objects with a cell in the region.
+    pub objects: usize,
+    /// Structure cells.
+    pub structure_cells: usize,
+    /// Map occupied cells.
+    pub map_occupied: usize,
+}
+
+/// Figures of `map` against the three-class reference on `region`: `reference` the layout's
+/// classes (occupied = structure), `objects` each object's cells (module docs).
+pub fn evaluate_three_class(
+    map: &[bool],
+    reference: &[crate::campaign::layout::CellClass],
+    objects: &[Vec<usize>],
+    region: &[bool],
+    rows: usize,
+    cols: usize,
+) -> ThreeClassMetrics {
+    use crate::campaign::layout::CellClass;
+    let n = map.len();
+    let structure: Vec<bool> = reference
+        .iter()
+        .map(|c| *c == CellClass::Occupied)
+        .collect();
+    let mut object = vec![false; n];
+    for o in objects {
+        for &c in o {
+            object[c] = true;
+        }
+    }
+    let zone_of = |cells: &[usize]| -> Vec<usize> {
+        let mut z = Vec::new();
+        for &c in cells {
+            let (r, k) = ((c / cols) as isize, (c % cols) as isize);
+            for dr in -1..=1 {
+                for dc in -1..=1 {
+                    let (rr, cc) = (r + dr, k + dc);
+                    if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
+                        let j = rr as usize * cols + cc as usize;
+                        if !structure[j] && !z.contains(&j) {
+                            z.push(j);
+                        }
+                    }
+                }
+            }
+        }
+        z
+    };
+    let zones: Vec<Vec<usize>> = objects.iter().map(|o| zone_of(o)).collect();
+    let mut zone = vec![false; n];
+    for z in &zones {
+        for &c in z {
+            zone[c] = true;
+        }
+    }
+    let target: Vec<bool> = structure
+        .iter()
+        .zip(&object)
+        .map(|(&s, &o)| s || o)
+        .collect();
+    let (mut s_n, mut s_found, mut m_n, mut m_hit) = (0usize, 0usize, 0usize, 0usize);
+    let (mut wrong, mut scored) = (0usize, 0usize);
+    let (mut free_n, mut free_occ, mut beyond_n, mut beyond_occ) = (0usize, 0usize, 0usize, 0usize);
+    for i in 0..n {
+        if !region[i] {
+            continue;
+        }
+        if map[i] {
+            m_n += 1;
+            if any_in_3x3(&target, rows, cols, i) {
+                m_hit += 1;
+            }
+        }
+        if structure[i] {
+            s_n += 1;
+            scored += 1;
+            if any_in_3x3(map, rows, cols, i) {
+                s_found += 1;
+            }
+            if !map[i] {
+                wrong += 1;
+            }
+            continue;
+        }
+        if zone[i] {
+            continue;
+        }
+        scored += 1;
+        wrong += map[i] as usize;
+        if reference[i] == CellClass::Outside {
+            beyond_n += 1;
+            beyond_occ += map[i] as usize;
+        } else {
+            free_n += 1;
+            free_occ += map[i] as usize;
+        }
+    }
+    let (mut found, mut present) = (0usize, 0usize);
+    for (o, z) in objects.iter().zip(&zones) {
+        if o.iter().any(|&c| region[c]) {
+            present += 1;
+            if z.iter().any(|&c| map[c]) {
+                found += 1;
+            }
+        }
+    }
+    let ratio = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { 0.0 };
+    let (p, r) = (ratio(m_hit, m_n), ratio(s_found, s_n));
+    ThreeClassMetrics {
+        walls_found_1: r,
+        precision_1: p,
+        f1_1: f1(p, r),
+        wrong,
+        scored_cells: scored,
+        free_marked_occupied: ratio(free_occ, free_n),
+        free_cells: free_n,
+        beyond_marked_occupied: ratio(beyond_occ, beyond_n),
+        beyond_cells: beyond_n,
+        objects_found: found,
+        objects: present,
+        structure_cells: s_n,
+        map_occupied: m_n,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -227,5 +394,62 @@ mod tests {
                 assert_eq!(d[r * cols + c] as usize, want);
             }
         }
+    }
+
+    /// A 6 × 8 grid by hand: walls on row 0 (8 cells), one object at (3, 4), rows 4–5
+    /// beyond the walls. The map marks 5 wall cells, one cell beside the object, one room
+    /// cell far from both, one cell beyond the walls and the object's zone corner.
+    #[test]
+    fn three_class_counts_a_hand_made_grid() {
+        use crate::campaign::layout::CellClass;
+        let (rows, cols) = (6, 8);
+        let mut reference = vec![CellClass::Free; rows * cols];
+        for c in 0..cols {
+            reference[c] = CellClass::Occupied;
+            reference[4 * cols + c] = CellClass::Outside;
+            reference[5 * cols + c] = CellClass::Outside;
+        }
+        let at = |r: usize, c: usize| r * cols + c;
+        let objects = vec![vec![at(3, 4)]];
+        let mut map = vec![false; rows * cols];
+        for c in 0..5 {
+            map[at(0, c)] = true; // walls 0..4 marked: found within one cell 0..5 (6 of 8)
+        }
+        map[at(3, 5)] = true; // beside the object: in its zone, right, not wrong
+        map[at(2, 1)] = true; // room cell, 2 rows from the wall: wrong
+        map[at(5, 7)] = true; // beyond the walls: wrong
+        let all = vec![true; rows * cols];
+        let m = evaluate_three_class(&map, &reference, &objects, &all, rows, cols);
+        assert_eq!(m.structure_cells, 8);
+        assert!((m.walls_found_1 - 6.0 / 8.0).abs() < 1e-12);
+        assert_eq!(m.map_occupied, 8);
+        // right: the 5 wall cells and the cell beside the object
+        assert!((m.precision_1 - 6.0 / 8.0).abs() < 1e-12);
+        assert!((m.f1_1 - 0.75).abs() < 1e-12);
+        // wrong: 3 walls missed + the room cell + the beyond cell; the zone (9 cells, row 4
+        // beyond the walls included) is not scored
+        assert_eq!(m.wrong, 5);
+        assert_eq!(m.scored_cells, 48 - 9);
+        // room free cells: rows 1–3 (24) less the zone's 6 there
+        assert_eq!(m.free_cells, 18);
+        assert!((m.free_marked_occupied - 1.0 / 18.0).abs() < 1e-12);
+        // beyond: rows 4–5 (16) less the zone's 3 on row 4
+        assert_eq!(m.beyond_cells, 13);
+        assert!((m.beyond_marked_occupied - 1.0 / 13.0).abs() < 1e-12);
+        assert_eq!((m.objects_found, m.objects), (1, 1));
+        // the all-free map: every wall wrong, nothing else
+        let free = vec![false; rows * cols];
+        let f = evaluate_three_class(&free, &reference, &objects, &all, rows, cols);
+        assert_eq!((f.wrong, f.objects_found, f.map_occupied), (8, 0, 0));
+        assert_eq!(f.f1_1, 0.0);
+        // a region without the object's cell: the object is not counted
+        let mut top = vec![false; rows * cols];
+        for c in 0..cols {
+            top[at(0, c)] = true;
+            top[at(1, c)] = true;
+        }
+        let t = evaluate_three_class(&map, &reference, &objects, &top, rows, cols);
+        assert_eq!((t.objects, t.objects_found), (0, 0));
+        assert_eq!(t.wrong, 3);
     }
 }

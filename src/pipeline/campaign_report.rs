@@ -674,7 +674,8 @@ fn run_experiments(
         let mut sections = Vec::new();
         for e in experiment::Experiment::ALL {
             let r = lab.run(e)?;
-            sections.push(experiment::Lab::section(&r, "experiments/"));
+            report::experiments::write_figures(&r, &dir)?;
+            sections.push(report::experiments::section(&r, "experiments/"));
         }
         Ok(sections)
     };

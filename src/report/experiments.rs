@@ -1,4 +1,6 @@
-//! HTML of the mapping experiments ([`crate::pipeline::experiment`]): each experiment's
+//! The mapping experiments' images and HTML, drawn from their results
+//! ([`crate::pipeline::experiment::ExperimentResult`]; the experiments never call this
+//! module): each experiment's panel `NAME/NAME.png` and curves `NAME/NAME_plot.png`, its
 //! report section (caption, panel, plots, findings, the "every map" table, file links) and
 //! the `pradar experiment` index page.
 //!
@@ -6,29 +8,32 @@
 //! relative to the page, replaced by [`section`]: the same section serves
 //! `DIR/index.html` (`""`) and the `reproduce` report (`"experiments/"`).
 
-use super::{html_escape, html_table, kv_table, write_index as write_page, Section};
+use super::{html_escape, html_table, kv_table, write_index as write_page, MapTile, Section};
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::pipeline::experiment::lab::score_columns;
-use crate::pipeline::experiment::{CaseFigures, ExperimentResult};
+use crate::pipeline::experiment::{CaseFigures, ExperimentResult, Figure};
 use std::path::Path;
 
-/// The section body of one experiment: caption, panel, `extra` (plots; may use `{P}`),
-/// findings, the "every map" table and links to the experiment's files.
-pub fn result_html(
-    name: &str,
-    caption: &str,
-    extra: &str,
-    findings: &[(String, String)],
-    cases: &[CaseFigures],
-) -> String {
+/// The section body of one experiment: caption, panel, figures (may use `{P}`), findings,
+/// the "every map" table and links to the experiment's files.
+pub fn result_html(r: &ExperimentResult) -> String {
+    let name = r.name.as_str();
+    let extra: String = r
+        .figures
+        .iter()
+        .map(|f| match f {
+            Figure::EkfMeans(keys) => ekf_mean_figures(keys),
+            Figure::Plot(alt) => plot_img(name, alt),
+        })
+        .collect();
     let mut html = format!(
         "<p>{}</p>\n<a href=\"{{P}}{name}/{name}.png\"><img src=\"{{P}}{name}/{name}.png\" alt=\"{name}\" style=\"max-width:1280px\"></a>\n{extra}",
-        html_escape(caption)
+        html_escape(&r.caption)
     );
-    html.push_str(&kv_table(findings));
+    html.push_str(&kv_table(&r.findings));
     html.push_str("<details><summary>every map</summary>\n");
-    html.push_str(&html_table(&every_map_table(cases)));
+    html.push_str(&html_table(&every_map_table(&r.cases)));
     html.push_str(&format!(
         "</details>\n<p>Files: <a href=\"{{P}}{name}/{name}.md\">{name}.md</a>, <a href=\"{{P}}{name}/{name}.csv\">{name}.csv</a>, <a href=\"{{P}}{name}/{name}.json\">{name}.json</a>.</p>\n"
     ));
@@ -53,7 +58,7 @@ pub fn every_map_table(cases: &[CaseFigures]) -> Table {
 }
 
 /// fig5's figures of the EKF mean RRCS of the maps `keys`.
-pub fn ekf_mean_figures(keys: &[&str]) -> String {
+pub fn ekf_mean_figures(keys: &[String]) -> String {
     keys.iter()
         .map(|k| format!(
             "<figure><img src=\"{{P}}maps/{k}/ekf_mean.png\" alt=\"{k}\"><figcaption>mean RRCS, {k}</figcaption></figure>\n"
@@ -64,6 +69,40 @@ pub fn ekf_mean_figures(keys: &[&str]) -> String {
 /// The experiment's curve plot `{P}<name>/<name>_plot.png`.
 pub fn plot_img(name: &str, alt: &str) -> String {
     format!("<img src=\"{{P}}{name}/{name}_plot.png\" alt=\"{alt}\" style=\"max-width:960px\">\n")
+}
+
+/// Draw a result's images into the experiments folder `out`: the panel `NAME/NAME.png`
+/// (each map coloured against the reference by [`super::scored_colour`]) and, when it has
+/// curves, `NAME/NAME_plot.png`.
+pub fn write_figures(r: &ExperimentResult, out: &Path) -> Result<()> {
+    let name = r.name.as_str();
+    let dir = out.join(name);
+    let p = &r.panel;
+    let tiles: Vec<MapTile> = p
+        .tiles
+        .iter()
+        .map(|t| MapTile {
+            title: t.title.clone(),
+            cells: t
+                .occupied
+                .iter()
+                .zip(&p.reference.cells)
+                .map(|(&b, &c)| super::scored_colour(b, c))
+                .collect(),
+        })
+        .collect();
+    let s = p.reference.spec;
+    super::map_panel(
+        &dir.join(format!("{name}.png")),
+        s.rows,
+        s.cols,
+        &tiles,
+        p.columns,
+    )?;
+    if !r.charts.is_empty() {
+        super::line_plots(&dir.join(format!("{name}_plot.png")), &r.charts)?;
+    }
+    Ok(())
 }
 
 /// The report section of a result, links prefixed by `prefix` (the experiments folder
@@ -77,7 +116,7 @@ pub fn section(r: &ExperimentResult, prefix: &str) -> Section {
     };
     Section {
         title: title.into(),
-        html: r.html.replace("{P}", prefix),
+        html: result_html(r).replace("{P}", prefix),
     }
 }
 
@@ -93,4 +132,17 @@ pub fn write_index(
     }];
     sections.extend(results.iter().map(|r| section(r, "")));
     write_page(path, "pradar experiments", &sections)
+}
+
+/// `pradar experiment`'s images and page in `out`: every result's [`write_figures`], then
+/// [`write_index`] as `out/index.html`.
+pub fn write_all(
+    out: &Path,
+    inputs: &[(String, String)],
+    results: &[ExperimentResult],
+) -> Result<()> {
+    for r in results {
+        write_figures(r, out)?;
+    }
+    write_index(&out.join("index.html"), inputs, results)
 }

@@ -90,10 +90,36 @@
 //! order; the dense products split P in fixed blocks, so maps are identical for any number
 //! of threads.
 //!
+//! Free-space evidence (issue 31, `free_space`, on by default). The energy observation
+//! h = Σ c̃ x² + N0·TW says little about a cell near x = 0 (its Jacobian 2 c̃ x vanishes
+//! there), so a bin with only noise barely lowers the cells in front of an echo, while the
+//! echo's bin raises every cell of its range ring in the main lobe: the ring. The bins
+//! before the occluder that hold no echo are read as what they are, free space: in each
+//! such bin (below the detector's threshold T, no detection within the kernel half-width J,
+//! k + J before the occluder) each cell whose largest coefficient in the observation is in
+//! that bin and within −3 dB of the bin's largest (the main lobe at that range) is observed
+//! directly, z = x_i = 0 with variance x_max²/3, x_max² = (T − N0·TW)/c̃_{k,i}: a cell of
+//! RRCS x_max would by itself have lifted the bin to the threshold, and a belief uniform on
+//! [−x_max, x_max] has that variance (the sign symmetry below). The pseudo-measurement comes
+//! from the same bins as the energy rows, which stay in the update, so it is not independent
+//! evidence: it is the EKF's counterpart of the occupancy grid's free-space update. Measured
+//! (`docs/mapping.md`, issue 31): it cuts the room cells marked occupied on the corridor at
+//! N = 100 from 18.3 % to 10.1 %.
+//!
 //! Binary map: occupied when x̂_i − κ·σ̂_i > μ0 (the data raised the cell above the prior
-//! mean by κ posterior standard deviations; κ = 2 by default), i.e. p_i > η = Φ(κ) with
-//! p_i = Φ((x̂_i − μ0)/σ̂_i). The rule uses the prior and the posterior only, never the
-//! reference map; cells never illuminated stay at the prior and read as free.
+//! mean by κ posterior standard deviations), i.e. p_i > η = Φ(κ) with
+//! p_i = Φ((x̂_i − μ0)/σ̂_i). κ = Φ⁻¹(1 − 10⁻³) = 3.09 by default ([`params::KAPPA`]): the
+//! false-alarm rate per cell of the occupancy grid's detector (P_fa = 10⁻³), so both mappers
+//! call a cell occupied at the same rate under their own models (it was 2, a 2.3 % rate per
+//! cell, about 50 false cells in a 2,000-cell building). The rule uses the prior and the
+//! posterior only, never the reference map; cells never illuminated stay at the prior and
+//! read as free.
+//!
+//! Negative means are reflected (below), not clamped to zero: clamping (`reflect` = false,
+//! the projection onto x ≥ 0) was measured and not kept (with free-space evidence it raised
+//! the corridor's wrong building cells at N = 100 from 462 to 618, `docs/mapping.md`): a
+//! clamped mean sits where the Jacobian vanishes, so later rows cannot move it, while its
+//! variance stays that of the unconstrained estimate.
 //!
 //! Layout: [`params`] ([`EkfParams`] → [`EkfValid`]), [`observation`] (noise model, kernel,
 //! [`Observation`], [`Linearized`]), [`dense`] ([`DenseEkf`]) over [`linalg`], [`tiled`]
@@ -145,9 +171,10 @@ pub trait RrcsFilter: Send {
     fn covariance(&self, i: usize, j: usize) -> Option<f64>;
     /// One EKF update with an observation linearised at the current mean.
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()>;
-    /// Reflect negative means (x_i → −x_i, row/column i of P negated) and keep means
-    /// ≥ `x_min`; returns the cells reflected.
-    fn project_positive(&mut self, x_min: f64) -> usize;
+    /// With `reflect`, reflect negative means (x_i → −x_i, row/column i of P negated); then
+    /// keep means ≥ `x_min` (without `reflect` a negative mean is clamped: the projection
+    /// onto x ≥ 0); returns the cells reflected.
+    fn project_positive(&mut self, x_min: f64, reflect: bool) -> usize;
     /// Name (`dense`, `scalable`).
     fn name(&self) -> &'static str;
 }

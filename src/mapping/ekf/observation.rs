@@ -175,6 +175,28 @@ pub struct Linearized {
 }
 
 impl Linearized {
+    /// A direct measurement of the cells of `obs` (one entry per row): row j observes
+    /// z_j = x_{cell_j} + noise of variance `r[j]` (H = 1, linear, so the linearisation is
+    /// exact). The free-space evidence of [`crate::mapping::ekf`] (z = 0).
+    pub fn direct(obs: &Observation, x: &[f64], r: &[f64]) -> Linearized {
+        let mut l = Linearized {
+            h: Vec::with_capacity(obs.rows()),
+            nu: Vec::with_capacity(obs.rows()),
+            r: r.to_vec(),
+            hval: Vec::with_capacity(obs.rows()),
+            x0: Vec::with_capacity(obs.rows()),
+        };
+        for j in 0..obs.rows() {
+            debug_assert_eq!(obs.ptr[j + 1] - obs.ptr[j], 1);
+            let xi = x[obs.cell[obs.ptr[j]] as usize];
+            l.h.push(xi);
+            l.nu.push(obs.z[j] - xi);
+            l.hval.push(1.0);
+            l.x0.push(xi);
+        }
+        l
+    }
+
     /// Linearise `obs` at `x` with the noise model.
     pub fn new(obs: &Observation, x: &[f64], noise: &NoiseModel) -> Linearized {
         let n = obs.cell.len();

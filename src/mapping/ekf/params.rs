@@ -2,7 +2,7 @@
 //! switch ([`EkfVariant`]).
 //!
 //! Defaults (reasons in [`crate::mapping::ekf`]): μ0 = 0.01 m, σ0 = 0.1 m, ε = 0.5, kernel
-//! floor −30 dB, κ = 2, the scalable filter with 4 × 4 tiles, at most 20,000 cells for the
+//! floor −30 dB, κ = 3.09, free-space evidence on, negative means reflected, the scalable filter with 4 × 4 tiles, at most 20,000 cells for the
 //! dense filter. Derived: the binary threshold η = Φ(κ) on p = P(x > μ0) and the lowest
 //! mean kept by the positivity step, 1e-3·μ0.
 
@@ -52,8 +52,14 @@ pub struct EkfParams {
     pub model_error: f64,
     /// Window-kernel truncation, dB below its peak (−30).
     pub kernel_floor_db: f64,
-    /// Binary rule: occupied when x̂ − κ·σ̂ > μ0 (κ = 2).
+    /// Binary rule: occupied when x̂ − κ·σ̂ > μ0 (κ = 3.09 = Φ⁻¹(1 − 10⁻³)).
     pub kappa: f64,
+    /// Free-space evidence: the main-lobe cells of the low-energy bins in front of a beam's
+    /// occluder observed as RRCS ≈ 0 ([`crate::mapping::ekf`] module docs).
+    pub free_space: bool,
+    /// A cell whose mean went negative: reflected (x → −x, the model's sign symmetry) when
+    /// true, clamped to the lowest mean (projection onto x ≥ 0) when false.
+    pub reflect: bool,
     /// Implementation (scalable).
     pub variant: EkfVariant,
     /// Tile side of the scalable filter, cells (4).
@@ -65,6 +71,12 @@ pub struct EkfParams {
 /// EKF parameters that passed [`ParamGuard::check`].
 pub type EkfValid = Valid<EkfParams>;
 
+/// The default κ: Φ⁻¹(1 − 10⁻³), the Gaussian posterior's one-sided 10⁻³ quantile — a cell is
+/// called occupied at the false-alarm rate per cell of the occupancy grid's detector
+/// (`OgParams::pfa` = 10⁻³), so both mappers decide at the same rate and neither looks at
+/// the reference.
+pub const KAPPA: f64 = 3.090_232_306_167_813;
+
 impl Default for EkfParams {
     fn default() -> Self {
         EkfParams {
@@ -72,7 +84,9 @@ impl Default for EkfParams {
             sigma0: 0.1,
             model_error: 0.5,
             kernel_floor_db: -30.0,
-            kappa: 2.0,
+            kappa: KAPPA,
+            free_space: true,
+            reflect: true,
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,
@@ -188,7 +202,8 @@ mod tests {
             let e = bad.check().unwrap_err().to_string();
             assert!(e.contains(&format!("`{field}`")), "{e}");
         }
-        assert!((EkfParams::default().eta() - 0.97725).abs() < 1e-4);
+        // κ = Φ⁻¹(1 − 10⁻³): η = 0.999
+        assert!((EkfParams::default().eta() - 0.999).abs() < 1e-6);
         assert!(EkfVariant::parse("dense").is_ok() && EkfVariant::parse("x").is_err());
     }
 }

@@ -35,6 +35,8 @@ pub struct EkfStats {
     pub entries: u64,
     /// Means reflected by the positivity step.
     pub reflected: u64,
+    /// Free-space observations (cells observed as RRCS ≈ 0, summed over updates).
+    pub free_cells: u64,
     /// Detections whose rows were not observed: more than the guard beyond the occluder of
     /// their beam, or before it (the occluder's own rows are always kept).
     pub withheld: u64,
@@ -80,7 +82,9 @@ pub fn ekf_run(
     // the filter before pose p − 1 was applied (the state the observations are built from)
     // (the energies are loaded one pose at a time: a table read from its file is never
     // held whole)
-    let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<(Vec<Observation>, f64, u64)> {
+    // a pose's observations with their free-space evidence, build time, withheld rows
+    type Built = (Vec<(Observation, Option<FreeSpace>)>, f64, u64);
+    let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<Built> {
         let tb = Instant::now();
         let part = src.load(p, p + 1)?;
         let energy: &EnergyMatrix = &part;
@@ -93,7 +97,7 @@ pub fn ekf_run(
             let vis = s.occlusion.visibility(model, &geom, &echoes);
             (echoes, vis, s.occlusion.guard_bins())
         });
-        let obs: Vec<(Observation, u64)> = (0..model.directions())
+        let obs: Vec<(Observation, Option<FreeSpace>, u64)> = (0..model.directions())
             .into_par_iter()
             .map_init(
                 || vec![0.0; n],
@@ -104,7 +108,7 @@ pub fn ekf_run(
                             ptr: vec![0],
                             ..Default::default()
                         };
-                        return (none, 0);
+                        return (none, None, 0);
                     }
                     let prof = energy.profile(p, d);
                     let mut bins = prof.len().min(model.bins);
@@ -121,6 +125,21 @@ pub fn ekf_run(
                     };
                     let mut o =
                         Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch);
+                    let mut free = None;
+                    if let (Some((echoes, _, _)), Some(s)) = (&seen, sight) {
+                        if params.free_space {
+                            let first = echoes.occluder[d].unwrap_or(bins);
+                            let j = kernel.len().saturating_sub(1);
+                            free = free_space(
+                                &o,
+                                &echoes.det[d],
+                                first,
+                                j,
+                                s.detector.threshold,
+                                noise,
+                            );
+                        }
+                    }
                     if let Some((echoes, _, _)) = &seen {
                         // the rows around a detection before the occluder (leakage of a strong
                         // echo at another bearing, withheld by the OG too) are not observed:
@@ -139,13 +158,13 @@ pub fn ekf_run(
                             });
                         }
                     }
-                    (o, withheld)
+                    (o, free, withheld)
                 },
             )
             .collect();
-        let withheld = obs.iter().map(|o| o.1).sum();
+        let withheld = obs.iter().map(|o| o.2).sum();
         Ok((
-            obs.into_iter().map(|o| o.0).collect(),
+            obs.into_iter().map(|o| (o.0, o.1)).collect(),
             tb.elapsed().as_secs_f64(),
             withheld,
         ))
@@ -166,10 +185,16 @@ pub fn ekf_run(
         let occupied = if p + 1 < np { snapshot(&*filter) } else { None };
         let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
             let tu = Instant::now();
-            for o in &obs {
+            for (o, free) in &obs {
                 let lin = Linearized::new(o, filter.mean(), noise);
                 filter.update(o, &lin)?;
-                st.reflected += filter.project_positive(params.x_min()) as u64;
+                st.reflected += filter.project_positive(params.x_min(), params.reflect) as u64;
+                if let Some((f, r)) = free {
+                    let lin = Linearized::direct(f, filter.mean(), r);
+                    filter.update(f, &lin)?;
+                    st.reflected += filter.project_positive(params.x_min(), params.reflect) as u64;
+                    st.free_cells += f.rows() as u64;
+                }
                 st.updates += 1;
                 st.rows += o.rows() as u64;
                 st.entries += o.cell.len() as u64;
@@ -187,6 +212,70 @@ pub fn ekf_run(
     }
     st.seconds = t0.elapsed().as_secs_f64();
     Ok(st)
+}
+
+/// Free-space evidence: direct observations of cells (z = 0) and their variances.
+type FreeSpace = (Observation, Vec<f64>);
+
+/// The free-space evidence of one observation (module docs of [`super`]): for each row
+/// (bin k) that is below the detector's threshold, at least the kernel's half-width `j`
+/// bins from every detection and ending before the occluder's kernel reach (k + j <
+/// `first`), the cells whose largest coefficient in the observation is in that row and is
+/// within −3 dB of the row's largest (the main lobe at that range): each observed directly
+/// as RRCS 0 with variance x_max²/3, x_max² = (threshold − N0·TW)/c̃ the RRCS that alone
+/// would lift the bin to the threshold (a uniform belief on [−x_max, x_max]). `None` when no
+/// cell qualifies.
+fn free_space(
+    o: &Observation,
+    det: &[bool],
+    first: usize,
+    j: usize,
+    threshold: f64,
+    noise: &NoiseModel,
+) -> Option<FreeSpace> {
+    let excess = threshold - noise.mean();
+    if excess.is_nan() || excess <= 0.0 {
+        return None;
+    }
+    // each cell's largest coefficient and its row
+    let mut best: std::collections::HashMap<u32, (f64, usize)> = Default::default();
+    let mut row_max = vec![0.0f64; o.rows()];
+    for (r, m) in row_max.iter_mut().enumerate() {
+        for e in o.ptr[r]..o.ptr[r + 1] {
+            let (c, v) = (o.cell[e], o.coef[e]);
+            *m = m.max(v);
+            let b = best.entry(c).or_insert((0.0, r));
+            if v > b.0 {
+                *b = (v, r);
+            }
+        }
+    }
+    let free_row: Vec<bool> = (0..o.rows())
+        .map(|r| {
+            let k = o.bin[r] as usize;
+            k + j < first
+                && o.z[r] < threshold
+                && (k.saturating_sub(j)..=(k + j).min(det.len().saturating_sub(1)))
+                    .all(|b| !det.get(b).copied().unwrap_or(false))
+        })
+        .collect();
+    let mut cells: Vec<(u32, f64)> = best
+        .into_iter()
+        .filter(|(_, (v, r))| free_row[*r] && *v >= 0.5 * row_max[*r] && *v > 0.0)
+        .map(|(c, (v, _))| (c, excess / v / 3.0))
+        .collect();
+    if cells.is_empty() {
+        return None;
+    }
+    cells.sort_by_key(|c| c.0);
+    let f = Observation {
+        bin: vec![0; cells.len()],
+        z: vec![0.0; cells.len()],
+        ptr: (0..=cells.len()).collect(),
+        cell: cells.iter().map(|c| c.0).collect(),
+        coef: vec![1.0; cells.len()],
+    };
+    Some((f, cells.into_iter().map(|c| c.1).collect()))
 }
 
 /// What the EKF can see (`map --method ekf` always gives it): the run's detector and its
@@ -285,4 +374,55 @@ pub fn mean_grey(x: f64, mu0: f64) -> u8 {
 /// Grey of a posterior standard deviation: black at σ0 (no information), white at 0.
 pub fn std_grey(s: f64, sigma0: f64) -> u8 {
     (254.0 * (1.0 - (s / sigma0).clamp(0.0, 1.0))).round() as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::ParamGuard;
+
+    /// Five rows (bins 10..=14) over three cells; threshold 1.0, noise mean 0.2 (excess
+    /// 0.8), kernel half-width 1, occluder at bin 14. Row 10: cells 0 (c̃ 0.4) and 1 (0.1);
+    /// row 11: cell 1 (0.3), cell 2 (0.2); row 12: cell 2 (0.5), energy above the threshold;
+    /// rows 13–14: cell 0 (0.01). Free rows: 10 only (11 is within one bin of the echo at 12,
+    /// 12 is above the threshold, 13 reaches the occluder). Cell 0's largest coefficient is
+    /// in row 10 and is the row's largest: observed, variance 0.8/0.4/3. Cell 1's largest is
+    /// in row 11 (not free); cell 2's in row 12: neither observed.
+    #[test]
+    fn free_space_observes_main_lobe_cells_of_quiet_bins_only() {
+        let o = Observation {
+            bin: vec![10, 11, 12, 13, 14],
+            z: vec![0.3, 0.4, 2.0, 0.2, 0.2],
+            ptr: vec![0, 2, 4, 5, 6, 7],
+            cell: vec![0, 1, 1, 2, 2, 0, 0],
+            coef: vec![0.4, 0.1, 0.3, 0.2, 0.5, 0.01, 0.01],
+        };
+        let mut det = vec![false; 20];
+        det[12] = true;
+        let noise = NoiseModel {
+            n0: 0.2,
+            tw: 1.0,
+            pulses: 1.0,
+            model_error: 0.5,
+        };
+        let (f, r) = free_space(&o, &det, 14, 1, 1.0, &noise).unwrap();
+        assert_eq!(f.cell, vec![0]);
+        assert_eq!(f.z, vec![0.0]);
+        assert!((r[0] - 0.8 / 0.4 / 3.0).abs() < 1e-12);
+        // the direct measurement pulls the cell's mean toward 0 by the Kalman gain
+        let params = EkfParams::default().check().unwrap();
+        let mut filter = super::super::DenseEkf::new(3, &params).unwrap();
+        let lin = Linearized::direct(&f, filter.mean(), &r);
+        filter.update(&f, &lin).unwrap();
+        let p0 = params.sigma0 * params.sigma0;
+        let want = params.mu0 - p0 / (p0 + r[0]) * params.mu0;
+        assert!(
+            (filter.mean()[0] - want).abs() < 1e-12,
+            "{}",
+            filter.mean()[0]
+        );
+        assert!((filter.variances()[0] - p0 * r[0] / (p0 + r[0])).abs() < 1e-12);
+        // a threshold at the noise mean gives no evidence
+        assert!(free_space(&o, &det, 14, 1, 0.2, &noise).is_none());
+    }
 }

@@ -198,7 +198,7 @@ impl RrcsFilter for TiledEkf {
         Ok(())
     }
 
-    fn project_positive(&mut self, x_min: f64) -> usize {
+    fn project_positive(&mut self, x_min: f64, reflect: bool) -> usize {
         // only the cells of tiles updated since the last call can violate the bounds
         let cells: Vec<u32> = match self.dirty.replace(Vec::new()) {
             None => (0..self.x.len() as u32).collect(),
@@ -214,7 +214,7 @@ impl RrcsFilter for TiledEkf {
         let mut flipped = 0;
         for i in cells {
             let i = i as usize;
-            if self.x[i] < 0.0 {
+            if reflect && self.x[i] < 0.0 {
                 self.x[i] = -self.x[i];
                 let t = self.cell_tile[i] as usize;
                 let k = self.tile_cells[t].len();

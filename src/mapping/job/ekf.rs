@@ -105,7 +105,7 @@ pub fn run_map_ekf(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) ->
 /// Load the runs, their observable region, window kernels and noise models.
 fn ekf_inputs(opts: &MapValid, params: &EkfValid) -> Result<EkfInputs> {
     let (loaded, reference) = load_runs(opts)?;
-    let region = runs_regions(&loaded, &reference);
+    let region = runs_regions(&loaded, &reference)?;
     let mut kernels = Vec::new();
     let mut noises = Vec::new();
     let mut occlusions = Vec::new();

@@ -55,13 +55,15 @@
 
 pub mod ekf;
 pub mod load;
+pub mod objects;
 pub mod score;
 
 pub use ekf::run_map_ekf;
 pub use load::{load_run, load_runs, min_bin, window_kernel, LoadedRun};
+pub use objects::{find_truth, load_objects, Objects};
 pub use score::{
     building_region, metrics_table, observable_region, runs_regions, score, score_binary,
-    ClassFigures, MetricsPair, Regions,
+    ClassFigures, MetricsPair, Regions, ThreeClassFigures,
 };
 
 use crate::campaign::layout::{CellClass, ReferenceMap};
@@ -301,7 +303,7 @@ pub fn run_map(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Res
 fn run_map_og(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<MapReport> {
     let (loaded, reference) = load_runs(opts)?;
     let (maps, stats) = og_maps(&loaded, &opts.og(), opts.method, progress)?;
-    let region = runs_regions(&loaded, &reference);
+    let region = runs_regions(&loaded, &reference)?;
     let fused = fuse(&maps)?;
     let metrics = score(&fused, &reference, &region);
     let mut runs = Vec::new();

@@ -18,12 +18,19 @@
 //! cells (inside the perimeter) and of its outside cells (beyond the walls) marked occupied,
 //! and the fraction of the reference's occupied cells in the observable region with a map
 //! occupied cell within one cell (8-neighbourhood).
+//!
+//! Three-class figures ([`ThreeClassFigures`], when the run has a truth: [`super::objects`]):
+//! the same three regions scored against structure, objects and free space
+//! ([`evaluate_three_class`], definitions in [`crate::mapping::metrics`]), each beside the
+//! all-free map's. A campaign without a truth has `three_class: null`.
 
+use super::objects::{find_truth, load_objects, Objects};
 use super::LoadedRun;
 use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
+use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::mapping::grid::ObservationModel;
-use crate::mapping::metrics::{evaluate, MapMetrics};
+use crate::mapping::metrics::{evaluate, evaluate_three_class, MapMetrics, ThreeClassMetrics};
 use crate::mapping::og::LogOddsMap;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -46,6 +53,29 @@ pub struct MetricsPair {
     pub whole_all_free: MapMetrics,
     /// Errors per reference class.
     pub classes: ClassFigures,
+    /// Figures against the three-class reference (structure, objects, free), when the run
+    /// has a truth.
+    pub three_class: Option<ThreeClassFigures>,
+}
+
+/// A map's and the all-free map's figures against the three-class reference on the three
+/// regions.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ThreeClassFigures {
+    /// Objects in the truth (on the grid).
+    pub objects: usize,
+    /// The map on the observable region.
+    pub observable: ThreeClassMetrics,
+    /// The all-free map on the observable region.
+    pub observable_all_free: ThreeClassMetrics,
+    /// The map on the building.
+    pub building: ThreeClassMetrics,
+    /// The all-free map on the building.
+    pub building_all_free: ThreeClassMetrics,
+    /// The map on the whole grid.
+    pub whole: ThreeClassMetrics,
+    /// The all-free map on the whole grid.
+    pub whole_all_free: ThreeClassMetrics,
 }
 
 /// A map's errors per reference class (see the module docs).
@@ -73,6 +103,8 @@ pub struct Regions {
     pub observable: Vec<bool>,
     /// Inside the perimeter or on a wall.
     pub building: Vec<bool>,
+    /// The truth's objects, for the three-class figures (`None`: layout classes only).
+    pub objects: Option<Objects>,
 }
 
 /// Score a log-odds map (binary at p > 0.5) against the reference.
@@ -103,7 +135,22 @@ pub fn score_binary(bin: &[bool], reference: &ReferenceMap, regions: &Regions) -
     };
     let (free_marked_occupied, free_cells) = marked(CellClass::Free);
     let (outside_marked_occupied, outside_cells) = marked(CellClass::Outside);
+    let three_class = regions.objects.as_ref().map(|o| {
+        let e = |m: &[bool], region: &[bool]| {
+            evaluate_three_class(m, &reference.cells, &o.cells, region, rows, cols)
+        };
+        ThreeClassFigures {
+            objects: o.cells.len(),
+            observable: e(bin, &regions.observable),
+            observable_all_free: e(&free, &regions.observable),
+            building: e(bin, &regions.building),
+            building_all_free: e(&free, &regions.building),
+            whole: e(bin, &all),
+            whole_all_free: e(&free, &all),
+        }
+    });
     MetricsPair {
+        three_class,
         observable,
         observable_all_free: evaluate(&free, &refo, &regions.observable, rows, cols),
         building: evaluate(bin, &refo, &regions.building, rows, cols),
@@ -172,8 +219,9 @@ pub fn observable_region(runs: &[&ObservationModel], layout: &Layout) -> Vec<boo
 }
 
 /// The regions of loaded runs, from the poses their data were recorded at and the first
-/// run's layout.
-pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Regions {
+/// run's layout, with the first run's truth objects when it has a truth
+/// ([`find_truth`]; an unreadable truth is an error).
+pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Regions> {
     let models: Vec<ObservationModel> = loaded
         .iter()
         .map(|l| {
@@ -184,16 +232,23 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Regions {
         .collect();
     let refs: Vec<&ObservationModel> = models.iter().collect();
     let layout = &loaded[0].layout;
-    Regions {
+    let objects = match find_truth(&loaded[0].campaign.path, &loaded[0].energy_path) {
+        Some(dir) => Some(load_objects(&dir, layout, reference.spec)?),
+        None => None,
+    };
+    Ok(Regions {
         observable: observable_region(&refs, layout),
         building: building_region(layout, reference),
-    }
+        objects,
+    })
 }
 
 /// The metrics table of the report: one row per map (name, its [`MetricsPair`], the link
 /// to its `metrics.json` or `None`): ψ, F1, F1 within one cell and the wrong-cell rate on
 /// the observable region, ψ and the wrong-cell rate on the building, the per-class errors,
-/// and ψ, F1 and the wrong-cell rate on the whole map.
+/// ψ, F1 and the wrong-cell rate on the whole map, and (with a truth) the three-class
+/// wrong cells on the building beside the all-free map's, F1 within one cell and free cells
+/// marked occupied on the building, and the objects found.
 pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
     let mut t = Table::new(vec![
         Column::new("map", "map"),
@@ -210,6 +265,16 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
         Column::new("F1 whole", "f1_whole"),
         Column::new("F1 (1 cell) whole", "f1_1_whole"),
         Column::new("wrong cells whole", "wrong_cell_rate_whole"),
+        Column::new(
+            "3-class wrong building (all-free)",
+            "three_class_wrong_building",
+        ),
+        Column::new("3-class F1 (1 cell) building", "three_class_f1_1_building"),
+        Column::new(
+            "3-class free marked occ. building",
+            "three_class_free_marked_building",
+        ),
+        Column::new("objects found", "objects_found"),
         Column::new("metrics", "metrics"),
     ]);
     for (name, m, link) in rows {
@@ -229,6 +294,25 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
             Cell::fixed(w.f1, 3),
             Cell::fixed(w.f1_1, 3),
             Cell::fixed(w.wrong_cell_rate, 4),
+            match &m.three_class {
+                Some(t) => Cell::num(
+                    t.building.wrong as f64,
+                    format!("{} ({})", t.building.wrong, t.building_all_free.wrong),
+                ),
+                None => Cell::missing("—"),
+            },
+            match &m.three_class {
+                Some(t) => Cell::fixed(t.building.f1_1, 3),
+                None => Cell::missing("—"),
+            },
+            match &m.three_class {
+                Some(t) => Cell::fixed(t.building.free_marked_occupied, 3),
+                None => Cell::missing("—"),
+            },
+            match &m.three_class {
+                Some(t) => Cell::text(format!("{} of {}", t.whole.objects_found, t.whole.objects)),
+                None => Cell::missing("—"),
+            },
             match link {
                 Some(href) => Cell::Link {
                     text: "metrics.json".into(),
@@ -258,6 +342,12 @@ impl MetricsPair {
                 walls_found_1: 0.0,
                 ..self.classes
             },
+            three_class: self.three_class.map(|t| ThreeClassFigures {
+                observable: t.observable_all_free,
+                building: t.building_all_free,
+                whole: t.whole_all_free,
+                ..t
+            }),
         }
     }
 }

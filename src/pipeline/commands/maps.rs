@@ -112,9 +112,10 @@ pub fn select_experiments(name: &str) -> Result<Vec<Experiment>> {
 pub fn experiments(cmd: &Experiments, progress: Progress) -> Result<ExperimentsSummary> {
     let which = select_experiments(&cmd.name)?;
     let params = cmd.params.check()?;
-    let results = run_experiments(&which, &cmd.inputs, &params, &cmd.out, progress)?;
+    let run = run_experiments(&which, &cmd.inputs, &params, &cmd.out, progress)?;
+    crate::report::experiments::write_all(&cmd.out, &run.inputs, &run.results)?;
     Ok(ExperimentsSummary {
-        results,
+        results: run.results,
         index: cmd.out.join("index.html"),
     })
 }

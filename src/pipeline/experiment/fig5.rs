@@ -1,10 +1,9 @@
 //! fig5: EKF maps at the campaign's array from its sweeps (simulated or measured) and from model data
 //! (every seed), side by side with the reference.
 
-use super::lab::{join, mean, CaseFigures, DataSource, Lab};
+use super::lab::{join, mean, result, CaseFigures, DataSource, Figure, Lab};
 use super::ExperimentResult;
 use crate::error::Result;
-use crate::report;
 
 impl Lab<'_> {
     pub(super) fn fig5(&mut self) -> Result<ExperimentResult> {
@@ -28,7 +27,7 @@ impl Lab<'_> {
                 &done[1].1,
             ),
         ];
-        self.panel("fig5", &tiles, 3)?;
+        let panel = self.panel(tiles, 3);
         let model_psi: Vec<f64> = done[1..].iter().map(|d| d.0.psi_whole).collect();
         let findings = vec![
             (
@@ -45,14 +44,15 @@ impl Lab<'_> {
             ),
         ];
         let cases: Vec<CaseFigures> = done.into_iter().map(|d| d.0).collect();
-        let keys: Vec<&str> = cases.iter().take(2).map(|c| c.key.as_str()).collect();
-        let extra = report::experiments::ekf_mean_figures(&keys);
-        Ok(self.result(
+        let keys: Vec<String> = cases.iter().take(2).map(|c| c.key.clone()).collect();
+        Ok(result(
             "fig5",
             &format!("EKF maps ({n} elements, the campaign's array) from the {} and from model data (synth with the model file), 0.1 m cells. Colours: black occupied in both, red false occupied, blue missed occupied, white free, grey outside (free in the map).", self.sweeps_word),
             cases,
             findings,
-            &extra,
+            panel,
+            Vec::new(),
+            vec![Figure::EkfMeans(keys)],
         ))
     }
 }

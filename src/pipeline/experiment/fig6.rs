@@ -4,7 +4,7 @@
 //! The paper's statement "N = 16 has more wrong cells than N = 100" is checked per mapper
 //! and seed, on the interior and on the whole map; the means over seeds are listed beside.
 
-use super::lab::{join_u, mean, CaseFigures, DataSource, Lab, Mapped};
+use super::lab::{join_u, mean, result, CaseFigures, DataSource, Lab, Mapped, Panel};
 use super::ExperimentResult;
 use crate::error::Result;
 
@@ -15,7 +15,7 @@ impl Lab<'_> {
         let sizes = self.params.compare_elements.clone();
         let (cases, sweeps_note) = self.fig6_cases(&sizes);
         let done = self.map_all("fig6", &cases)?;
-        self.fig6_panel(&done, &sizes)?;
+        let panel = self.fig6_panel(&done, &sizes);
         let cases: Vec<CaseFigures> = done.into_iter().map(|d| d.0).collect();
         let (small, large) = (sizes[0], sizes[1]);
         let mut findings = Vec::new();
@@ -30,12 +30,14 @@ impl Lab<'_> {
         }
         findings.extend(mean_findings(&cases, &sizes));
         let first = self.params.seeds[0];
-        Ok(self.result(
+        Ok(result(
             "fig6",
             &format!("OG (side-lobe aware) vs EKF on model data at N = {small} and N = {large}, seeds {}; the panel shows seed {first} (colours as fig5). Wrong cells and ψ on the interior (the reference's known cells) and on the whole map (the same cells for both N in each). The same comparison on the campaign's sweeps simulated at both N is listed beside it.", join_u(&self.params.seeds)),
             cases,
             findings,
-            "",
+            panel,
+            Vec::new(),
+            Vec::new(),
         ))
     }
 
@@ -68,7 +70,7 @@ impl Lab<'_> {
 
     /// The panel: per data source (first seed, sweeps) and size, the reference then OG and
     /// EKF, titled with the interior / whole wrong cells.
-    fn fig6_panel(&self, done: &[Mapped], sizes: &[usize]) -> Result<()> {
+    fn fig6_panel(&self, done: &[Mapped], sizes: &[usize]) -> Panel {
         let first = self.params.seeds[0];
         let mut tiles = Vec::new();
         for src in [DataSource::Model(first), DataSource::Sweeps] {
@@ -104,7 +106,7 @@ impl Lab<'_> {
                 }
             }
         }
-        self.panel("fig6", &tiles, 3)
+        self.panel(tiles, 3)
     }
 
     /// Per mapper on model data: in how many seeds N = small has more wrong cells than

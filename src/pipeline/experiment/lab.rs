@@ -1,7 +1,10 @@
 //! What the experiments share: the cases ([`Case`], one map each), their scoring
-//! ([`CaseFigures`]), the result of one experiment ([`ExperimentResult`]) with its case
+//! ([`CaseFigures`]), the result of one experiment ([`ExperimentResult`]: figures, findings,
+//! and what its page shows — caption, [`Panel`], curves, [`Figure`]s — as data) with its case
 //! table, and the [`Lab`] that makes model data and sweeps, maps every case once per
-//! process and writes each experiment's files.
+//! process and writes each experiment's data files (`NAME.md|.csv|.json`). The images and
+//! the HTML are drawn from a result by [`crate::report::experiments`]; nothing here calls
+//! the report.
 //!
 //! Scoring: ψ, F1 and the wrong-cell count of a map on three regions (module docs of
 //! [`super`]): the whole map and the observable region come from the map's own metrics
@@ -21,12 +24,12 @@ use crate::campaign::modelfile::ModelConfig;
 use crate::campaign::simulate::simulate;
 use crate::energy;
 use crate::error::{Error, Result};
+use crate::export::LineChart;
 use crate::export::{Cell, Column, Table};
 use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
-use crate::report::{self, MapTile, Section};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -122,6 +125,9 @@ pub struct CaseFigures {
     pub all_free_wrong_interior: usize,
     /// The map's errors per reference class.
     pub classes: crate::mapping::job::ClassFigures,
+    /// The map against the three-class reference (structure, the data's truth objects,
+    /// free), when the data have a truth (simulated sweeps, model data).
+    pub three_class: Option<crate::mapping::job::ThreeClassFigures>,
 }
 
 fn count(rate: f64, cells: usize) -> usize {
@@ -152,6 +158,7 @@ impl CaseFigures {
             all_free_wrong_whole: count(m.whole_all_free.wrong_cell_rate, m.whole_all_free.cells),
             all_free_wrong_interior: count(m.building_all_free.wrong_cell_rate, i.cells),
             classes: m.classes,
+            three_class: m.three_class,
         }
     }
 }
@@ -165,10 +172,48 @@ pub struct ExperimentResult {
     pub cases: Vec<CaseFigures>,
     /// Derived statements (e.g. fig6's N = 16 vs N = 100 check, relative ψ changes).
     pub findings: Vec<(String, String)>,
-    /// Report section (links relative to the experiments folder's parent, see
-    /// [`Lab::section`]).
+    /// What the experiment shows, in one paragraph (the report's caption).
     #[serde(skip)]
-    pub html: String,
+    pub caption: String,
+    /// The maps shown side by side (`NAME.png`, drawn by the report).
+    #[serde(skip)]
+    pub panel: Panel,
+    /// Curves (`NAME_plot.png` when not empty, drawn by the report).
+    #[serde(skip)]
+    pub charts: Vec<LineChart>,
+    /// Other figures the report shows.
+    #[serde(skip)]
+    pub figures: Vec<Figure>,
+}
+
+/// One map of an experiment's panel: its title and its binary map (row-major, row 0 = lowest
+/// y, as the map files).
+#[derive(Debug, Clone)]
+pub struct PanelTile {
+    /// Title drawn above the map.
+    pub title: String,
+    /// Occupied cells.
+    pub occupied: Vec<bool>,
+}
+
+/// The maps an experiment shows side by side, each to be scored against `reference`.
+#[derive(Debug, Clone)]
+pub struct Panel {
+    /// The reference map the tiles are coloured against.
+    pub reference: ReferenceMap,
+    /// The maps, in reading order.
+    pub tiles: Vec<PanelTile>,
+    /// Tiles per row.
+    pub columns: usize,
+}
+
+/// A figure of a result beside its panel and table.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Figure {
+    /// The EKF mean RRCS images (`maps/<key>/ekf_mean.png`) of these maps.
+    EkfMeans(Vec<String>),
+    /// The experiment's curve plot (`NAME/NAME_plot.png`), with its alternative text.
+    Plot(String),
 }
 
 /// A mapped case: its figures and its binary map (for the panels).
@@ -367,20 +412,16 @@ impl<'a> Lab<'a> {
             .collect())
     }
 
-    /// A panel tile: the binary map scored against the reference.
-    pub(super) fn tile(&self, title: String, binary: &[bool]) -> MapTile {
-        MapTile {
+    /// A panel tile: the binary map (scored against the reference when drawn).
+    pub(super) fn tile(&self, title: String, binary: &[bool]) -> PanelTile {
+        PanelTile {
             title,
-            cells: binary
-                .iter()
-                .zip(&self.reference.cells)
-                .map(|(&b, &r)| report::scored_colour(b, r))
-                .collect(),
+            occupied: binary.to_vec(),
         }
     }
 
     /// The reference's own tile.
-    pub(super) fn reference_tile(&self) -> MapTile {
+    pub(super) fn reference_tile(&self) -> PanelTile {
         let occupied = self
             .reference
             .cells
@@ -390,16 +431,13 @@ impl<'a> Lab<'a> {
         self.tile("reference".into(), &b)
     }
 
-    /// Write the experiment's panel `out/<name>/<name>.png`.
-    pub(super) fn panel(&self, name: &str, tiles: &[MapTile], columns: usize) -> Result<()> {
-        let s = self.reference.spec;
-        report::map_panel(
-            &self.out.join(name).join(format!("{name}.png")),
-            s.rows,
-            s.cols,
+    /// The experiment's panel: `tiles`, `columns` per row, against the reference.
+    pub(super) fn panel(&self, tiles: Vec<PanelTile>, columns: usize) -> Panel {
+        Panel {
+            reference: self.reference.clone(),
             tiles,
             columns,
-        )
+        }
     }
 
     /// Run one experiment: map its cases, write its files, return its figures.
@@ -431,30 +469,6 @@ impl<'a> Lab<'a> {
     /// The model-data seeds.
     pub(super) fn seeds(&self) -> Vec<u64> {
         self.params.seeds.clone()
-    }
-
-    /// Assemble a result; `extra` HTML may use `{P}` for the experiments folder prefix.
-    pub(super) fn result(
-        &self,
-        name: &str,
-        caption: &str,
-        cases: Vec<CaseFigures>,
-        findings: Vec<(String, String)>,
-        extra: &str,
-    ) -> ExperimentResult {
-        let html = report::experiments::result_html(name, caption, extra, &findings, &cases);
-        ExperimentResult {
-            name: name.to_string(),
-            cases,
-            findings,
-            html,
-        }
-    }
-
-    /// The report section of a result, links prefixed by `prefix` (the experiments folder
-    /// relative to the page: `""` for `DIR/index.html`, `"experiments/"` in `reproduce`).
-    pub fn section(r: &ExperimentResult, prefix: &str) -> Section {
-        report::experiments::section(r, prefix)
     }
 }
 
@@ -582,5 +596,26 @@ impl CaseFigures {
             Cell::count(c.wrong_interior),
             Cell::fixed(c.f1_interior, 3),
         ]
+    }
+}
+
+/// Assemble a result.
+pub(super) fn result(
+    name: &str,
+    caption: &str,
+    cases: Vec<CaseFigures>,
+    findings: Vec<(String, String)>,
+    panel: Panel,
+    charts: Vec<LineChart>,
+    figures: Vec<Figure>,
+) -> ExperimentResult {
+    ExperimentResult {
+        name: name.to_string(),
+        cases,
+        findings,
+        caption: caption.to_string(),
+        panel,
+        charts,
+        figures,
     }
 }

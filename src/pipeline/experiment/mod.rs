@@ -13,8 +13,10 @@
 //!
 //! Layout: [`params`] (the parameters and their check), [`inputs`] (resolving the inputs),
 //! [`lab`] (cases, scoring, the shared maps, the case table), one file per experiment
-//! ([`fig5`], [`fig6`], [`prior_sensitivity`], [`pose_noise`]); the HTML is
-//! [`crate::report::experiments`].
+//! ([`fig5`], [`fig6`], [`prior_sensitivity`], [`pose_noise`]). The experiments produce
+//! results ([`ExperimentResult`]: figures, findings and what the page shows, as data) and
+//! never call the report: the panels, plots and HTML are drawn from the results by
+//! [`crate::report::experiments`] (`pradar experiment` and the campaign report call it).
 //!
 //! Choices (where DESIGN and the issue are silent):
 //! * **model data** = `synth` with the model file on the campaign's layout and trajectory,
@@ -22,7 +24,7 @@
 //!   seeds 1, 2, 3 (`--seeds`): a seed draws a new channel (clusters, rays, shadowing) and new
 //!   detector noise;
 //! * **mappers**: the side-lobe-aware occupancy grid `og` (prior 0.5, P_fa 1e-3, binary
-//!   p > 0.5) and the scalable EKF (μ0 0.01 m, σ0 0.1 m, binary x̂ − 2σ̂ > μ0), 0.1 m cells —
+//!   p > 0.5) and the scalable EKF (μ0 0.01 m, σ0 0.1 m, binary x̂ − κσ̂ > μ0, κ = 3.09, free-space evidence), 0.1 m cells —
 //!   `pradar map`'s defaults, not tuned on the reference;
 //! * **figures** per map: ψ, F1 and the wrong-cell count on three regions, each the same
 //!   for every N, mapper, prior and pose noise of a campaign except (b): (a) the *whole map*
@@ -40,7 +42,7 @@
 //!   sweeps simulated at both N);
 //! * **prior-sensitivity**: at N = 16 on model data, the OG prior p0 and the EKF μ0 each
 //!   scaled by 1 ± 0.4 (p0 0.3 / 0.5 / 0.7, μ0 0.006 / 0.01 / 0.014 m) with everything else
-//!   fixed (the binary rules stay p > 0.5 and x̂ − 2σ̂ > μ0, so μ0 moves the EKF's threshold as
+//!   fixed (the binary rules stay p > 0.5 and x̂ − κσ̂ > μ0, so μ0 moves the EKF's threshold as
 //!   it moves its prior); relative change Δψ/ψ = (ψ̄(changed) − ψ̄(base))/ψ̄(base) of the mean ψ
 //!   over seeds;
 //! * **pose-noise**: at N = 100 on model data, the mapper is given poses with Gaussian noise
@@ -64,7 +66,9 @@ pub mod pose_noise;
 pub mod prior_sensitivity;
 
 pub use inputs::{prepare_inputs, ExperimentInputs, InputOptions};
-pub use lab::{case_table, Case, CaseFigures, DataSource, ExperimentResult, Lab};
+pub use lab::{
+    case_table, Case, CaseFigures, DataSource, ExperimentResult, Figure, Lab, Panel, PanelTile,
+};
 pub use params::{ExperimentParams, ExperimentValid};
 
 /// The experiments.
@@ -113,8 +117,18 @@ impl Experiment {
     }
 }
 
-/// `pradar experiment`: resolve the inputs into `out/work`, run `which` and write
-/// `out/index.html`.
+/// What [`run_experiments`] gives: the inputs it used (name, value) and each result.
+#[derive(Debug, Clone)]
+pub struct ExperimentsRun {
+    /// The inputs as listed on the page: campaign, energy, model, seeds.
+    pub inputs: Vec<(String, String)>,
+    /// One result per experiment run, in the order asked.
+    pub results: Vec<ExperimentResult>,
+}
+
+/// `pradar experiment`'s computation: resolve the inputs into `out/work`, run `which`
+/// (maps and data files). The images and `out/index.html` are the report's
+/// ([`crate::report::experiments::write_all`]).
 ///
 /// ```no_run
 /// use pradar::params::ParamGuard;
@@ -122,8 +136,8 @@ impl Experiment {
 /// let params = ExperimentParams::default().seeds(vec![1]).check()?;
 /// let progress = |_: &str, _: usize| -> Box<dyn Fn(usize, usize)> { Box::new(|_, _| {}) };
 /// let out = std::path::Path::new("experiments");
-/// let results = run_experiments(&[Experiment::Fig5], &InputOptions::default(), &params, out, &progress)?;
-/// println!("{:?}", results[0].findings);
+/// let run = run_experiments(&[Experiment::Fig5], &InputOptions::default(), &params, out, &progress)?;
+/// println!("{:?}", run.results[0].findings);
 /// # Ok::<(), pradar::error::Error>(())
 /// ```
 pub fn run_experiments(
@@ -132,7 +146,7 @@ pub fn run_experiments(
     params: &ExperimentValid,
     out: &Path,
     progress: Progress,
-) -> Result<Vec<ExperimentResult>> {
+) -> Result<ExperimentsRun> {
     let resolved = prepare_inputs(inputs, &out.join("work"), progress)?;
     let mut lab = Lab::new(resolved, params.clone(), out, progress)?;
     let mut results = Vec::new();
@@ -140,12 +154,14 @@ pub fn run_experiments(
         results.push(lab.run(e)?);
     }
     let i = lab.inputs();
-    let listed = [
+    let listed = vec![
         ("campaign".to_string(), i.campaign.display().to_string()),
         ("energy (sweeps)".into(), i.energy.display().to_string()),
         ("model".into(), i.model.display().to_string()),
         ("seeds".into(), lab::join_u(&params.seeds)),
     ];
-    crate::report::experiments::write_index(&out.join("index.html"), &listed, &results)?;
-    Ok(results)
+    Ok(ExperimentsRun {
+        inputs: listed,
+        results,
+    })
 }

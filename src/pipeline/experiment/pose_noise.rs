@@ -5,31 +5,29 @@
 //! position noise; one draw per pose, keyed by the data seed; scored on the true poses'
 //! observable region; mean ψ over seeds.
 
-use super::lab::{join_u, mean, Case, CaseFigures, DataSource, Lab, Mapped};
+use super::lab::{join_u, mean, result, Case, CaseFigures, DataSource, Figure, Lab, Mapped, Panel};
 use super::ExperimentResult;
 use crate::error::Result;
+use crate::export::LineChart;
 use crate::mapping::job::PoseNoise;
-use crate::report::{self, LineChart};
 
 impl Lab<'_> {
     pub(super) fn pose_noise(&mut self) -> Result<ExperimentResult> {
         let n = self.params.pose_elements;
         let cases = self.pose_cases(n);
         let done = self.map_all("pose-noise", &cases)?;
-        self.pose_panel(&done)?;
+        let panel = self.pose_panel(&done);
         let cases: Vec<CaseFigures> = done.into_iter().map(|d| d.0).collect();
         let (findings, charts) = self.psi_vs_noise(&cases, n);
-        report::line_plots(
-            &self.out.join("pose-noise").join("pose-noise_plot.png"),
-            &charts,
-        )?;
         let first = self.params.seeds[0];
-        Ok(self.result(
+        Ok(result(
             "pose-noise",
             &format!("N = {n}, model data, seeds {}: the mappers are given noisy poses (Gaussian, independent per pose; the data were taken at the true poses; scored on the true poses' observable region). Panel: seed {first}, no noise and the largest levels.", join_u(&self.params.seeds)),
             cases,
             findings,
-            &report::experiments::plot_img("pose-noise", "psi vs pose noise"),
+            panel,
+            charts,
+            vec![Figure::Plot("psi vs pose noise".into())],
         ))
     }
 
@@ -71,7 +69,7 @@ impl Lab<'_> {
     }
 
     /// The panel: the first seed's maps per mapper with no noise and the largest levels.
-    fn pose_panel(&self, done: &[Mapped]) -> Result<()> {
+    fn pose_panel(&self, done: &[Mapped]) -> Panel {
         let first = self.params.seeds[0];
         let largest = |v: &[f64]| v.iter().cloned().fold(0.0, f64::max);
         let pmax = largest(&self.params.position_noise_m);
@@ -98,7 +96,7 @@ impl Lab<'_> {
                 }
             }
         }
-        self.panel("pose-noise", &tiles, 3)
+        self.panel(tiles, 3)
     }
 
     /// Mean ψ per mapper and region against each noise level: the findings and the two

@@ -1,14 +1,14 @@
 //! prior-sensitivity: at N = 16 on model data, the OG prior p0 and the EKF μ0 each scaled by
 //! 1 ± `prior_change` with everything else fixed.
 //!
-//! The binary rules stay p > 0.5 and x̂ − 2σ̂ > μ0, so μ0 moves the EKF's threshold as it
+//! The binary rules stay p > 0.5 and x̂ − κσ̂ > μ0, so μ0 moves the EKF's threshold as it
 //! moves its prior. Reported: the relative change Δψ/ψ = (ψ̄(changed) − ψ̄(base))/ψ̄(base)
 //! of the mean ψ over seeds, on the observable region and on the whole map.
 
-use super::lab::{join_u, mean, Case, CaseFigures, DataSource, Lab, Mapped};
+use super::lab::{join_u, mean, result, Case, CaseFigures, DataSource, Figure, Lab, Mapped, Panel};
 use super::ExperimentResult;
 use crate::error::{Error, Result};
-use crate::report::{self, LineChart};
+use crate::export::LineChart;
 
 impl Lab<'_> {
     pub(super) fn prior_sensitivity(&mut self) -> Result<ExperimentResult> {
@@ -27,28 +27,23 @@ impl Lab<'_> {
             }
         }
         let done = self.map_all("prior-sensitivity", &cases)?;
-        self.prior_panel(&done, factors)?;
+        let panel = self.prior_panel(&done, factors)?;
         let cases: Vec<CaseFigures> = done.into_iter().map(|d| d.0).collect();
         let (findings, charts) = self.relative_changes(&cases, n, factors);
-        report::line_plots(
-            &self
-                .out
-                .join("prior-sensitivity")
-                .join("prior-sensitivity_plot.png"),
-            &charts,
-        )?;
         let first = self.params.seeds[0];
-        Ok(self.result(
+        Ok(result(
             "prior-sensitivity",
-            &format!("N = {n}, model data, seeds {}: the OG prior p0 = {} and the EKF μ0 = {} m each changed by ±{:.0} % (binary rules unchanged: p > 0.5, x̂ − 2σ̂ > μ0). The paper reports about +5 % for the OG and +220 % for the EKF; here is what is measured. Panel: seed {first}.", join_u(&self.params.seeds), self.params.og.prior, self.params.ekf.mu0, c * 100.0),
+            &format!("N = {n}, model data, seeds {}: the OG prior p0 = {} and the EKF μ0 = {} m each changed by ±{:.0} % (binary rules unchanged: p > 0.5, x̂ − {:.2}σ̂ > μ0). The paper reports about +5 % for the OG and +220 % for the EKF; here is what is measured. Panel: seed {first}.", join_u(&self.params.seeds), self.params.og.prior, self.params.ekf.mu0, c * 100.0, self.params.ekf.kappa),
             cases,
             findings,
-            &report::experiments::plot_img("prior-sensitivity", "relative change of psi"),
+            panel,
+            charts,
+            vec![Figure::Plot("relative change of psi".into())],
         ))
     }
 
     /// The panel: the first seed's OG then EKF maps at each factor.
-    fn prior_panel(&self, done: &[Mapped], factors: [f64; 3]) -> Result<()> {
+    fn prior_panel(&self, done: &[Mapped], factors: [f64; 3]) -> Result<Panel> {
         let first = self.params.seeds[0];
         let mut tiles = Vec::new();
         for m in ["og", "ekf"] {
@@ -69,7 +64,7 @@ impl Lab<'_> {
                 tiles.push(self.tile(label, &d.1));
             }
         }
-        self.panel("prior-sensitivity", &tiles, 3)
+        Ok(self.panel(tiles, 3))
     }
 
     /// Δψ/ψ per mapper and region at each factor: the findings and the two charts
