@@ -475,7 +475,9 @@ fn allow_missing_goes_on_to_energy_and_the_report() {
     }
     for f in ["maps/og/metrics.json", "maps/ekf/metrics.json"] {
         let j = std::fs::read_to_string(rep.join(f)).unwrap();
-        assert!(!j.contains("NaN") && !j.contains("null"), "{f}: {j}");
+        // (no truth: the three-class scores are null by design)
+        let numbers = j.replace("\"three_class\": null", "");
+        assert!(!j.contains("NaN") && !numbers.contains("null"), "{f}: {j}");
     }
     // the coupling's mean over the directions of a position skips the missing one
     let t = std::fs::read_to_string(&m)
