@@ -38,6 +38,15 @@
 //!    summary per parameter, an estimate of E[x | y]). Distance
 //!    ρ(y, y_obs) = (Σ_k ((s_k(y) − s_k(y_obs))/MAD_k)²)^½, MAD_k of s_k under the prior
 //!    predictive (the t = 0 draws).
+//!
+//!    With `--distance mmd` ([`Distance::Mmd`], issue 30) the distance is instead
+//!    ρ = MMD²_u(profiles) + MMD²_u(positions), the unbiased squared maximum mean
+//!    discrepancy between the measured and the simulated table's per-profile and
+//!    per-position statistics of `pradar check`, standardised by the measured set's
+//!    median/MAD, Gaussian kernel with the median-heuristic length scale of the measured
+//!    set, sets over 1000 vectors subsampled ([`mmd`] gives the definitions): fixed for the
+//!    run, no projection, and no regression adjustment in step 6 (there are no summaries
+//!    to regress on).
 //! 3. Keep the N_α = ⌊αN⌋ particles with the smallest ρ, weights w_i = 1; ε_1 their
 //!    largest ρ.
 //! 4. t ≥ 1: Σ = 2·Cov_w(x) (the weighted covariance of the kept particles, Beaumont et
@@ -60,15 +69,16 @@
 //! same bytes with any number of threads. The keys differ from synth's streams: the
 //! simulations never replay the data's own draw even at the campaign seed.
 //!
-//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`abc`] (the
-//! sampler).
+//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`mmd`] (the MMD
+//! distance), [`abc`] (the sampler).
 
 pub mod abc;
+pub mod mmd;
 pub mod params;
 pub mod summaries;
 
 pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior};
-pub use params::{CalibrateParams, CalibrateValid};
+pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
@@ -275,14 +285,26 @@ pub fn calibrate(
         energy.meta.gate_ns(),
         sim.layout(),
     );
-    let observed = summaries::summaries(&ctx, &energy.data);
     let seed = params.seed.unwrap_or(m.seed);
+    let mmd_mode = params.distance == Distance::Mmd;
     let opts = abc::AbcOptions {
         simulations: params.simulations,
         population: params.population,
         kept: params.kept(),
         min_acceptance: params.min_acceptance,
         seed,
+        distance: if mmd_mode {
+            abc::DistanceKind::Direct
+        } else {
+            abc::DistanceKind::Projected
+        },
+    };
+    let stat_ctx = crate::check::context(energy);
+    let (observed, reference) = if mmd_mode {
+        let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
+        (vec![0.0], Some(r))
+    } else {
+        (summaries::summaries(&ctx, &energy.data), None)
     };
     let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
         let mut e = sim.energies(&prior.model_at(x), s)?;
@@ -290,7 +312,11 @@ pub fn calibrate(
         energy
             .meta
             .mask_missing(energy.directions(), energy.bins, &mut e);
-        Ok(summaries::summaries(&ctx, &e))
+        Ok(match &reference {
+            // the subsample's stream: the simulation's seed, under its own key
+            Some(r) => vec![r.distance(&stat_ctx, &e, s ^ 0x4d4d_445f_5355_4253)],
+            None => summaries::summaries(&ctx, &e),
+        })
     };
     let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;
     let adjusted = params.adjust && post.regression_adjusted;
@@ -324,7 +350,9 @@ pub fn calibrate(
         window: format!("{:?}", m.processing.window).to_lowercase(),
     });
     model.calibration = Some(CalibrationMeta {
-        method: if adjusted {
+        method: if mmd_mode {
+            "abc-smc (APMC, MMD of per-profile and per-position statistics)".into()
+        } else if adjusted {
             "abc-smc (APMC, semi-automatic summaries, regression-adjusted)".into()
         } else {
             "abc-smc (APMC, semi-automatic summaries)".into()

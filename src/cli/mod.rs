@@ -200,6 +200,10 @@ pub struct CalibrateArgs {
     /// Seed (default: the campaign's).
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
+    /// The ABC distance: `summaries` (semi-automatic summaries, issue 19) or `mmd` (the
+    /// MMD between the per-profile and per-position statistics' distributions, issue 30).
+    #[arg(long, value_enum, default_value = "summaries")]
+    pub distance: pradar::calibrate::Distance,
 }
 
 // `pradar check`
