@@ -319,6 +319,73 @@ fn corridor_closed_loop() {
     }
 }
 
+/// `calibrate --report --chain`: the page has the marginals and the predictive check
+/// (`pradar check`'s table and CDF panels) of the calibrated model and of the chain's
+/// model beside it (issue 30 item 3); a chain model the check cannot draw is reported as
+/// not checked, not a failed run. A small budget (60 simulations); about 10 s.
+#[test]
+fn report_has_the_check() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = corridor(&tmp.path().join("in"));
+    let truth = ModelConfig::table1_defaults();
+    let e = synth(&tmp.path().join("synth"), &cpath, &truth, 11);
+    let chain = tmp.path().join("synth").join("model.toml");
+    let rep = tmp.path().join("rep");
+    let out = tmp.path().join("cal.toml");
+    let mut args: Vec<String> = [
+        "calibrate",
+        "--energy",
+        &s(&e),
+        "--campaign",
+        &s(&cpath),
+        "--out",
+        &s(&out),
+        "--simulations",
+        "60",
+        "--population",
+        "30",
+        "--seed",
+        "3",
+        "--report",
+        &s(&rep),
+        "--chain",
+        &s(&chain),
+    ]
+    .map(String::from)
+    .into();
+    run(&args, None);
+    let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    for want in [
+        "Does the calibrated model reproduce the channel?",
+        "Does the cluster chain",
+        "KS measured↔draws",
+        "check_calibrated.png",
+        "check_chain.png",
+        "Bonferroni",
+        "width / prior",
+    ] {
+        assert!(html.contains(want), "{want} missing from the page");
+    }
+    assert!(html.matches("<table").count() >= 3);
+    assert!(rep.join("check_calibrated.png").is_file());
+    assert!(rep.join("check_chain.png").is_file());
+    // a chain model with a quantity marked not estimable: not checked, the run succeeds
+    let mut bad = truth.clone();
+    bad.ray_decay = pradar::campaign::modelfile::Quantity::not_estimable(
+        &bad.ray_decay.unit,
+        &bad.ray_decay.family,
+        "too few rays",
+    );
+    bad.save(&chain).unwrap();
+    std::fs::remove_dir_all(&rep).unwrap();
+    args.push("--distance".into());
+    args.push("mmd".into());
+    run(&args, None);
+    let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    assert!(html.contains("Not checked"), "{html}");
+    assert!(!rep.join("check_chain.png").exists());
+}
+
 /// Bad input: a prior interval that is no range, a table of another campaign; one line
 /// naming the file and field, exit 1, no panic, nothing written.
 #[test]

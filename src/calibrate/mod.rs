@@ -14,8 +14,12 @@
 //!
 //! **Free quantities** θ (inferred in ln units): λ `intra_cluster_rate`, AoA std
 //! `intra_cluster_aoa`, d_c `perimeter_spacing`, d_p `perimeter_offset`, Γ
-//! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, and when the
-//! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`. The
+//! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, when the
+//! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`, and
+//! when it has `[walls]` (issue 30), `walls.specular_gamma` (0.01–1), `walls.corner_rcs`
+//! and `walls.edge_rcs` (1e-4–10 m², when present; the per-material |Γ| are copied). A
+//! quantity whose 95 % interval spans ≥ 90 % of its prior's ln-range
+//! ([`Calibration::informed`]) is reported as not informed by the data. The
 //! others (Λ, which the model derives from geometry; the diffuse `power_share` and
 //! `decay`, which synth does not draw from) are copied from the prior file.
 //!
@@ -89,7 +93,8 @@ use std::path::Path;
 use summaries::SummaryContext;
 
 /// Default prior ranges (log-uniform): (quantity, lower, upper), in the schema's units.
-pub const DEFAULT_PRIOR: [(&str, f64, f64); 10] = [
+/// The `diffuse.*` and `walls.*` ones are free only when the prior file has that section.
+pub const DEFAULT_PRIOR: [(&str, f64, f64); 13] = [
     ("intra_cluster_rate", 0.05, 3.0),
     ("intra_cluster_aoa", 2.0, 60.0),
     ("perimeter_spacing", 0.3, 20.0),
@@ -100,7 +105,14 @@ pub const DEFAULT_PRIOR: [(&str, f64, f64); 10] = [
     ("rays_per_cluster", 1.0, 20.0),
     ("diffuse.wall_rcs_per_m", 1e-3, 1.0),
     ("diffuse.lambert_exponent", 0.2, 10.0),
+    ("walls.specular_gamma", 0.01, 1.0),
+    ("walls.corner_rcs", 1e-4, 10.0),
+    ("walls.edge_rcs", 1e-4, 10.0),
 ];
+
+/// A free quantity whose 95 % interval spans at least this share of its prior range in
+/// ln units is reported as not informed by the data ([`Calibration::width_share`]).
+pub const UNINFORMED_SHARE: f64 = 0.9;
 
 /// The prior: a model template (units, families, the quantities not inferred) and the
 /// free quantities' log-uniform ranges.
@@ -134,7 +146,7 @@ impl Prior {
         let (mut free, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new());
         for (name, a, b) in DEFAULT_PRIOR {
             let Some(q) = template.quantity(name) else {
-                continue; // a diffuse quantity without [diffuse]
+                continue; // a diffuse or walls quantity without its section
             };
             let (a, b) = match q.interval {
                 Some([x, y]) => {
@@ -213,9 +225,31 @@ pub struct Calibration {
     pub free: Vec<String>,
     /// Wall time, s.
     pub wall_s: f64,
+    /// The prior ranges of the free quantities (schema units), lower ends.
+    pub prior_lo: Vec<f64>,
+    /// Upper ends.
+    pub prior_hi: Vec<f64>,
 }
 
 impl Calibration {
+    /// The width of free quantity `k`'s 95 % interval as a share of its prior range, in
+    /// ln units: ln(hi/lo) / ln(prior hi/prior lo); 1 is the prior (a posterior that
+    /// the data left flat has ≈ 0.95), 0 a point.
+    pub fn width_share(&self, k: usize) -> f64 {
+        let Some([lo, hi]) = self.model.quantity(&self.free[k]).and_then(|q| q.interval) else {
+            return f64::NAN;
+        };
+        (hi / lo).ln() / (self.prior_hi[k] / self.prior_lo[k]).ln()
+    }
+
+    /// Whether the data informed free quantity `k`: its [`width_share`](Self::width_share)
+    /// is below [`UNINFORMED_SHARE`] (the interval cut at least a tenth of the prior's
+    /// ln-range). A quantity not informed has a median that means little: the
+    /// posterior is about the prior.
+    pub fn informed(&self, k: usize) -> bool {
+        self.width_share(k) < UNINFORMED_SHARE
+    }
+
     /// The particles reported (adjusted or raw, as the model file), ln units.
     pub fn particles(&self) -> &[Vec<f64>] {
         if self
@@ -370,6 +404,8 @@ pub fn calibrate(
         posterior: post,
         free: prior.free.clone(),
         wall_s: t0.elapsed().as_secs_f64(),
+        prior_lo: prior.lo.clone(),
+        prior_hi: prior.hi.clone(),
     })
 }
 
@@ -402,6 +438,35 @@ mod tests {
             e.contains("p.toml") && e.contains("cluster_decay.interval"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn walls_are_free_when_the_prior_has_them() {
+        use crate::campaign::modelfile::WallModel;
+        let mut m = ModelConfig::table1_defaults();
+        m.walls = Some(WallModel {
+            specular_gamma: Quantity::new(0.3, "1", "constant"),
+            material_gamma: Default::default(),
+            corner_rcs: Some(Quantity::new(0.05, "m2", "constant")),
+            edge_rcs: None,
+        });
+        let p = Prior::from_template(m.clone(), Path::new("p.toml")).unwrap();
+        assert_eq!(p.free.len(), 10);
+        let k = p
+            .free
+            .iter()
+            .position(|f| f == "walls.specular_gamma")
+            .unwrap();
+        assert_eq!((p.lo[k], p.hi[k]), (0.01, 1.0));
+        assert!(p.free.iter().any(|f| f == "walls.corner_rcs"));
+        assert!(!p.free.iter().any(|f| f == "walls.edge_rcs"));
+        let x: Vec<f64> = p.hi.iter().map(|v| v.ln()).collect();
+        let at = p.model_at(&x);
+        assert!((at.walls.as_ref().unwrap().specular_gamma.value - 1.0).abs() < 1e-12);
+        // an interval [a, a] holds it fixed
+        m.walls.as_mut().unwrap().specular_gamma.interval = Some([0.3, 0.3]);
+        let p = Prior::from_template(m, Path::new("p.toml")).unwrap();
+        assert_eq!(p.free.len(), 9);
     }
 
     #[test]

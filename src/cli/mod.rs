@@ -187,7 +187,9 @@ pub struct CalibrateArgs {
     /// Simulation budget (at least the population).
     #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
     pub simulations: usize,
-    /// Report folder: index.html with the marginal posteriors and their correlations.
+    /// Report folder: index.html with the marginal posteriors and their correlations, and
+    /// the predictive check (`pradar check`'s table and CDFs) of the calibrated model and
+    /// of the `--chain` model.
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// The cluster chain's model file (`fit --out`), shown beside the posterior in the
