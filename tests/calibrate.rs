@@ -254,8 +254,9 @@ fn environment(
 /// environments, and the drawn model itself passes in 15 of 20 too: on the corridor's
 /// 12 poses the check's ratio rule fails a true model about one time in four.
 ///
-/// Runtime: about 60 s in release on 2 idle cores (three calibrations of ~15 s, four
-/// small ones), 2–3 min when the cores are shared.
+/// Runtime (release): 128 s and 147 s measured with load average 5–6 on the 2 shared
+/// cores (the three calibrations 117–136 s, four small ones); on idle cores about half
+/// (not measured).
 #[test]
 fn corridor_closed_loop() {
     let tmp = tempfile::tempdir().unwrap();

@@ -39,10 +39,11 @@
 //! (the measured set's own sum is computed once). A set larger than [`MAX_SET`] = 1000
 //! vectors is replaced by a uniform subsample of 1000 without replacement — the measured
 //! set once (a fixed stream), each simulated set from its simulation's seed — so one
-//! distance costs at most 2·10⁶ kernel evaluations (about 10 ms on one core). The
-//! corridor's 444 profiles are never subsampled (1 ms per distance beside synth's 31 ms);
-//! the closed loop's hall (240 poses × 61 directions = 14 640 profiles) is, and the
-//! subsample adds to MMD²_u a variance of order 1/1000 (the estimator's own at n = 1000).
+//! distance costs at most 1.5·10⁶ kernel evaluations (measured, `tests::cost`: 21 ms on
+//! one core). The corridor's 444 profiles are never subsampled (4.4 ms per distance beside
+//! synth's ~31 ms); the closed loop's hall (240 poses × 61 directions = 14 640 profiles)
+//! is, and the subsample adds to MMD²_u a variance of order 1/1000 (the estimator's own at
+//! n = 1000).
 
 use super::abc::median_mad;
 use crate::check::stats::StatContext;
