@@ -67,7 +67,9 @@ fn synth(dir: &Path, cpath: &Path, model: &ModelConfig, seed: u64) -> PathBuf {
     e
 }
 
-/// `calibrate` of `energy` (budget `sims`, population `pop`, seed `seed`) into `out`.
+/// `calibrate` of `energy` (budget `sims`, population `pop`, seed `seed`, `--distance
+/// distance` unless None: the default) into `out`.
+#[allow(clippy::too_many_arguments)]
 fn calibrate(
     energy: &Path,
     cpath: &Path,
@@ -76,8 +78,9 @@ fn calibrate(
     pop: usize,
     seed: u64,
     threads: Option<usize>,
+    distance: Option<&str>,
 ) -> ModelConfig {
-    let args: Vec<String> = [
+    let mut args: Vec<String> = [
         "calibrate",
         "--energy",
         &s(energy),
@@ -94,8 +97,46 @@ fn calibrate(
     ]
     .map(String::from)
     .into();
+    if let Some(d) = distance {
+        args.extend(["--distance".to_string(), d.to_string()]);
+    }
     run(&args, threads);
     ModelConfig::load(out).unwrap()
+}
+
+/// `pradar check` (20 draws, its default seed) of `model` against `energy`: whether it
+/// passes, and its largest KS ratio.
+fn check(model: &Path, cpath: &Path, energy: &Path) -> (bool, f64) {
+    // not --quiet: the verdict line is the progress output's last line
+    let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
+        .args([
+            "check",
+            "--model",
+            common::path_str(model),
+            "--campaign",
+            common::path_str(cpath),
+            "--energy",
+            common::path_str(energy),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("PASS:") || l.starts_with("FAIL:"))
+        .unwrap_or_else(|| panic!("no verdict in {text}"));
+    let ratio: f64 = line
+        .split("largest KS ratio ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(f64::NAN);
+    (line.starts_with("PASS:"), ratio)
 }
 
 /// Print each quantity (posterior median, interval, truth, error); return those of the
@@ -136,68 +177,214 @@ fn corridor(dir: &Path) -> PathBuf {
     common::write_campaign(dir, &common::corridor())
 }
 
-/// Priority 1: the built-in corridor, Table 1 model (`table1_defaults`: λ 0.43/ns, AoA
-/// 16.9°, d_c 1.505 m, d_p 0.3 m, Γ 12 ns, γ 3 ns, 6 rays, σ 0.01 m²), synth seed 11,
-/// calibrate 1500 simulations (population 300) seed 5, default prior (seeds fixed before
-/// the first run, never changed).
+/// The prior's hi/lo per quantity of [`QUANTITIES`] (the default prior's ranges).
+const PRIOR_HILO: [f64; 8] = [60.0, 30.0, 20.0 / 0.3, 30.0, 30.0, 40.0, 1e4, 20.0];
+
+/// One environment calibrated and scored against the model it was drawn from.
+struct Scored {
+    /// Per quantity: the 95 % interval covers the truth.
+    covered: Vec<bool>,
+    /// Per quantity: |median − truth| / truth.
+    err: Vec<f64>,
+    /// Per quantity: the interval's hi/lo.
+    hilo: Vec<f64>,
+    /// `pradar check` of the calibrated model against the environment: pass, largest ratio.
+    check: (bool, f64),
+}
+
+/// `synth` of `truth` on `cpath` at `synth_seed` into `dir`, calibrated (`sims`, `pop`,
+/// `seed`, `distance`), scored and checked.
+#[allow(clippy::too_many_arguments)]
+fn environment(
+    dir: &Path,
+    cpath: &Path,
+    truth: &ModelConfig,
+    synth_seed: u64,
+    sims: usize,
+    pop: usize,
+    seed: u64,
+    distance: Option<&str>,
+) -> Scored {
+    let e = synth(dir, cpath, truth, synth_seed);
+    let out = dir.join("cal.toml");
+    let got = calibrate(&e, cpath, &out, sims, pop, seed, None, distance);
+    let (_, covered) = score(
+        &format!("synth seed {synth_seed}, {}", distance.unwrap_or("default")),
+        &got,
+        truth,
+        0.15,
+    );
+    let mut err = Vec::new();
+    let mut hilo = Vec::new();
+    for (q, pick) in QUANTITIES {
+        err.push(((pick(&got) - pick(truth)) / pick(truth)).abs());
+        let [lo, hi] = got.quantity(q).and_then(|x| x.interval).unwrap();
+        hilo.push(hi / lo);
+    }
+    let check = check(&out, cpath, &e);
+    Scored {
+        covered,
+        err,
+        hilo,
+        check,
+    }
+}
+
+/// The built-in corridor, Table 1 model (`table1_defaults`: λ 0.43/ns, AoA 16.9°, d_c
+/// 1.505 m, d_p 0.3 m, Γ 12 ns, γ 3 ns, 6 rays, σ 0.01 m²), three environments (synth
+/// seeds 21, 22, 23, never tuned: the thresholds below come from the 20 environments of
+/// `corridor_coverage`, seeds 1000–1019), each calibrated with the default distance at
+/// 600 simulations (population 200, seed = the synth seed), default prior.
 ///
-/// Asserted (each a check the code could fail; measured: median vs model): AoA std
-/// 18.68° (+10.5 %), d_c 1.673 m (+11.2 %), Γ 11.69 ns (−2.6 %) within 15 %; the 95 %
-/// credible interval of each of the eight quantities covering the model value; the run's
-/// determinism (1 and 2 threads give the same model file and posterior bytes, at a small
-/// budget). Runtime: the calibration 35.8 s (41.9 simulations/s), the test 38.5 s in
-/// release; 130 s while another calibration ran beside it.
+/// Asserted, properties that hold over environments rather than medians at chosen seeds
+/// (issue 30 item 5; the bounds hold in every one of `corridor_coverage`'s 20
+/// environments, seeds 1000–1019, with the margins given):
+/// * coverage: in every environment at least 6 of the 8 95 % intervals cover the model
+///   value, and at least 21 of the 24 over the three (20 environments: 18 at 8/8, one at
+///   7/8, one at 6/8; 157 of 160);
+/// * contraction: the intervals' width as a share of the prior's in ln units,
+///   c = mean over λ, d_c and Γ of ln(hi/lo) / ln(prior hi/lo) (prior hi/lo 60, 66.7, 30;
+///   1 = the prior, 0 = a point), is at most 0.75 in every environment and at most 0.65
+///   in the mean over the three (20 environments: 0.40–0.69, mean 0.52, sd 0.065; with
+///   `--distance mmd` 0.70–0.88, which would fail): the data informed them;
+/// * determinism: 1 and 2 threads give the same model file and posterior bytes, for both
+///   distances (a small budget).
 ///
-/// NOT met (printed only): λ 0.359/ns (−16.6 %), d_p 0.183 m (−39.1 %), γ 1.64 ns
-/// (−45.3 %); also σ −49 %, rays −36 %. Nor is meeting the three asserted ones robust: the
-/// corridor (12 poses over 4.5 m, about 20 clusters along 32 m of walls) carries little
-/// information, the posterior is wide (95 % intervals spanning a factor 6–12 for the six
-/// quantities) and its median moves by 13–39 % (median |error|) between environments
-/// drawn with the same model (`corridor_coverage`); the same run on a model file whose
-/// d_c differs in the fifth digit (1.505 m) gave AoA −45 %, Γ −45 %, d_c +3 %.
+/// Not asserted: the predictive check of the calibrated model. It passed in 15 of the 20
+/// environments, and the drawn model itself passes in 15 of 20 too: on the corridor's
+/// 12 poses the check's ratio rule fails a true model about one time in four.
+///
+/// Runtime (release): 128 s and 147 s measured with load average 5–6 on the 2 shared
+/// cores (the three calibrations 117–136 s, four small ones); on idle cores about half
+/// (not measured).
 #[test]
 fn corridor_closed_loop() {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = corridor(&tmp.path().join("in"));
     let truth = ModelConfig::table1_defaults();
-    let e = synth(&tmp.path().join("synth"), &cpath, &truth, 11);
     let t = Instant::now();
-    let out = tmp.path().join("cal.toml");
-    let got = calibrate(&e, &cpath, &out, 1500, 300, 5, None);
-    let wall = t.elapsed().as_secs_f64();
-    let (failures, covered) = score("corridor, Table 1 model", &got, &truth, 0.15);
-    let meta = got.calibration.as_ref().unwrap();
-    eprintln!(
-        "calibrate: {} simulations, {} generations, ε {:.3}, {wall:.1} s ({:.1} simulations/s)",
-        meta.simulations,
-        meta.generations,
-        meta.epsilon,
-        meta.simulations as f64 / wall
-    );
-    assert!(meta.method.starts_with("abc-smc"));
-    assert!(tmp.path().join("cal_posterior.csv").is_file());
-    // determinism over threads, at a small budget
-    let a = tmp.path().join("a.toml");
-    let b = tmp.path().join("b.toml");
-    calibrate(&e, &cpath, &a, 60, 30, 9, Some(1));
-    calibrate(&e, &cpath, &b, 60, 30, 9, Some(2));
-    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
-    assert_eq!(
-        std::fs::read(tmp.path().join("a_posterior.csv")).unwrap(),
-        std::fs::read(tmp.path().join("b_posterior.csv")).unwrap()
-    );
-    let asserted: Vec<&String> = failures
-        .iter()
-        .filter(|f| {
-            ["intra_cluster_aoa", "perimeter_spacing", "cluster_decay"]
-                .iter()
-                .any(|q| f.contains(&format!(" {q}:")))
-        })
-        .collect();
-    assert!(asserted.is_empty(), "outside 15 %: {asserted:?}");
-    for ((q, _), c) in QUANTITIES.iter().zip(&covered) {
-        assert!(c, "{q}: the 95 % credible interval misses the model value");
+    let mut total_covered = 0;
+    let mut shares = Vec::new();
+    for seed in [21u64, 22, 23] {
+        let dir = tmp.path().join(format!("s{seed}"));
+        let r = environment(&dir, &cpath, &truth, seed, 600, 200, seed, None);
+        let k = r.covered.iter().filter(|c| **c).count();
+        total_covered += k;
+        let c = [0, 2, 4]
+            .iter()
+            .map(|&i| r.hilo[i].ln() / PRIOR_HILO[i].ln())
+            .sum::<f64>()
+            / 3.0;
+        eprintln!(
+            "synth seed {seed}: {k}/8 covered, hi/lo λ {:.1} d_c {:.1} Γ {:.1}, width share {c:.3}, check {:?}",
+            r.hilo[0], r.hilo[2], r.hilo[4], r.check
+        );
+        assert!(
+            k >= 6,
+            "synth seed {seed}: {k}/8 intervals cover the model value"
+        );
+        assert!(
+            c <= 0.75,
+            "synth seed {seed}: width share {c:.3} of the prior's (λ, d_c, Γ): not contracted"
+        );
+        shares.push(c);
+        assert!(dir.join("cal_posterior.csv").is_file());
     }
+    let mean = shares.iter().sum::<f64>() / 3.0;
+    assert!(
+        mean <= 0.65,
+        "mean width share {mean:.3} over the environments"
+    );
+    assert!(total_covered >= 21, "{total_covered}/24 intervals cover");
+    eprintln!("three environments: {:.1} s", t.elapsed().as_secs_f64());
+    // determinism over threads, at a small budget, both distances
+    let e = tmp.path().join("s21").join("e.parquet");
+    for d in ["summaries", "mmd"] {
+        let a = tmp.path().join(format!("a_{d}.toml"));
+        let b = tmp.path().join(format!("b_{d}.toml"));
+        let m = calibrate(&e, &cpath, &a, 60, 30, 9, Some(1), Some(d));
+        calibrate(&e, &cpath, &b, 60, 30, 9, Some(2), Some(d));
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{d}"
+        );
+        assert_eq!(
+            std::fs::read(tmp.path().join(format!("a_{d}_posterior.csv"))).unwrap(),
+            std::fs::read(tmp.path().join(format!("b_{d}_posterior.csv"))).unwrap(),
+            "{d}"
+        );
+        let method = &m.calibration.as_ref().unwrap().method;
+        assert!(method.starts_with("abc-smc"), "{method}");
+        assert_eq!(method.contains("MMD"), d == "mmd", "{method}");
+    }
+}
+
+/// `calibrate --report --chain`: the page has the marginals and the predictive check
+/// (`pradar check`'s table and CDF panels) of the calibrated model and of the chain's
+/// model beside it (issue 30 item 3); a chain model the check cannot draw is reported as
+/// not checked, not a failed run. A small budget (60 simulations); about 10 s.
+#[test]
+fn report_has_the_check() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = corridor(&tmp.path().join("in"));
+    let truth = ModelConfig::table1_defaults();
+    let e = synth(&tmp.path().join("synth"), &cpath, &truth, 11);
+    let chain = tmp.path().join("synth").join("model.toml");
+    let rep = tmp.path().join("rep");
+    let out = tmp.path().join("cal.toml");
+    let mut args: Vec<String> = [
+        "calibrate",
+        "--energy",
+        &s(&e),
+        "--campaign",
+        &s(&cpath),
+        "--out",
+        &s(&out),
+        "--simulations",
+        "60",
+        "--population",
+        "30",
+        "--seed",
+        "3",
+        "--report",
+        &s(&rep),
+        "--chain",
+        &s(&chain),
+    ]
+    .map(String::from)
+    .into();
+    run(&args, None);
+    let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    for want in [
+        "Does the calibrated model reproduce the channel?",
+        "Does the cluster chain",
+        "KS measured↔draws",
+        "check_calibrated.png",
+        "check_chain.png",
+        "Bonferroni",
+        "width / prior",
+    ] {
+        assert!(html.contains(want), "{want} missing from the page");
+    }
+    assert!(html.matches("<table").count() >= 3);
+    assert!(rep.join("check_calibrated.png").is_file());
+    assert!(rep.join("check_chain.png").is_file());
+    // a chain model with a quantity marked not estimable: not checked, the run succeeds
+    let mut bad = truth.clone();
+    bad.ray_decay = pradar::campaign::modelfile::Quantity::not_estimable(
+        &bad.ray_decay.unit,
+        &bad.ray_decay.family,
+        "too few rays",
+    );
+    bad.save(&chain).unwrap();
+    std::fs::remove_dir_all(&rep).unwrap();
+    args.push("--distance".into());
+    args.push("mmd".into());
+    run(&args, None);
+    let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    assert!(html.contains("Not checked"), "{html}");
+    assert!(!rep.join("check_chain.png").exists());
 }
 
 /// Bad input: a prior interval that is no range, a table of another campaign; one line
@@ -318,7 +505,7 @@ fn hall_sets() {
         let dir = tmp.path().join(format!("set{k}"));
         let e = synth(&dir, &cpath, model, 11);
         let t = Instant::now();
-        let got = calibrate(&e, &cpath, &dir.join("cal.toml"), 1200, 300, 5, None);
+        let got = calibrate(&e, &cpath, &dir.join("cal.toml"), 1200, 300, 5, None, None);
         let wall = t.elapsed().as_secs_f64();
         let (failures, covered) = score(name, &got, model, 0.15);
         eprintln!(
@@ -330,48 +517,83 @@ fn hall_sets() {
     }
 }
 
-/// Priority 2: credible-interval coverage at one set — the corridor, Table 1 model, 20
-/// environments (synth seeds 1000..=1019), each calibrated with 600 simulations
-/// (population 200, seed = the repetition). Prints, per quantity, the share of
-/// repetitions whose 95 % interval covers the model value and the median |error| of the
-/// posterior median; asserts nothing beyond completing.
-///
-/// Measured (862 s): covered 20/20 λ, AoA, Γ, γ, σ; 19/20 d_c, d_p, rays (≥ 85 %: met);
-/// median |error| of the median λ 13 %, AoA 34 %, d_c 30 %, d_p 39 %, Γ 28 %, γ 18 %,
-/// σ 65 %, rays 36 %; median interval hi/lo 6–12 (σ 249).
-#[test]
-#[ignore = "about 15 min on 2 shared cores"]
-fn corridor_coverage() {
+/// Credible-interval coverage and width over environments: the corridor, Table 1 model,
+/// 20 environments (synth seeds 1000..=1019), each calibrated with `distance` at 600
+/// simulations (population 200, seed = the repetition), default prior, then checked
+/// (`pradar check`, 20 draws); the model itself checked against each environment as the
+/// reference. Prints per environment and per quantity: coverage, median |error| of the
+/// median, median and largest interval hi/lo; and the check's pass count.
+fn coverage(distance: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = corridor(&tmp.path().join("in"));
     let truth = ModelConfig::table1_defaults();
     let reps = 20;
-    let mut cover = [0usize; 8];
-    let mut errs: Vec<Vec<f64>> = vec![Vec::new(); 8];
     let t = Instant::now();
+    let mut all = Vec::new();
+    let mut truth_pass = 0;
     for r in 0..reps {
         let dir = tmp.path().join(format!("r{r}"));
-        let e = synth(&dir, &cpath, &truth, 1000 + r as u64);
-        let got = calibrate(&e, &cpath, &dir.join("cal.toml"), 600, 200, r as u64, None);
-        let (_, covered) = score(&format!("repetition {r}"), &got, &truth, 0.15);
-        for (i, (_, pick)) in QUANTITIES.iter().enumerate() {
-            cover[i] += usize::from(covered[i]);
-            errs[i].push(((pick(&got) - pick(&truth)) / pick(&truth)).abs());
-        }
-    }
-    eprintln!(
-        "coverage over {reps} repetitions ({:.0} s):",
-        t.elapsed().as_secs_f64()
-    );
-    for (i, (q, _)) in QUANTITIES.iter().enumerate() {
-        errs[i].sort_by(f64::total_cmp);
+        let sc = environment(
+            &dir,
+            &cpath,
+            &truth,
+            1000 + r as u64,
+            600,
+            200,
+            r as u64,
+            Some(distance),
+        );
+        let (tp, tr) = check(&dir.join("model.toml"), &cpath, &dir.join("e.parquet"));
+        truth_pass += usize::from(tp);
         eprintln!(
-            "{q:20} covered {}/{reps} ({:.0} %), median |error| {:.0} %",
-            cover[i],
-            100.0 * cover[i] as f64 / reps as f64,
-            100.0 * errs[i][reps / 2]
+            "ENV {distance} {r}: covered {}/8, hi/lo {:.1?}, check {:?}, truth's check ({tp}, {tr:.2})",
+            sc.covered.iter().filter(|c| **c).count(),
+            sc.hilo,
+            sc.check
+        );
+        all.push(sc);
+    }
+    let wall = t.elapsed().as_secs_f64();
+    eprintln!("== {distance}: coverage over {reps} environments ({wall:.0} s)");
+    eprintln!("quantity | covered | median |error| | median hi/lo | largest hi/lo");
+    for (i, (q, _)) in QUANTITIES.iter().enumerate() {
+        let cov = all.iter().filter(|a| a.covered[i]).count();
+        let mut e: Vec<f64> = all.iter().map(|a| a.err[i]).collect();
+        let mut h: Vec<f64> = all.iter().map(|a| a.hilo[i]).collect();
+        e.sort_by(f64::total_cmp);
+        h.sort_by(f64::total_cmp);
+        let med = |v: &[f64]| 0.5 * (v[reps / 2 - 1] + v[reps / 2]);
+        eprintln!(
+            "SUMMARY {distance} | {q} | {cov}/{reps} | {:.0} % | {:.2} | {:.2}",
+            100.0 * med(&e),
+            med(&h),
+            h[reps - 1]
         );
     }
+    let passes = all.iter().filter(|a| a.check.0).count();
+    eprintln!(
+        "SUMMARY {distance} | check of the calibrated model passes {passes}/{reps}; of the model itself {truth_pass}/{reps}"
+    );
+}
+
+/// [`coverage`] with `--distance summaries` (issue 19's distance).
+///
+/// Measured (862 s, issue 19): covered 20/20 λ, AoA, Γ, γ, σ; 19/20 d_c, d_p, rays;
+/// median hi/lo λ 9.7, AoA 6.3, d_c 5.9, Γ 7.2. Figures of this issue in
+/// `docs/calibrate.md`. `cargo test --release --test tests calibrate::corridor_coverage
+/// -- --ignored --nocapture`.
+#[test]
+#[ignore = "about 15 min on 2 shared cores"]
+fn corridor_coverage() {
+    coverage("summaries");
+}
+
+/// [`coverage`] with `--distance mmd` (issue 30), the same environments and budget.
+/// Figures in `docs/calibrate.md`.
+#[test]
+#[ignore = "about 15 min on 2 shared cores"]
+fn corridor_coverage_mmd() {
+    coverage("mmd");
 }
 
 /// The calibration's in-memory simulator gives exactly the energies `synth` writes for the

@@ -47,6 +47,18 @@ impl BoxPrior {
     }
 }
 
+/// How the sampler gets a particle's distance to the data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DistanceKind {
+    /// The simulator gives raw summaries; the distance is the scaled Euclidean distance
+    /// of their semi-automatic projections (refitted each generation), and the final
+    /// particles are regression-adjusted on them.
+    Projected,
+    /// The simulator gives the distance itself, as its one output (the MMD of
+    /// [`mmd`](super::mmd)); nothing is refitted and there is no regression adjustment.
+    Direct,
+}
+
 /// Options of the sampler (from [`CalibrateValid`](super::CalibrateValid)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AbcOptions {
@@ -60,6 +72,8 @@ pub struct AbcOptions {
     pub min_acceptance: f64,
     /// Seed.
     pub seed: u64,
+    /// What the simulator's output is.
+    pub distance: DistanceKind,
 }
 
 /// The final weighted population and the run's figures.
@@ -113,7 +127,7 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// Median and MAD (scaled by 1.4826 to a Gaussian σ) of a column; a MAD of 0 falls back
 /// to the standard deviation, then to 1.
-fn median_mad(col: &[f64]) -> (f64, f64) {
+pub(crate) fn median_mad(col: &[f64]) -> (f64, f64) {
     let mut v: Vec<f64> = col.iter().copied().filter(|x| x.is_finite()).collect();
     let m = median(&mut v);
     let mut dev: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
@@ -275,7 +289,20 @@ struct Particle {
 /// Fit the projection on `pts` (all of them) and recompute every particle's projected
 /// summaries and distance; returns the observed projected summaries and the projection's
 /// R² per parameter on `pts`.
-fn refit(pts: &mut [Particle], observed: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+fn refit(
+    pts: &mut [Particle],
+    observed: &[f64],
+    kind: DistanceKind,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    if kind == DistanceKind::Direct {
+        for p in pts.iter_mut() {
+            p.d = p.f.first().copied().unwrap_or(f64::INFINITY);
+            if p.d.is_nan() {
+                p.d = f64::INFINITY;
+            }
+        }
+        return Ok((Vec::new(), Vec::new()));
+    }
     let proj = Projection::fit(
         &pts.iter().map(|p| p.f.clone()).collect::<Vec<_>>(),
         &pts.iter().map(|p| p.theta.clone()).collect::<Vec<_>>(),
@@ -338,7 +365,7 @@ where
         .collect::<Result<_>>()?;
     let mut used = n;
     progress(used, opts.simulations);
-    let (mut s_obs, r2) = refit(&mut pop, observed)?;
+    let (mut s_obs, r2) = refit(&mut pop, observed, opts.distance)?;
     if trace() {
         eprintln!("abc: prior generation, R² of the projection {r2:.2?}");
     }
@@ -422,7 +449,7 @@ where
         generations += 1;
         let old = pop.len();
         pop.extend(new);
-        let (so, r2) = refit(&mut pop, observed)?;
+        let (so, r2) = refit(&mut pop, observed, opts.distance)?;
         s_obs = so;
         // the previous tolerance under the refitted distance: the kept particles' largest
         let eps_prev = pop[..old].iter().map(|p| p.d).fold(0.0, f64::max);
@@ -438,7 +465,10 @@ where
     let tw: f64 = pop.iter().map(|p| p.w).sum();
     let weights: Vec<f64> = pop.iter().map(|p| p.w / tw).collect();
     let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
-    let adjusted = adjust(prior, &pop, &s_obs, eps, &weights);
+    let adjusted = match opts.distance {
+        DistanceKind::Projected => adjust(prior, &pop, &s_obs, eps, &weights),
+        DistanceKind::Direct => None,
+    };
     Ok(Posterior {
         regression_adjusted: adjusted.is_some(),
         adjusted: adjusted.unwrap_or_else(|| theta.clone()),
@@ -466,7 +496,7 @@ fn adjust(
 ) -> Option<Vec<Vec<f64>>> {
     let n = pop.len();
     let p = s_obs.len();
-    if n < 10 * (p + 1) {
+    if p == 0 || n < 10 * (p + 1) {
         return None;
     }
     let dim = prior.dim();
@@ -538,6 +568,7 @@ mod tests {
             kept: 200,
             min_acceptance: 0.02,
             seed: 3,
+            distance: DistanceKind::Projected,
         };
         let obs = vec![0.5, -1.0];
         let a = apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap();
@@ -558,5 +589,37 @@ mod tests {
             .unwrap();
         let b = pool.install(|| apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap());
         assert_eq!(a, b);
+    }
+
+    #[test]
+    fn direct_distance_is_used_as_given() {
+        // the simulator returns the distance itself (as the MMD does): |toy − obs|
+        let prior = BoxPrior {
+            lo: vec![-2.0],
+            hi: vec![2.0],
+        };
+        let opts = AbcOptions {
+            simulations: 2000,
+            population: 200,
+            kept: 100,
+            min_acceptance: 0.02,
+            seed: 4,
+            distance: DistanceKind::Direct,
+        };
+        let sim = |t: &[f64], s: u64| -> Result<Vec<f64>> { Ok(vec![(toy(t, s)?[0] - 0.7).abs()]) };
+        let a = apmc(&prior, &[0.0], &opts, sim, &|_, _| {}).unwrap();
+        assert!(!a.regression_adjusted);
+        assert_eq!(a.adjusted, a.theta);
+        // the distances are the simulator's, ascending, and the final ε is their largest
+        assert!(a.distances.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(a.epsilon, *a.distances.last().unwrap());
+        let x: Vec<f64> = a.theta.iter().map(|t| t[0]).collect();
+        let m = weighted_quantile(&x, &a.weights, 0.5);
+        assert!((m - 0.7).abs() < 0.05, "{m}");
+        let (lo, hi) = (
+            weighted_quantile(&x, &a.weights, 0.025),
+            weighted_quantile(&x, &a.weights, 0.975),
+        );
+        assert!(lo < 0.7 && hi > 0.7 && hi - lo < 0.4, "{lo} {hi}");
     }
 }

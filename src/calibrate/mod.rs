@@ -14,8 +14,12 @@
 //!
 //! **Free quantities** θ (inferred in ln units): λ `intra_cluster_rate`, AoA std
 //! `intra_cluster_aoa`, d_c `perimeter_spacing`, d_p `perimeter_offset`, Γ
-//! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, and when the
-//! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`. The
+//! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, when the
+//! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`, and
+//! when it has `[walls]` (issue 30), `walls.specular_gamma` (0.01–1), `walls.corner_rcs`
+//! and `walls.edge_rcs` (1e-4–10 m², when present; the per-material |Γ| are copied). A
+//! quantity whose 95 % interval spans ≥ 90 % of its prior's ln-range
+//! ([`Calibration::informed`]) is reported as not informed by the data. The
 //! others (Λ, which the model derives from geometry; the diffuse `power_share` and
 //! `decay`, which synth does not draw from) are copied from the prior file.
 //!
@@ -38,6 +42,15 @@
 //!    summary per parameter, an estimate of E[x | y]). Distance
 //!    ρ(y, y_obs) = (Σ_k ((s_k(y) − s_k(y_obs))/MAD_k)²)^½, MAD_k of s_k under the prior
 //!    predictive (the t = 0 draws).
+//!
+//!    With `--distance mmd` ([`Distance::Mmd`], issue 30) the distance is instead
+//!    ρ = MMD²_u(profiles) + MMD²_u(positions), the unbiased squared maximum mean
+//!    discrepancy between the measured and the simulated table's per-profile and
+//!    per-position statistics of `pradar check`, standardised by the measured set's
+//!    median/MAD, Gaussian kernel with the median-heuristic length scale of the measured
+//!    set, sets over 1000 vectors subsampled ([`mmd`] gives the definitions): fixed for the
+//!    run, no projection, and no regression adjustment in step 6 (there are no summaries
+//!    to regress on).
 //! 3. Keep the N_α = ⌊αN⌋ particles with the smallest ρ, weights w_i = 1; ε_1 their
 //!    largest ρ.
 //! 4. t ≥ 1: Σ = 2·Cov_w(x) (the weighted covariance of the kept particles, Beaumont et
@@ -60,15 +73,16 @@
 //! same bytes with any number of threads. The keys differ from synth's streams: the
 //! simulations never replay the data's own draw even at the campaign seed.
 //!
-//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`abc`] (the
-//! sampler).
+//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`mmd`] (the MMD
+//! distance), [`abc`] (the sampler).
 
 pub mod abc;
+pub mod mmd;
 pub mod params;
 pub mod summaries;
 
 pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior};
-pub use params::{CalibrateParams, CalibrateValid};
+pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
@@ -79,7 +93,8 @@ use std::path::Path;
 use summaries::SummaryContext;
 
 /// Default prior ranges (log-uniform): (quantity, lower, upper), in the schema's units.
-pub const DEFAULT_PRIOR: [(&str, f64, f64); 10] = [
+/// The `diffuse.*` and `walls.*` ones are free only when the prior file has that section.
+pub const DEFAULT_PRIOR: [(&str, f64, f64); 13] = [
     ("intra_cluster_rate", 0.05, 3.0),
     ("intra_cluster_aoa", 2.0, 60.0),
     ("perimeter_spacing", 0.3, 20.0),
@@ -90,7 +105,14 @@ pub const DEFAULT_PRIOR: [(&str, f64, f64); 10] = [
     ("rays_per_cluster", 1.0, 20.0),
     ("diffuse.wall_rcs_per_m", 1e-3, 1.0),
     ("diffuse.lambert_exponent", 0.2, 10.0),
+    ("walls.specular_gamma", 0.01, 1.0),
+    ("walls.corner_rcs", 1e-4, 10.0),
+    ("walls.edge_rcs", 1e-4, 10.0),
 ];
+
+/// A free quantity whose 95 % interval spans at least this share of its prior range in
+/// ln units is reported as not informed by the data ([`Calibration::width_share`]).
+pub const UNINFORMED_SHARE: f64 = 0.9;
 
 /// The prior: a model template (units, families, the quantities not inferred) and the
 /// free quantities' log-uniform ranges.
@@ -124,7 +146,7 @@ impl Prior {
         let (mut free, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new());
         for (name, a, b) in DEFAULT_PRIOR {
             let Some(q) = template.quantity(name) else {
-                continue; // a diffuse quantity without [diffuse]
+                continue; // a diffuse or walls quantity without its section
             };
             let (a, b) = match q.interval {
                 Some([x, y]) => {
@@ -203,9 +225,31 @@ pub struct Calibration {
     pub free: Vec<String>,
     /// Wall time, s.
     pub wall_s: f64,
+    /// The prior ranges of the free quantities (schema units), lower ends.
+    pub prior_lo: Vec<f64>,
+    /// Upper ends.
+    pub prior_hi: Vec<f64>,
 }
 
 impl Calibration {
+    /// The width of free quantity `k`'s 95 % interval as a share of its prior range, in
+    /// ln units: ln(hi/lo) / ln(prior hi/prior lo); 1 is the prior (a posterior that
+    /// the data left flat has ≈ 0.95), 0 a point.
+    pub fn width_share(&self, k: usize) -> f64 {
+        let Some([lo, hi]) = self.model.quantity(&self.free[k]).and_then(|q| q.interval) else {
+            return f64::NAN;
+        };
+        (hi / lo).ln() / (self.prior_hi[k] / self.prior_lo[k]).ln()
+    }
+
+    /// Whether the data informed free quantity `k`: its [`width_share`](Self::width_share)
+    /// is below [`UNINFORMED_SHARE`] (the interval cut at least a tenth of the prior's
+    /// ln-range). A quantity not informed has a median that means little: the
+    /// posterior is about the prior.
+    pub fn informed(&self, k: usize) -> bool {
+        self.width_share(k) < UNINFORMED_SHARE
+    }
+
     /// The particles reported (adjusted or raw, as the model file), ln units.
     pub fn particles(&self) -> &[Vec<f64>] {
         if self
@@ -275,14 +319,26 @@ pub fn calibrate(
         energy.meta.gate_ns(),
         sim.layout(),
     );
-    let observed = summaries::summaries(&ctx, &energy.data);
     let seed = params.seed.unwrap_or(m.seed);
+    let mmd_mode = params.distance == Distance::Mmd;
     let opts = abc::AbcOptions {
         simulations: params.simulations,
         population: params.population,
         kept: params.kept(),
         min_acceptance: params.min_acceptance,
         seed,
+        distance: if mmd_mode {
+            abc::DistanceKind::Direct
+        } else {
+            abc::DistanceKind::Projected
+        },
+    };
+    let stat_ctx = crate::check::context(energy);
+    let (observed, reference) = if mmd_mode {
+        let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
+        (vec![0.0], Some(r))
+    } else {
+        (summaries::summaries(&ctx, &energy.data), None)
     };
     let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
         let mut e = sim.energies(&prior.model_at(x), s)?;
@@ -290,7 +346,11 @@ pub fn calibrate(
         energy
             .meta
             .mask_missing(energy.directions(), energy.bins, &mut e);
-        Ok(summaries::summaries(&ctx, &e))
+        Ok(match &reference {
+            // the subsample's stream: the simulation's seed, under its own key
+            Some(r) => vec![r.distance(&stat_ctx, &e, s ^ 0x4d4d_445f_5355_4253)],
+            None => summaries::summaries(&ctx, &e),
+        })
     };
     let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;
     let adjusted = params.adjust && post.regression_adjusted;
@@ -324,7 +384,9 @@ pub fn calibrate(
         window: format!("{:?}", m.processing.window).to_lowercase(),
     });
     model.calibration = Some(CalibrationMeta {
-        method: if adjusted {
+        method: if mmd_mode {
+            "abc-smc (APMC, MMD of per-profile and per-position statistics)".into()
+        } else if adjusted {
             "abc-smc (APMC, semi-automatic summaries, regression-adjusted)".into()
         } else {
             "abc-smc (APMC, semi-automatic summaries)".into()
@@ -342,6 +404,8 @@ pub fn calibrate(
         posterior: post,
         free: prior.free.clone(),
         wall_s: t0.elapsed().as_secs_f64(),
+        prior_lo: prior.lo.clone(),
+        prior_hi: prior.hi.clone(),
     })
 }
 
@@ -374,6 +438,35 @@ mod tests {
             e.contains("p.toml") && e.contains("cluster_decay.interval"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn walls_are_free_when_the_prior_has_them() {
+        use crate::campaign::modelfile::WallModel;
+        let mut m = ModelConfig::table1_defaults();
+        m.walls = Some(WallModel {
+            specular_gamma: Quantity::new(0.3, "1", "constant"),
+            material_gamma: Default::default(),
+            corner_rcs: Some(Quantity::new(0.05, "m2", "constant")),
+            edge_rcs: None,
+        });
+        let p = Prior::from_template(m.clone(), Path::new("p.toml")).unwrap();
+        assert_eq!(p.free.len(), 10);
+        let k = p
+            .free
+            .iter()
+            .position(|f| f == "walls.specular_gamma")
+            .unwrap();
+        assert_eq!((p.lo[k], p.hi[k]), (0.01, 1.0));
+        assert!(p.free.iter().any(|f| f == "walls.corner_rcs"));
+        assert!(!p.free.iter().any(|f| f == "walls.edge_rcs"));
+        let x: Vec<f64> = p.hi.iter().map(|v| v.ln()).collect();
+        let at = p.model_at(&x);
+        assert!((at.walls.as_ref().unwrap().specular_gamma.value - 1.0).abs() < 1e-12);
+        // an interval [a, a] holds it fixed
+        m.walls.as_mut().unwrap().specular_gamma.interval = Some([0.3, 0.3]);
+        let p = Prior::from_template(m, Path::new("p.toml")).unwrap();
+        assert_eq!(p.free.len(), 9);
     }
 
     #[test]

@@ -14,10 +14,25 @@
 //! * `seed` — any `u64` (default: the campaign seed, hashed with its own key, so the
 //!   simulations never share a stream with a `synth` run of the same seed);
 //! * `cull` — as `synth`'s (default 1e-3), in [0, 1);
-//! * `adjust` — report the regression-adjusted particles (default) or the raw ones.
+//! * `adjust` — report the regression-adjusted particles (default) or the raw ones
+//!   (`--distance summaries` only: the MMD has no summaries to regress on);
+//! * `distance` — [`Distance::Summaries`] (default) or [`Distance::Mmd`].
 
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
+
+/// The ABC distance between the data and a simulation (`--distance`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Distance {
+    /// Semi-automatic summaries: 42 pooled statistics of the matrix regressed onto the
+    /// parameters ([`summaries`](super::summaries), issue 19).
+    #[value(name = "summaries", help = None::<&str>)]
+    Summaries,
+    /// The MMD between the per-profile and per-position statistics' distributions
+    /// ([`mmd`](super::mmd), issue 30).
+    #[value(name = "mmd", help = None::<&str>)]
+    Mmd,
+}
 
 /// The largest population N (the first generation alone is N simulations, and the kernel
 /// weights cost N·N_α per generation).
@@ -44,6 +59,8 @@ pub struct CalibrateParams {
     pub cull: f64,
     /// Report the regression-adjusted particles (default true) instead of the raw ones.
     pub adjust: bool,
+    /// The distance.
+    pub distance: Distance,
 }
 
 impl Default for CalibrateParams {
@@ -56,6 +73,7 @@ impl Default for CalibrateParams {
             seed: None,
             cull: 1e-3,
             adjust: true,
+            distance: Distance::Summaries,
         }
     }
 }
@@ -69,6 +87,11 @@ impl CalibrateParams {
     /// Set the simulation budget.
     pub fn simulations(mut self, n: usize) -> Self {
         self.simulations = n;
+        self
+    }
+    /// Set the distance.
+    pub fn distance(mut self, d: Distance) -> Self {
+        self.distance = d;
         self
     }
     /// Set the population size.

@@ -188,7 +188,9 @@ pub struct CalibrateArgs {
     /// Simulation budget (at least the population).
     #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
     pub simulations: usize,
-    /// Report folder: index.html with the marginal posteriors and their correlations.
+    /// Report folder: index.html with the marginal posteriors and their correlations, and
+    /// the predictive check (`pradar check`'s table and CDFs) of the calibrated model and
+    /// of the `--chain` model.
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// The cluster chain's model file (`fit --out`), shown beside the posterior in the
@@ -201,6 +203,10 @@ pub struct CalibrateArgs {
     /// Seed (default: the campaign's).
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
+    /// The ABC distance: `summaries` (semi-automatic summaries, issue 19) or `mmd` (the
+    /// MMD between the per-profile and per-position statistics' distributions, issue 30).
+    #[arg(long, value_enum, default_value = "summaries")]
+    pub distance: pradar::calibrate::Distance,
 }
 
 // `pradar check`

@@ -92,6 +92,7 @@ impl CalibrateArgs {
                 simulations: self.simulations,
                 population: self.population,
                 seed: self.seed,
+                distance: self.distance,
                 ..Default::default()
             },
         }

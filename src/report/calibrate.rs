@@ -115,9 +115,9 @@ pub fn section(
         html_escape(plot)
     );
     html.push_str(
-        "<table><tr><th>quantity</th><th>posterior median</th><th>95 % credible interval</th><th>cluster chain</th><th></th></tr>\n",
+        "<table><tr><th>quantity</th><th>posterior median</th><th>95 % credible interval</th><th>width / prior's (ln)</th><th>cluster chain</th><th></th></tr>\n",
     );
-    for name in &cal.free {
+    for (k, name) in cal.free.iter().enumerate() {
         let Some(q) = cal.model.quantity(name) else {
             continue;
         };
@@ -135,16 +135,26 @@ pub fn section(
             Some(_) => ("not estimable".to_string(), ""),
             None => ("—".to_string(), ""),
         };
+        let share = cal.width_share(k);
         html.push_str(&format!(
-            "<tr><td>{} ({})</td><td>{:.4}</td><td>[{lo:.4}, {hi:.4}]</td><td>{}</td><td>{}</td></tr>\n",
+            "<tr><td>{} ({})</td><td>{:.4}</td><td>[{lo:.4}, {hi:.4}]</td><td>{:.2}{}</td><td>{}</td><td>{}</td></tr>\n",
             html_escape(name),
             html_escape(&q.unit),
             q.value,
+            share,
+            if cal.informed(k) {
+                ""
+            } else {
+                " (not informed: posterior ≈ prior)"
+            },
             html_escape(&shown),
             flag
         ));
     }
-    html.push_str("</table>\n<p>Posterior correlations (ln units):</p>\n<table><tr><th></th>");
+    html.push_str(&format!(
+        "</table>\n<p>Width / prior's: ln(hi/lo) of the 95 % interval over ln(hi/lo) of the prior range; at ≥ {} the data did not inform the quantity (a flat posterior gives ≈ 0.95) and its median means little.</p>\n<p>Posterior correlations (ln units):</p>\n<table><tr><th></th>",
+        crate::calibrate::UNINFORMED_SHARE
+    ));
     for name in &cal.free {
         html.push_str(&format!("<th>{}</th>", html_escape(name)));
     }

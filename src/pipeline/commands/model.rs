@@ -27,7 +27,8 @@ pub struct Calibrate {
     pub prior: Option<PathBuf>,
     /// Budget, population, seed.
     pub params: crate::calibrate::CalibrateParams,
-    /// Report folder (`index.html` with the marginal posteriors and correlations).
+    /// Report folder (`index.html` with the marginal posteriors and correlations, and the
+    /// predictive check of the calibrated model and of the chain's).
     pub report: Option<PathBuf>,
     /// The cluster chain's model file (`fit` output), shown beside the posterior in the
     /// report.
@@ -49,13 +50,22 @@ impl fmt::Display for CalibrateSummary {
     /// One line per free quantity (median and 95 % credible interval), then the run.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let c = &self.calibration;
-        for name in &c.free {
+        for (k, name) in c.free.iter().enumerate() {
             let q = c.model.quantity(name).expect("a free quantity exists");
             let [lo, hi] = q.interval.unwrap_or([f64::NAN; 2]);
             writeln!(
                 f,
-                "{name:<26} {:>10.4} {:<5} 95 % [{lo:.4}, {hi:.4}]",
-                q.value, q.unit
+                "{name:<26} {:>10.4} {:<5} 95 % [{lo:.4}, {hi:.4}]{}",
+                q.value,
+                q.unit,
+                if c.informed(k) {
+                    String::new()
+                } else {
+                    format!(
+                        "  not informed: the interval spans {:.0} % of the prior's ln-range",
+                        100.0 * c.width_share(k)
+                    )
+                }
             )?;
         }
         let p = &c.posterior;
@@ -102,6 +112,10 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
     if let Some(r) = &cmd.report {
         outputs.push((r.join("index.html"), "--report"));
         outputs.push((r.join("posterior.png"), "--report"));
+        outputs.push((r.join("check_calibrated.png"), "--report"));
+        if cmd.chain.is_some() {
+            outputs.push((r.join("check_chain.png"), "--report"));
+        }
     }
     refuse(&outputs, &inputs)?;
     let chain = match &cmd.chain {
@@ -120,7 +134,51 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
         std::fs::create_dir_all(r).map_err(|e| crate::error::Error::io(r, e))?;
         let sec =
             crate::report::calibrate::section(r, "posterior.png", &calibration, chain.as_ref())?;
-        crate::report::write_index(&r.join("index.html"), "pradar calibrate", &[sec])?;
+        let mut sections = vec![sec];
+        // the predictive check of the calibrated model (and of the chain's), as `pradar
+        // check` gives it: 20 draws, the calibration's seed
+        let check_params = crate::check::CheckParams {
+            seed: cmd.params.seed,
+            ..Default::default()
+        }
+        .check()?;
+        let energy_name = cmd.energy.display().to_string();
+        let mut models = vec![(
+            "Does the calibrated model reproduce the channel?",
+            format!("the calibrated model against {energy_name}"),
+            Ok(calibration.model.clone()),
+            "check_calibrated.png",
+        )];
+        if let (Some(m), Some(p)) = (&chain, &cmd.chain) {
+            models.push((
+                "Does the cluster chain's model reproduce the channel?",
+                format!(
+                    "the cluster chain's model {} against {energy_name}",
+                    p.display()
+                ),
+                m.clone()
+                    .require_estimable(&Default::default())
+                    .map_err(|e| crate::error::Error::input(p, e.to_string())),
+                "check_chain.png",
+            ));
+        }
+        for (title, what, model, png) in models {
+            let run = || -> Result<crate::report::Section> {
+                let model = model?;
+                let res =
+                    crate::check::check(&c, &em, &cmd.energy, &model, &check_params, &|_, _| {})?;
+                crate::report::check::cdf_plot(&r.join(png), &res)?;
+                Ok(crate::report::check::section(title, &what, &res, png))
+            };
+            sections.push(run().unwrap_or_else(|e| crate::report::Section {
+                title: title.into(),
+                html: format!(
+                    "<p>Not checked: {}</p>\n",
+                    crate::report::html_escape(&e.to_string())
+                ),
+            }));
+        }
+        crate::report::write_index(&r.join("index.html"), "pradar calibrate", &sections)?;
     }
     calibration.model.save(&cmd.out)?;
     Ok(CalibrateSummary {
