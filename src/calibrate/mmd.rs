@@ -128,10 +128,8 @@ impl VecSet {
 
 /// The per-profile and per-position sets of energies `e` (position-major, then direction,
 /// then bin), module docs' definitions; profiles without a sweep (NaN) are left out.
-#[allow(clippy::needless_range_loop)] // bins index the profile and its neighbours
 pub fn statistic_sets(ctx: &StatContext, e: &[f64]) -> (VecSet, VecSet) {
     let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
-    let thr = 10.0 * ctx.mu;
     let silent_db = 10.0 * (9.0 * ctx.mu).max(1e-300).log10();
     let t_end = nb as f64 * ctx.bin_ns;
     let mut profiles = VecSet::new(PROFILE_NAMES.len());
@@ -147,50 +145,21 @@ pub fn statistic_sets(ctx: &StatContext, e: &[f64]) -> (VecSet, VecSet) {
             if prof.first().is_some_and(|v| v.is_nan()) {
                 continue;
             }
-            let (mut m0, mut m1, mut n, mut k) = (0.0, 0.0, 0usize, 0usize);
-            let mut t0 = None;
-            for b in ctx.first_bin..nb {
-                let v = prof[b];
-                if v <= thr || v.is_nan() {
-                    continue;
-                }
-                let s = v - ctx.mu;
-                let tau = b as f64 * ctx.bin_ns;
-                t0.get_or_insert(tau);
-                m0 += s;
-                m1 += s * tau;
-                n += 1;
-                let before = if b > ctx.first_bin { prof[b - 1] } else { 0.0 };
-                let after = if b + 1 < nb { prof[b + 1] } else { 0.0 };
-                if v > before && v >= after {
-                    k += 1;
-                }
-            }
-            let row = match t0 {
-                Some(t0) => {
-                    let mu1 = m1 / m0;
-                    let mut m2 = 0.0;
-                    for b in ctx.first_bin..nb {
-                        let v = prof[b];
-                        if v > thr {
-                            let tau = b as f64 * ctx.bin_ns;
-                            m2 += (v - ctx.mu) * (tau - mu1).powi(2);
-                        }
-                    }
-                    [
-                        10.0 * m0.log10(),
-                        mu1,
-                        (m2 / m0).max(0.0).sqrt(),
-                        n as f64,
-                        t0,
-                        k as f64,
-                        0.0,
-                    ]
-                }
+            let m = ctx.moments(prof);
+            let row = match m.signal {
+                Some(sig) => [
+                    sig.energy_db,
+                    sig.mean_ns,
+                    sig.rms_ns,
+                    m.bins as f64,
+                    sig.first_ns,
+                    m.peaks as f64,
+                    0.0,
+                ],
                 None => [silent_db, t_end, 0.0, 0.0, t_end, 0.0, 0.0],
             };
             rows.push(row);
-            m0s.push(m0);
+            m0s.push(m.m0);
             dirs.push(d);
         }
         if rows.is_empty() {

@@ -58,6 +58,85 @@ pub struct StatContext {
     pub angles_deg: Vec<f64>,
 }
 
+/// The signal bins of one profile (E > 10μ after the gate; [`StatContext::moments`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileMoments {
+    /// Σ (E − μ) over the signal bins (0 without any).
+    pub m0: f64,
+    /// Signal bins.
+    pub bins: usize,
+    /// Local maxima among them.
+    pub peaks: usize,
+    /// The energy-weighted moments, when there is a signal bin.
+    pub signal: Option<ProfileSignal>,
+}
+
+/// The moments of a profile with signal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileSignal {
+    /// 10·log10 m0, dB.
+    pub energy_db: f64,
+    /// Mean delay m1/m0, ns.
+    pub mean_ns: f64,
+    /// RMS delay spread √(m2/m0), ns.
+    pub rms_ns: f64,
+    /// Delay of the first signal bin, ns.
+    pub first_ns: f64,
+}
+
+impl StatContext {
+    /// The per-profile statistics of one profile: its signal bins (E > 10μ after the
+    /// gate), their local maxima, and the moments of E − μ over delay. Shared by the
+    /// check's samples and the calibration's MMD sets, so both read a profile alike.
+    #[allow(clippy::needless_range_loop)] // bins index the profile and its neighbours
+    pub fn moments(&self, prof: &[f64]) -> ProfileMoments {
+        let nb = prof.len();
+        let thr = 10.0 * self.mu;
+        let (mut m0, mut m1, mut n, mut k) = (0.0, 0.0, 0usize, 0usize);
+        let mut t0 = None;
+        for b in self.first_bin..nb {
+            let v = prof[b];
+            if v <= thr || v.is_nan() {
+                continue;
+            }
+            let s = v - self.mu;
+            let tau = b as f64 * self.bin_ns;
+            t0.get_or_insert(tau);
+            m0 += s;
+            m1 += s * tau;
+            n += 1;
+            let before = if b > self.first_bin { prof[b - 1] } else { 0.0 };
+            let after = if b + 1 < nb { prof[b + 1] } else { 0.0 };
+            if v > before && v >= after {
+                k += 1;
+            }
+        }
+        let signal = t0.map(|t0| {
+            let mu1 = m1 / m0;
+            let mut m2 = 0.0;
+            for b in self.first_bin..nb {
+                let v = prof[b];
+                if v > thr {
+                    let tau = b as f64 * self.bin_ns;
+                    m2 += (v - self.mu) * (tau - mu1).powi(2);
+                }
+            }
+            ProfileSignal {
+                energy_db: 10.0 * m0.log10(),
+                mean_ns: mu1,
+                rms_ns: (m2 / m0).max(0.0).sqrt(),
+                first_ns: t0,
+            }
+        });
+        ProfileMoments {
+            m0,
+            bins: n,
+            peaks: k,
+            signal,
+        }
+    }
+}
+
 /// One statistic of one matrix: a sample of values, or (the delay power profile) a
 /// non-negative curve over the bins.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,7 +158,6 @@ pub struct Statistics {
 
 impl Statistics {
     /// The statistics of energies `e` (position-major, then direction, then bin).
-    #[allow(clippy::needless_range_loop)] // bins index the profile and its neighbours
     pub fn of(ctx: &StatContext, e: &[f64]) -> Statistics {
         let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
         debug_assert_eq!(e.len(), np * nd * nb);
@@ -106,43 +184,23 @@ impl Statistics {
                     continue;
                 }
                 n_present += 1;
-                let (mut m0, mut m1, mut n, mut k) = (0.0, 0.0, 0usize, 0usize);
-                let mut t0 = None;
-                for b in ctx.first_bin..nb {
-                    let v = prof[b];
-                    if v <= thr || v.is_nan() {
-                        continue;
-                    }
-                    let s = v - ctx.mu;
-                    let tau = b as f64 * ctx.bin_ns;
-                    t0.get_or_insert(tau);
-                    m0 += s;
-                    m1 += s * tau;
-                    n += 1;
-                    curve[b] += s;
-                    let before = if b > ctx.first_bin { prof[b - 1] } else { 0.0 };
-                    let after = if b + 1 < nb { prof[b + 1] } else { 0.0 };
-                    if v > before && v >= after {
-                        k += 1;
+                let m = ctx.moments(prof);
+                for (c, &v) in curve[ctx.first_bin..]
+                    .iter_mut()
+                    .zip(&prof[ctx.first_bin..])
+                {
+                    if v > thr {
+                        *c += v - ctx.mu;
                     }
                 }
-                bins.push(n as f64);
-                peaks.push(k as f64);
-                *w = m0;
-                if let Some(t0) = t0 {
-                    let mu1 = m1 / m0;
-                    let mut m2 = 0.0;
-                    for b in ctx.first_bin..nb {
-                        let v = prof[b];
-                        if v > thr {
-                            let tau = b as f64 * ctx.bin_ns;
-                            m2 += (v - ctx.mu) * (tau - mu1).powi(2);
-                        }
-                    }
-                    energy.push(10.0 * m0.log10());
-                    mean.push(mu1);
-                    rms.push((m2 / m0).max(0.0).sqrt());
-                    first.push(t0);
+                bins.push(m.bins as f64);
+                peaks.push(m.peaks as f64);
+                *w = m.m0;
+                if let Some(sig) = m.signal {
+                    energy.push(sig.energy_db);
+                    mean.push(sig.mean_ns);
+                    rms.push(sig.rms_ns);
+                    first.push(sig.first_ns);
                 }
             }
             let total: f64 = per_dir.iter().sum();
