@@ -289,12 +289,20 @@ fn ghost_scene() -> (toml::Table, [f64; 2]) {
     (t, image)
 }
 
-/// Issue 17's ghost test. Unmet: the occluder of a beam is its strongest echo unless an
-/// earlier one lies on a surface the map already holds, and the wall the ghost is seen
-/// through is not mapped yet when the first poses see the ghost (figures printed; the
-/// boresight baseline shows the ghost, so the test can tell). Run with `--ignored`.
+/// Issue 17's ghost test with issue 31's rule (item 4): with `--ghost mirror` (each pose's
+/// evidence judged again against the final map's surfaces, `mapping::grid::ghost`; for the
+/// OG with `--og-hold-echoes true`, so that a beam whose occluder is the ghost does not
+/// clear the wall in front of it) both mappers leave at most 5 of the 90 cells around the
+/// image occupied, and find the walls (three-class building figure) at least as well as
+/// with the defaults (no rule). Measured (about 25 s with the simulation): defaults OG 13,
+/// EKF 19 of 90 (walls found 0.758 / 0.761); with the rule OG 2, EKF 4 (walls found
+/// 0.761 / 0.696); boresight 35. Unmet for the EKF's walls: the rule also discounts rises
+/// some poses gave to wall cells (building walls found 0.761 → 0.696); judging against a
+/// stricter surface map (occupied at 2κ or 3κ) leaves it at 0.700 / 0.710, so the EKF's
+/// range-ring cells are not the main cause, and the cause was not isolated
+/// (`docs/mapping.md`, issue 31 item 4). Run with `--ignored`.
 #[test]
-#[ignore = "unmet: the OG leaves 13 and the EKF 19 of 90 ghost cells occupied (42 before issue 31; boresight 35)"]
+#[ignore = "unmet: with --ghost mirror the OG leaves 2 and the EKF 4 of 90 ghost cells occupied (defaults 13 / 19, boresight 35), but the EKF's walls found falls 0.761 -> 0.696; the rule is off by default (it lowers walls found on the must-show scenes)"]
 fn a_multi_bounce_ghost_leaves_no_occupied_cell_beyond_the_wall() {
     let (t, image) = ghost_scene();
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("occlusion_ghost");
@@ -314,30 +322,50 @@ fn a_multi_bounce_ghost_leaves_no_occupied_cell_beyond_the_wall() {
         })
         .collect();
     assert!(ghost_cells.len() > 50, "the image must lie inside the grid");
-    let mut res = Vec::new();
-    for method in ["og-boresight", "og", "ekf"] {
-        let out = root.join(format!("map_{method}"));
-        map(method, &c, &e, &out);
+    let mut res = std::collections::HashMap::new();
+    let runs: [(&str, &str, &[&str]); 5] = [
+        ("og-boresight", "og-boresight", &[]),
+        ("og", "og", &[]),
+        ("ekf", "ekf", &[]),
+        (
+            "og-mirror",
+            "og",
+            &["--ghost", "mirror", "--og-hold-echoes", "true"],
+        ),
+        ("ekf-mirror", "ekf", &["--ghost", "mirror"]),
+    ];
+    for (tag, method, flags) in runs {
+        let out = root.join(format!("map_{tag}"));
+        let j = map_with(method, flags, &c, &e, &out);
         let bin = read_binary_pgm(&out.join(format!("{method}_binary.pgm")));
         let occ = ghost_cells.iter().filter(|&&i| bin[i]).count();
         let outside = (0..spec.len())
             .filter(|&i| reference.cells[i] == CellClass::Outside && bin[i])
             .count();
+        let walls = f(&j, &["metrics", "three_class", "building", "walls_found_1"]);
         eprintln!(
-            "{method:>12}: {occ} of {} cells within 0.6 m of the ghost (beyond the wall) occupied; {outside} outside cells occupied in all",
+            "{tag:>12}: {occ} of {} cells within 0.6 m of the ghost (beyond the wall) occupied; {outside} outside cells occupied in all; walls found (building) {walls:.3}",
             ghost_cells.len()
         );
-        res.push(occ);
+        res.insert(tag, (occ, walls));
     }
-    assert!(res[0] > 0, "the boresight map should show the ghost");
-    assert_eq!(
-        res[1], 0,
-        "og: the ghost left occupied cells beyond the wall"
+    assert!(
+        res["og-boresight"].0 > 0,
+        "the boresight map should show the ghost"
     );
-    assert_eq!(
-        res[2], 0,
-        "ekf: the ghost left occupied cells beyond the wall"
-    );
+    for (rule, base) in [("og-mirror", "og"), ("ekf-mirror", "ekf")] {
+        assert!(
+            res[rule].0 <= 5,
+            "{rule}: {} ghost cells occupied",
+            res[rule].0
+        );
+        assert!(
+            res[rule].1 >= res[base].1,
+            "{rule}: walls found {} below {} without the rule",
+            res[rule].1,
+            res[base].1
+        );
+    }
 }
 
 /// A binary PGM map read back by the mapping tests' independent reader (row 0 of the file

@@ -292,6 +292,18 @@ pub struct MapArgs {
     /// EKF negative means: reflected (true) or clamped to the lowest mean (false).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().reflect, action = clap::ArgAction::Set)]
     pub ekf_reflect: bool,
+    /// OG (`--method og`): no free evidence at the range of a main-lobe echo before the
+    /// beam's occluder.
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_echoes, action = clap::ArgAction::Set)]
+    pub og_hold_echoes: bool,
+    /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
+    /// judged again against the final map's surfaces), aspect (occupancy needs support from
+    /// poses spanning a minimum aspect) or none.
+    #[arg(long, value_enum, default_value = "none", hide_possible_values = true)]
+    pub ghost: pradar::mapping::grid::GhostRule,
+    /// Minimum aspect of `--ghost aspect`, in two-way −3 dB main-lobe widths, [0, 36].
+    #[arg(long, default_value_t = pradar::mapping::grid::GhostParams::default().aspect_lobes, value_parser = ranges::aspect_lobes, allow_negative_numbers = true)]
+    pub ghost_aspect_lobes: f64,
     /// Pose noise given to the mapper: position standard deviation per axis, m.
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_m: f64,

@@ -123,6 +123,10 @@ impl MapArgs {
             .campaign
             .zip(self.energy)
             .map(|(campaign, energy)| MapRun { campaign, energy });
+        let ghost = pradar::mapping::grid::GhostParams {
+            rule: self.ghost,
+            aspect_lobes: self.ghost_aspect_lobes,
+        };
         commands::Map {
             options: MapOptions {
                 method: self.method,
@@ -137,6 +141,8 @@ impl MapArgs {
                     pfa: self.pfa,
                     prior: self.prior,
                     passes: self.passes as usize,
+                    hold_echoes: self.og_hold_echoes,
+                    ghost,
                     ..Default::default()
                 },
                 ekf: EkfParams {
@@ -146,6 +152,7 @@ impl MapArgs {
                     kappa: self.kappa,
                     free_space: self.ekf_free_space,
                     reflect: self.ekf_reflect,
+                    ghost,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {

@@ -103,6 +103,15 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
     checked(s, |v| v.is_finite() && v >= 0.0, "finite and >= 0")
 }
 
+/// `--ghost-aspect-lobes`: in [0, 36] (`GhostParams` aspect_lobes).
+pub fn aspect_lobes(s: &str) -> Result<f64, String> {
+    checked(
+        s,
+        |v| v.is_finite() && (0.0..=36.0).contains(&v),
+        "in [0, 36]",
+    )
+}
+
 /// `--dynamic-range-db`: > 0 (`ExtractParams` dynamic_range_db; infinity means no limit).
 pub fn dynamic_range_db(s: &str) -> Result<f64, String> {
     checked(s, |v| v > 0.0, "> 0")

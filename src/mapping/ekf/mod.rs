@@ -115,6 +115,10 @@
 //! posterior only, never the reference map; cells never illuminated stay at the prior and
 //! read as free.
 //!
+//! Ghosts across poses: a ghost rule ([`crate::mapping::grid::ghost`], `none` by default;
+//! [`EkfMap::discount`]) may discount, at the binary decision, the mean rises of the poses
+//! that cannot see a cell under the final map.
+//!
 //! Negative means are reflected (below), not clamped to zero: clamping (`reflect` = false,
 //! the projection onto x ≥ 0) was measured and not kept (with free-space evidence it raised
 //! the corridor's wrong building cells at N = 100 from 462 to 618, `docs/mapping.md`): a
@@ -150,7 +154,7 @@ pub use dense::DenseEkf;
 pub use linalg::cholesky;
 pub use observation::{truncate_kernel, Linearized, NoiseModel, Observation};
 pub use params::{normal_cdf, EkfParams, EkfValid, EkfVariant};
-pub use run::{ekf_run, mean_grey, std_grey, EkfMap, EkfReport, EkfStats, Sight};
+pub use run::{ekf_run, ekf_run_judged, mean_grey, std_grey, EkfMap, EkfReport, EkfStats, Sight};
 pub use tiled::TiledEkf;
 
 use crate::error::Result;

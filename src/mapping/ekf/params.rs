@@ -7,6 +7,7 @@
 //! mean kept by the positivity step, 1e-3·μ0.
 
 use crate::error::{Error, Result};
+use crate::mapping::grid::GhostParams;
 use crate::params::{ParamGuard, Valid};
 
 /// Which implementation of the EKF.
@@ -66,6 +67,9 @@ pub struct EkfParams {
     pub tile: usize,
     /// Largest grid the dense filter accepts (20,000 cells = 3.2 GB of covariance).
     pub max_dense_cells: usize,
+    /// Ghost rule applied to the map once the runs are filtered
+    /// ([`crate::mapping::grid::ghost`]; `none`).
+    pub ghost: GhostParams,
 }
 
 /// EKF parameters that passed [`ParamGuard::check`].
@@ -90,6 +94,7 @@ impl Default for EkfParams {
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,
+            ghost: GhostParams::default(),
         }
     }
 }
@@ -98,7 +103,7 @@ impl ParamGuard for EkfParams {
     type Checked = EkfValid;
 
     /// Every field in range: μ0 > 0, σ0 > 0, ε ≥ 0, kernel floor < 0 dB, κ ≥ 0, tile in
-    /// 1..=64 cells, `max_dense_cells` > 0.
+    /// 1..=64 cells, `max_dense_cells` > 0, the ghost rule's parameters in range.
     fn check(&self) -> Result<EkfValid> {
         if !(self.mu0.is_finite() && self.mu0 > 0.0) {
             return Err(Error::param(
@@ -127,6 +132,7 @@ impl ParamGuard for EkfParams {
         if self.max_dense_cells == 0 {
             return Err(Error::param("max_dense_cells", "must be > 0"));
         }
+        self.ghost.check()?;
         Ok(Valid::new(*self))
     }
 }

@@ -19,7 +19,7 @@ use super::{
 };
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
-use crate::mapping::grid::{ObservationModel, Occlusion};
+use crate::mapping::grid::{GhostJudge, GhostRule, ObservationModel, Occlusion, ScanEchoes};
 use crate::mapping::og::Detector;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -61,6 +61,26 @@ pub fn ekf_run(
     filter: &mut dyn RrcsFilter,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EkfStats> {
+    ekf_run_judged(
+        model, src, kernel, params, noise, sight, filter, None, progress,
+    )
+}
+
+/// [`ekf_run`] that also records, with a sight model, each pose's echoes and the rise of
+/// each cell's mean in the pose's energy updates (net over its directions, the positive
+/// part) for a ghost rule ([`crate::mapping::grid::ghost`]).
+#[allow(clippy::too_many_arguments)]
+pub fn ekf_run_judged(
+    model: &ObservationModel,
+    src: &dyn EnergySource,
+    kernel: &[f64],
+    params: &EkfValid,
+    noise: &NoiseModel,
+    sight: Option<Sight<'_>>,
+    filter: &mut dyn RrcsFilter,
+    mut judge: Option<&mut GhostJudge<'_>>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<EkfStats> {
     let n = model.spec.len();
     if filter.len() != n {
         return Err(Error::param("ekf", "filter and grid sizes differ"));
@@ -83,7 +103,12 @@ pub fn ekf_run(
     // (the energies are loaded one pose at a time: a table read from its file is never
     // held whole)
     // a pose's observations with their free-space evidence, build time, withheld rows
-    type Built = (Vec<(Observation, Option<FreeSpace>)>, f64, u64);
+    type Built = (
+        Vec<(Observation, Option<FreeSpace>)>,
+        f64,
+        u64,
+        Option<ScanEchoes>,
+    );
     let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<Built> {
         let tb = Instant::now();
         let part = src.load(p, p + 1)?;
@@ -167,6 +192,7 @@ pub fn ekf_run(
             obs.into_iter().map(|o| (o.0, o.1)).collect(),
             tb.elapsed().as_secs_f64(),
             withheld,
+            seen.map(|s| s.0),
         ))
     };
     // the filter's binary map (EkfMap's rule)
@@ -179,16 +205,33 @@ pub fn ekf_run(
         None
     };
     for p in 0..np {
-        let (obs, build_s, withheld) = current.take().expect("built")?;
+        let (obs, build_s, withheld, echoes) = current.take().expect("built")?;
+        let recording = judge.is_some() && echoes.is_some();
+        let mut rise: Vec<std::collections::BTreeMap<u32, f64>> =
+            vec![Default::default(); obs.len()];
         st.build_seconds += build_s;
         st.withheld += withheld;
         let occupied = if p + 1 < np { snapshot(&*filter) } else { None };
-        let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
+        let mut apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
             let tu = Instant::now();
-            for (o, free) in &obs {
+            for (d, (o, free)) in obs.iter().enumerate() {
+                let before: Vec<(u32, f64)> = if recording {
+                    let mut cells = o.cell.clone();
+                    cells.sort_unstable();
+                    cells.dedup();
+                    cells
+                        .into_iter()
+                        .map(|c| (c, filter.mean()[c as usize]))
+                        .collect()
+                } else {
+                    Vec::new()
+                };
                 let lin = Linearized::new(o, filter.mean(), noise);
                 filter.update(o, &lin)?;
                 st.reflected += filter.project_positive(params.x_min(), params.reflect) as u64;
+                for (c, b) in before {
+                    *rise[d].entry(c).or_default() += filter.mean()[c as usize] - b;
+                }
                 if let Some((f, r)) = free {
                     let lin = Linearized::direct(f, filter.mean(), r);
                     filter.update(f, &lin)?;
@@ -207,6 +250,18 @@ pub fn ekf_run(
             || (p + 1 < np).then(|| build(p + 1, occupied)),
         );
         applied?;
+        if let (Some(j), Some(e)) = (judge.as_deref_mut(), echoes.as_ref()) {
+            let evidence = rise
+                .into_iter()
+                .map(|m| {
+                    m.into_iter()
+                        .filter(|&(_, r)| r > 0.0)
+                        .map(|(c, r)| (c, r as f32))
+                        .collect()
+                })
+                .collect();
+            j.record(p, e, evidence);
+        }
         current = next;
         progress(p + 1, np);
     }
@@ -306,6 +361,10 @@ pub struct EkfMap {
     pub mu0: f64,
     /// κ of the binary rule.
     pub kappa: f64,
+    /// Evidence a ghost rule removed from each cell's mean, m
+    /// ([`crate::mapping::grid::ghost`]; zeros without one): the decisions use
+    /// x̂ − discount.
+    pub discount: Vec<f64>,
 }
 
 impl EkfMap {
@@ -318,14 +377,63 @@ impl EkfMap {
             std: f.variances().iter().map(|v| v.max(0.0).sqrt()).collect(),
             mu0: params.mu0,
             kappa: params.kappa,
+            discount: vec![0.0; rows * cols],
         }
     }
-    /// p_i = Φ((x̂_i − μ0)/σ̂_i).
+
+    /// Snapshot of a filter with the ghost rule of `judges` (one per run filtered so far):
+    /// `mirror` discounts the mean rises of the poses that cannot see a cell under the
+    /// binary map; `aspect` brings the occupied cells whose supporting poses (mean rise
+    /// ≥ μ0) span less than the minimum aspect in any run back to the prior mean.
+    pub fn judged(
+        f: &dyn RrcsFilter,
+        rows: usize,
+        cols: usize,
+        params: &EkfValid,
+        judges: &[GhostJudge<'_>],
+    ) -> Self {
+        let mut m = EkfMap::from_filter(f, rows, cols, params);
+        let Some(rule) = judges.first().map(|j| j.rule()) else {
+            return m;
+        };
+        let occupied = m.binary();
+        match rule {
+            GhostRule::None => {}
+            GhostRule::Mirror => {
+                for j in judges {
+                    for (d, e) in m
+                        .discount
+                        .iter_mut()
+                        .zip(j.explained(rows * cols, &occupied))
+                    {
+                        *d += e;
+                    }
+                }
+            }
+            GhostRule::Aspect => {
+                let mut ok = vec![false; rows * cols];
+                for j in judges {
+                    for (o, a) in ok.iter_mut().zip(j.aspect_ok(&occupied, params.mu0)) {
+                        *o |= a;
+                    }
+                }
+                for (i, ok) in ok.into_iter().enumerate() {
+                    if !ok {
+                        m.discount[i] = m.mean[i] - m.mu0;
+                    }
+                }
+            }
+        }
+        m
+    }
+    /// p_i = Φ((x̂_i − d_i − μ0)/σ̂_i), d_i the ghost rule's discount.
     pub fn probs(&self) -> Vec<f64> {
         self.mean
             .iter()
+            .zip(&self.discount)
+            .map(|(&m, &d)| m - d)
             .zip(&self.std)
-            .map(|(&m, &s)| {
+            .map(|(m, &s)| {
                 if s > 0.0 {
                     normal_cdf((m - self.mu0) / s)
                 } else if m > self.mu0 {
@@ -336,12 +444,13 @@ impl EkfMap {
             })
             .collect()
     }
-    /// Binary map: x̂ − κ·σ̂ > μ0.
+    /// Binary map: x̂ − d − κ·σ̂ > μ0 (d the ghost rule's discount).
     pub fn binary(&self) -> Vec<bool> {
         self.mean
             .iter()
+            .zip(&self.discount)
             .zip(&self.std)
-            .map(|(&m, &s)| m - self.kappa * s > self.mu0)
+            .map(|((&m, &d), &s)| m - d - self.kappa * s > self.mu0)
             .collect()
     }
 }

@@ -28,7 +28,9 @@
 //!   illuminated cells.
 //!
 //! What a scan can see (the occluder of each beam, the visibility of each cell) is
-//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Beams are built
+//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Evidence a pose
+//! could not have had, judged again against the final map (multi-bounce ghosts), is
+//! [`ghost`]. Beams are built
 //! on demand per pose and reused for every bin and every pass of a mapper;
 //! [`ObservationModel::beams`] builds one pose's beams in parallel.
 
@@ -40,10 +42,12 @@ use crate::units::{wrap_rad, C0};
 use rayon::prelude::*;
 
 mod gain;
+pub mod ghost;
 pub mod visibility;
 use gain::GainModel;
+pub use ghost::{GhostJudge, GhostParams, GhostRule, GhostValid};
 use std::f64::consts::PI;
-pub use visibility::{Occlusion, ScanEchoes, Visibility};
+pub use visibility::{Occlusion, Polygon, ScanEchoes, Visibility};
 
 /// Grid and observation-model parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]

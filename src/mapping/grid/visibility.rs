@@ -76,6 +76,10 @@ pub struct ScanEchoes {
     /// Per direction: the campaign has no sweep there (`[sweeps] missing`); its occluder is
     /// unknown, and the visible region is interpolated over it from its neighbours.
     pub missing: Vec<bool>,
+    /// Per direction: the detections not explained by a side lobe, (bin, energy) by
+    /// ascending bin — the candidates of the occluder, kept so that a later map can judge
+    /// the scan again ([`crate::mapping::grid::ghost`]).
+    pub main: Vec<Vec<(u32, f64)>>,
 }
 
 impl ScanEchoes {
@@ -192,37 +196,59 @@ impl Occlusion {
             .into_par_iter()
             .map(|d| self.side_lobe_flags(em, p, d, &det[d]))
             .collect();
-        let occluder = (0..nd)
+        let main: Vec<Vec<(u32, f64)>> = (0..nd)
             .map(|d| {
                 let prof = em.profile(p, d);
                 let bins = det[d].len().min(prof.len());
-                let main = |k: usize| det[d][k] && !side[d][k];
-                let mut best: Option<usize> = None;
-                for k in self.min_bin..bins {
-                    if main(k) && best.is_none_or(|b| prof[k] > prof[b]) {
-                        best = Some(k);
-                    }
-                }
-                let strongest = best?;
-                let Some(occ) = occupied else {
-                    return Some(strongest);
-                };
-                let surfaces = self.mapped_surfaces(model, p, d, occ);
-                let confirmed = (self.min_bin..strongest).find(|&k| {
-                    main(k) && {
-                        let r = k as f64 * self.bin_m;
-                        surfaces.iter().any(|&s| (s - r).abs() <= self.guard_m)
-                    }
-                });
-                Some(confirmed.unwrap_or(strongest))
+                (self.min_bin..bins)
+                    .filter(|&k| det[d][k] && !side[d][k])
+                    .map(|k| (k as u32, prof[k]))
+                    .collect()
             })
+            .collect();
+        let occluder = (0..nd)
+            .map(|d| self.occluder_of(model, p, d, &main[d], occupied))
             .collect();
         let missing = (0..nd).map(|d| !em.has(p, d)).collect();
         ScanEchoes {
             det,
             occluder,
             missing,
+            main,
         }
+    }
+
+    /// The occluder of direction `d` at pose `p` from its main detections `main` (bin,
+    /// energy; ascending bin): the strongest (the first of equals), or an earlier one on a
+    /// surface of the binary map `occupied` when given (module docs).
+    pub fn occluder_of(
+        &self,
+        model: &ObservationModel,
+        p: usize,
+        d: usize,
+        main: &[(u32, f64)],
+        occupied: Option<&[bool]>,
+    ) -> Option<usize> {
+        let mut best: Option<(u32, f64)> = None;
+        for &(k, e) in main {
+            if best.is_none_or(|b| e > b.1) {
+                best = Some((k, e));
+            }
+        }
+        let strongest = best?.0 as usize;
+        let Some(occ) = occupied else {
+            return Some(strongest);
+        };
+        let surfaces = self.mapped_surfaces(model, p, d, occ);
+        let confirmed = main
+            .iter()
+            .map(|&(k, _)| k as usize)
+            .take_while(|&k| k < strongest)
+            .find(|&k| {
+                let r = k as f64 * self.bin_m;
+                surfaces.iter().any(|&s| (s - r).abs() <= self.guard_m)
+            });
+        Some(confirmed.unwrap_or(strongest))
     }
 
     /// Ranges (m, ascending) at which the boresight ray of (pose `p`, direction `d`) enters an
@@ -260,6 +286,46 @@ impl Occlusion {
         out
     }
 
+    /// The visibility polygon of a scan from its occluders (module docs): samples
+    /// (θ_d, 1/R_d), ascending θ.
+    pub fn polygon(&self, model: &ObservationModel, echoes: &ScanEchoes) -> Polygon {
+        self.polygon_of(model, &echoes.occluder, &echoes.missing)
+    }
+
+    /// [`Occlusion::polygon`] from the occluders and the missing directions.
+    pub fn polygon_of(
+        &self,
+        model: &ObservationModel,
+        occluder: &[Option<usize>],
+        missing: &[bool],
+    ) -> Polygon {
+        let rmax = model.max_range_m();
+        let mut samples: Vec<(f64, f64)> = occluder
+            .iter()
+            .enumerate()
+            // a direction without a sweep saw nothing: its neighbours bound the region
+            .filter(|(d, _)| !missing.get(*d).copied().unwrap_or(false))
+            .map(|(d, o)| {
+                let r = o.map_or(rmax, |k| (k as f64 * self.bin_m).max(self.bin_m));
+                (model.direction_rad(d), 1.0 / r)
+            })
+            .collect();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Polygon { samples }
+    }
+
+    /// Depth δ = r − R(θ) of the cell at range `r` and bearing `theta` (relative to the
+    /// heading) behind the polygon `poly`, m; +∞ where no main lobe looked.
+    pub fn depth(&self, poly: &Polygon, r: f64, theta: f64) -> f64 {
+        let b = bucket_of(theta);
+        if !self.covered[b] {
+            return f64::INFINITY;
+        }
+        let u = polygon_inverse_range(&poly.samples, bucket_centre(b));
+        let lim = if u > 0.0 { 1.0 / u } else { f64::INFINITY };
+        r - lim
+    }
+
     /// The visibility of every cell of a pose's geometry from its echoes (module docs).
     pub fn visibility(
         &self,
@@ -267,20 +333,7 @@ impl Occlusion {
         geom: &PoseGeometry,
         echoes: &ScanEchoes,
     ) -> Visibility {
-        let rmax = model.max_range_m();
-        // polygon samples (θ_d, 1/R_d), ascending θ
-        let mut samples: Vec<(f64, f64)> = echoes
-            .occluder
-            .iter()
-            .enumerate()
-            // a direction without a sweep saw nothing: its neighbours bound the region
-            .filter(|(d, _)| !echoes.missing.get(*d).copied().unwrap_or(false))
-            .map(|(d, o)| {
-                let r = o.map_or(rmax, |k| (k as f64 * self.bin_m).max(self.bin_m));
-                (model.direction_rad(d), 1.0 / r)
-            })
-            .collect();
-        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let samples = self.polygon(model, echoes).samples;
         let mut depth = vec![f32::INFINITY; model.spec.len()];
         for b in 0..BUCKETS {
             let (lo, hi) = (geom.bucket[b] as usize, geom.bucket[b + 1] as usize);
@@ -304,6 +357,13 @@ impl Occlusion {
             guard_m: self.guard_m as f32,
         }
     }
+}
+
+/// A scan's visibility polygon: per direction with a sweep (θ_d, 1/R_d), ascending θ
+/// (R_d the occluder's range, the last bin's without one).
+#[derive(Debug, Clone, Default)]
+pub struct Polygon {
+    samples: Vec<(f64, f64)>,
 }
 
 /// The bearing at the centre of bucket `b`, rad.
@@ -371,6 +431,7 @@ mod tests {
             det: vec![vec![false; 50]; 2],
             occluder: vec![Some(20), None],
             missing: vec![false; 2],
+            main: vec![Vec::new(); 2],
         };
         assert_eq!(e.last_observed(0, 3, 50), 23);
         assert_eq!(

@@ -17,11 +17,12 @@ use crate::campaign::layout::{GridSpec, ReferenceMap};
 use crate::energy::EnergySource;
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{
-    ekf_run, mean_grey, new_filter, std_grey, truncate_kernel, EkfMap, EkfReport, EkfStats,
-    EkfValid, EkfVariant, NoiseModel, RrcsFilter, Sight,
+    ekf_run_judged, mean_grey, new_filter, std_grey, truncate_kernel, EkfMap, EkfReport, EkfStats,
+    EkfValid, EkfVariant, NoiseModel, Sight,
 };
-use crate::mapping::grid::Occlusion;
+use crate::mapping::grid::{GhostJudge, GhostRule, Occlusion};
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
+use crate::params::Valid;
 use std::path::Path;
 
 /// The runs with their window kernels and noise models.
@@ -47,7 +48,8 @@ impl EkfInputs {
 /// What filtering the runs gave: the fused filter, its statistics per run, the fusion
 /// table and each run's figures alone.
 struct Filtered {
-    filter: Box<dyn RrcsFilter>,
+    /// The fused map (the ghost rule applied).
+    map: EkfMap,
     stats: Vec<EkfStats>,
     fusion: Vec<FusionRow>,
     alone: Vec<MetricsPair>,
@@ -59,7 +61,7 @@ pub fn run_map_ekf(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) ->
     let inputs = ekf_inputs(opts, &params)?;
     let spec = inputs.reference.spec;
     let f = filter_runs(&inputs, &params, progress)?;
-    let map = EkfMap::from_filter(f.filter.as_ref(), spec.rows, spec.cols, &params);
+    let map = f.map;
     let bin = map.binary();
     let metrics = score_binary(&bin, &inputs.reference, &inputs.region);
     let eta = params.eta();
@@ -138,13 +140,24 @@ fn filter_runs(
     let spec = inp.reference.spec;
     let total: usize = inp.loaded.iter().map(|l| l.model.poses.len()).sum();
     let mut filter = new_filter(params, spec.rows, spec.cols)?;
+    let judge = |i: usize| {
+        (params.ghost.rule != GhostRule::None).then(|| {
+            GhostJudge::new(
+                &inp.loaded[i].model,
+                &inp.occlusions[i],
+                Valid::new(params.ghost),
+            )
+        })
+    };
+    let mut judges: Vec<GhostJudge<'_>> = Vec::new();
     let mut done = 0;
     let mut stats = Vec::new();
     let mut fusion = Vec::new();
     let mut alone = Vec::new();
     for (i, l) in inp.loaded.iter().enumerate() {
         let base = done;
-        let st = ekf_run(
+        let mut j = judge(i);
+        let st = ekf_run_judged(
             &l.model,
             &l.energy,
             &inp.kernels[i],
@@ -152,11 +165,13 @@ fn filter_runs(
             &inp.noises[i],
             Some(inp.sight(i)),
             filter.as_mut(),
+            j.as_mut(),
             &|d, _| progress(base + d, total),
         )?;
+        judges.extend(j);
         done += l.model.poses.len();
         stats.push(st);
-        let snap = EkfMap::from_filter(filter.as_ref(), spec.rows, spec.cols, params);
+        let snap = EkfMap::judged(filter.as_ref(), spec.rows, spec.cols, params, &judges);
         let m = score_binary(&snap.binary(), &inp.reference, &inp.region);
         fusion.push(FusionRow {
             runs: i + 1,
@@ -169,7 +184,8 @@ fn filter_runs(
     if inp.loaded.len() > 1 {
         for (i, l) in inp.loaded.iter().enumerate() {
             let mut f = new_filter(params, spec.rows, spec.cols)?;
-            ekf_run(
+            let mut j = judge(i);
+            ekf_run_judged(
                 &l.model,
                 &l.energy,
                 &inp.kernels[i],
@@ -177,14 +193,21 @@ fn filter_runs(
                 &inp.noises[i],
                 Some(inp.sight(i)),
                 f.as_mut(),
+                j.as_mut(),
                 &|_, _| {},
             )?;
-            let snap = EkfMap::from_filter(f.as_ref(), spec.rows, spec.cols, params);
+            let snap = EkfMap::judged(
+                f.as_ref(),
+                spec.rows,
+                spec.cols,
+                params,
+                &j.into_iter().collect::<Vec<_>>(),
+            );
             alone.push(score_binary(&snap.binary(), &inp.reference, &inp.region));
         }
     }
     Ok(Filtered {
-        filter,
+        map: EkfMap::judged(filter.as_ref(), spec.rows, spec.cols, params, &judges),
         stats,
         fusion,
         alone,

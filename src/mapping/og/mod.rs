@@ -32,7 +32,10 @@
 //!   leakage of an echo another direction credits, or a surface the main lobe just
 //!   cleared) and detections more than g beyond it (shadowed: multipath or echoes from
 //!   behind the surface) are withheld, counted in [`OgStats::withheld`]; bins after the
-//!   occluder without a detection give no evidence. The map the occluders are confirmed
+//!   occluder without a detection give no evidence. With `hold_echoes` (off by default)
+//!   the bins within g of a main-lobe detection before the occluder give no free evidence
+//!   either, and a ghost rule ([`crate::mapping::grid::ghost`], `none` by default) may
+//!   judge every pose's increments again against the final map and replay them. The map the occluders are confirmed
 //!   against is the belief the responsibilities use, a cell being a surface when
 //!   p > max(0.5, p0): the scan's snapshot, or the previous pass's map with `passes` ≥ 2;
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the

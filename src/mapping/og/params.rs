@@ -5,6 +5,7 @@
 //! p_free; the inverse is the logistic function [`sigmoid`].
 
 use crate::error::{Error, Result};
+use crate::mapping::grid::GhostParams;
 use crate::params::{ParamGuard, Valid};
 
 /// Occupancy-grid parameters.
@@ -32,6 +33,14 @@ pub struct OgParams {
     /// Passes of the side-lobe-aware model over the run (1; a pass > 1 restarts from the prior
     /// and takes its responsibilities from the previous pass's final map).
     pub passes: usize,
+    /// No free evidence within the guard of a main-lobe echo before the occluder (false; see
+    /// [`crate::mapping::grid::ghost`]): a weaker echo not explained by a side lobe is a
+    /// surface the beam sees (the wall in front of a stronger multi-bounce image), not free
+    /// space.
+    pub hold_echoes: bool,
+    /// Ghost rule applied to the `og` map once it is built
+    /// ([`crate::mapping::grid::ghost`]; `none`).
+    pub ghost: GhostParams,
 }
 
 impl Default for OgParams {
@@ -46,6 +55,8 @@ impl Default for OgParams {
             passes: 1,
             side_db: 0.0,
             free_db: -10.0,
+            hold_echoes: false,
+            ghost: GhostParams::default(),
         }
     }
 }
@@ -67,7 +78,7 @@ impl ParamGuard for OgParams {
 
     /// Prior in (0, 1) with log-odds inside the clamp, P_fa in (0, 0.5], p_occ in
     /// (0.5, 1), p_free in (0, 0.5), clamp > 0, masking margin ≥ 0 dB, free level ≤ 0 dB,
-    /// side-lobe margin finite, passes in 1..=10.
+    /// side-lobe margin finite, passes in 1..=10, the ghost rule's parameters in range.
     fn check(&self) -> Result<OgValid> {
         let open01 = |v: f64| v.is_finite() && v > 0.0 && v < 1.0;
         if !open01(self.prior) {
@@ -97,6 +108,7 @@ impl ParamGuard for OgParams {
         if self.passes == 0 || self.passes > 10 {
             return Err(Error::param("passes", "must be in 1..=10"));
         }
+        self.ghost.check()?;
         if logit(self.prior).abs() >= self.clamp {
             return Err(Error::param("prior", "prior log-odds beyond the clamp"));
         }

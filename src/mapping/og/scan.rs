@@ -6,8 +6,9 @@ use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
-    Beam, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility,
+    Beam, GhostJudge, GhostRule, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility,
 };
+use crate::params::Valid;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -16,11 +17,14 @@ type ScanResult = (Vec<(u32, f32)>, u64, u64, u64);
 
 /// Side-lobe-aware increments of one scan (beam restricted to what it sees, detections,
 /// occluder bin `first` (`bins` when none), last observed bin `last`, visibility) into
-/// `out`; returns (detections, detections withheld: before `first` or after `last`).
+/// `out`; no free evidence within the guard of a bin of `held` (the main-lobe echoes before
+/// the occluder when `hold_echoes`); returns (detections, detections withheld: before
+/// `first` or after `last`).
 #[allow(clippy::too_many_arguments)]
 fn scan_og(
     beam: &Beam,
     det: &[bool],
+    held: &[u32],
     first: usize,
     last: usize,
     vis: &Visibility,
@@ -31,6 +35,13 @@ fn scan_og(
     let bins = det.len().min(beam.ptr.len() - 1);
     let lf = k.l_free as f32;
     for b in k.min_bin..first.min(bins) {
+        if held
+            .iter()
+            .any(|&h| (h as usize).abs_diff(b) <= k.guard_bins)
+        {
+            // an echo in the main lobe at this range: something is there, not free
+            continue;
+        }
         for j in beam.bin_range(b) {
             let w = beam.weight[j];
             if w >= k.free_w && vis.clearable(beam.cell[j]) {
@@ -81,6 +92,8 @@ struct IncrementConstants {
     l_free: f64,
     free_w: f32,
     min_bin: usize,
+    guard_bins: usize,
+    hold_echoes: bool,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -158,9 +171,17 @@ pub fn og_map_stats(
         1
     };
     let mut map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
+    // the ghost rule judges the last pass's scans again once the map is built
+    let ghost_rule = match method {
+        Method::Og => params.ghost.rule,
+        _ => GhostRule::None,
+    };
+    let mut judge = (ghost_rule != GhostRule::None)
+        .then(|| GhostJudge::new(model, &ctx.occlusion, Valid::new(params.ghost)));
     // belief of the previous pass (pass ≥ 2 uses it, fixed, for the responsibilities)
     let mut fixed_belief: Option<Vec<f32>> = None;
     for pass in 0..passes {
+        let last_pass = pass + 1 == passes;
         if pass > 0 {
             fixed_belief = Some(map.logodds.par_iter().map(|&l| sigmoid(l) as f32).collect());
             map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
@@ -188,15 +209,52 @@ pub fn og_map_stats(
                         .collect_into_vec(&mut belief);
                 }
                 let bel: &[f32] = fixed_belief.as_deref().unwrap_or(&belief);
-                let scans = ctx.scan_pose(&part, p, geom.as_ref(), bel);
+                let (scans, echoes) = ctx.scan_pose(&part, p, geom.as_ref(), bel);
+                if let (Some(j), Some(e), true) = (judge.as_mut(), echoes.as_ref(), last_pass) {
+                    let evidence = scans.iter().map(|s| s.0.clone()).collect();
+                    j.record(p, e, evidence);
+                }
                 apply_scans(&mut map, &mut stats, scans, ctx.clamp);
                 progress(pass * np + p + 1, passes * np);
             }
             p0 = p1;
         }
     }
+    if let Some(j) = &judge {
+        apply_ghost_rule(&mut map, j, params, ctx.surface_p);
+    }
     stats.seconds = t0.elapsed().as_secs_f64();
     Ok((map, stats))
+}
+
+/// The ghost rule of `judge` on a finished map ([`crate::mapping::grid::ghost`]): `mirror`
+/// replays the kept increments from the prior; `aspect` sends the occupied cells whose
+/// supporting poses (summed increments ≥ |l_free|) span less than the minimum aspect back
+/// to the prior.
+fn apply_ghost_rule(map: &mut LogOddsMap, judge: &GhostJudge, params: &OgValid, surface_p: f32) {
+    let occupied: Vec<bool> = map
+        .logodds
+        .iter()
+        .map(|&l| sigmoid(l) as f32 > surface_p)
+        .collect();
+    match judge.rule() {
+        GhostRule::None => {}
+        GhostRule::Mirror => {
+            let (l, observed) =
+                judge.replay(map.logodds.len(), params.l0(), params.clamp, &occupied);
+            map.logodds = l;
+            map.observed = observed;
+        }
+        GhostRule::Aspect => {
+            let ok = judge.aspect_ok(&map.binary(), params.l_free().abs());
+            let l0 = params.l0();
+            for (l, ok) in map.logodds.iter_mut().zip(ok) {
+                if !ok {
+                    *l = l.min(l0);
+                }
+            }
+        }
+    }
 }
 
 /// What the scans of a run share: the model, the detector, the occlusion model and the
@@ -220,6 +278,7 @@ impl<'a> ScanContext<'a> {
         detector: &'a Detector,
     ) -> ScanContext<'a> {
         let min_bin = model.min_bin.max(detector.min_bin);
+        let occlusion = Occlusion::new(model, min_bin, params.side_db);
         ScanContext {
             model,
             detector,
@@ -231,8 +290,10 @@ impl<'a> ScanContext<'a> {
                 l_free: params.l_free(),
                 free_w: 10f64.powf(params.free_db / 10.0) as f32,
                 min_bin,
+                guard_bins: occlusion.guard_bins(),
+                hold_echoes: params.hold_echoes,
             },
-            occlusion: Occlusion::new(model, min_bin, params.side_db),
+            occlusion,
         }
     }
 
@@ -244,7 +305,7 @@ impl<'a> ScanContext<'a> {
         p: usize,
         geom: Option<&PoseGeometry>,
         bel: &[f32],
-    ) -> Vec<ScanResult> {
+    ) -> (Vec<ScanResult>, Option<ScanEchoes>) {
         let nd = self.model.directions();
         let dets = self.detector.detect_pose(em, p);
         match (geom, self.method) {
@@ -257,7 +318,7 @@ impl<'a> ScanContext<'a> {
                     .occlusion
                     .echoes(self.model, em, p, dets, Some(&occupied));
                 let vis = self.occlusion.visibility(self.model, g, &echoes);
-                (0..nd)
+                let scans = (0..nd)
                     .into_par_iter()
                     .map(|d| {
                         if !em.has(p, d) {
@@ -265,27 +326,31 @@ impl<'a> ScanContext<'a> {
                         }
                         self.scan_direction_og(d, g, &echoes, &vis, bel)
                     })
-                    .collect()
+                    .collect();
+                (scans, Some(echoes))
             }
-            _ => (0..nd)
-                .into_par_iter()
-                .map(|d| {
-                    if !em.has(p, d) {
-                        return (Vec::new(), 0, 0, 0); // no sweep: no evidence
-                    }
-                    let ray = self.model.boresight_ray(p, d);
-                    let mut out = Vec::new();
-                    let dets = scan_boresight(
-                        &ray,
-                        &dets[d],
-                        self.inc.min_bin,
-                        self.inc.l_occ,
-                        self.inc.l_free,
-                        &mut out,
-                    );
-                    (out, dets, 0, ray.len() as u64)
-                })
-                .collect(),
+            _ => (
+                (0..nd)
+                    .into_par_iter()
+                    .map(|d| {
+                        if !em.has(p, d) {
+                            return (Vec::new(), 0, 0, 0); // no sweep: no evidence
+                        }
+                        let ray = self.model.boresight_ray(p, d);
+                        let mut out = Vec::new();
+                        let dets = scan_boresight(
+                            &ray,
+                            &dets[d],
+                            self.inc.min_bin,
+                            self.inc.l_occ,
+                            self.inc.l_free,
+                            &mut out,
+                        );
+                        (out, dets, 0, ray.len() as u64)
+                    })
+                    .collect(),
+                None,
+            ),
         }
     }
 
@@ -303,9 +368,19 @@ impl<'a> ScanContext<'a> {
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
         let mut out = Vec::with_capacity(beam.len() / 2);
+        let held: Vec<u32> = if self.inc.hold_echoes {
+            echoes.main[d]
+                .iter()
+                .map(|e| e.0)
+                .filter(|&k| (k as usize) < first)
+                .collect()
+        } else {
+            Vec::new()
+        };
         let (dets, withheld) = scan_og(
             &beam,
             &echoes.det[d],
+            &held,
             first,
             last,
             vis,
