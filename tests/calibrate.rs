@@ -299,7 +299,7 @@ fn corridor_closed_loop() {
     eprintln!("three environments: {:.1} s", t.elapsed().as_secs_f64());
     // determinism over threads, at a small budget, both distances
     let e = tmp.path().join("s21").join("e.parquet");
-    for d in ["summaries", "mmd"] {
+    for d in ["summaries-quantiles", "summaries", "mmd"] {
         let a = tmp.path().join(format!("a_{d}.toml"));
         let b = tmp.path().join(format!("b_{d}.toml"));
         let m = calibrate(&e, &cpath, &a, 60, 30, 9, Some(1), Some(d));
@@ -317,6 +317,11 @@ fn corridor_closed_loop() {
         let method = &m.calibration.as_ref().unwrap().method;
         assert!(method.starts_with("abc-smc"), "{method}");
         assert_eq!(method.contains("MMD"), d == "mmd", "{method}");
+        assert_eq!(
+            method.contains("quantiles"),
+            d == "summaries-quantiles",
+            "{method}"
+        );
     }
 }
 
@@ -585,6 +590,15 @@ fn coverage(distance: &str) {
 #[test]
 #[ignore = "about 15 min on 2 shared cores"]
 fn corridor_coverage() {
+    coverage("summaries-quantiles");
+}
+
+/// [`coverage`] with `--distance summaries` (issue 19's 42 pooled statistics, the default
+/// until issue 30's quantiles), the same environments and budget. Figures in
+/// `docs/calibrate.md`.
+#[test]
+#[ignore = "about 15 min on 2 shared cores"]
+fn corridor_coverage_pooled() {
     coverage("summaries");
 }
 

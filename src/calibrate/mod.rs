@@ -334,11 +334,17 @@ pub fn calibrate(
         },
     };
     let stat_ctx = crate::check::context(energy);
+    // issue 30: the check statistics' quantiles appended to the pooled summaries
+    let quant = params.distance == Distance::SummariesQuantiles;
     let (observed, reference) = if mmd_mode {
         let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
         (vec![0.0], Some(r))
     } else {
-        (summaries::summaries(&ctx, &energy.data), None)
+        let mut f = summaries::summaries(&ctx, &energy.data);
+        if quant {
+            f.extend(summaries::quantile_summaries(&stat_ctx, &energy.data));
+        }
+        (f, None)
     };
     let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
         let mut e = sim.energies(&prior.model_at(x), s)?;
@@ -349,7 +355,13 @@ pub fn calibrate(
         Ok(match &reference {
             // the subsample's stream: the simulation's seed, under its own key
             Some(r) => vec![r.distance(&stat_ctx, &e, s ^ 0x4d4d_445f_5355_4253)],
-            None => summaries::summaries(&ctx, &e),
+            None => {
+                let mut f = summaries::summaries(&ctx, &e);
+                if quant {
+                    f.extend(summaries::quantile_summaries(&stat_ctx, &e));
+                }
+                f
+            }
         })
     };
     let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;
@@ -386,10 +398,20 @@ pub fn calibrate(
     model.calibration = Some(CalibrationMeta {
         method: if mmd_mode {
             "abc-smc (APMC, MMD of per-profile and per-position statistics)".into()
-        } else if adjusted {
-            "abc-smc (APMC, semi-automatic summaries, regression-adjusted)".into()
         } else {
-            "abc-smc (APMC, semi-automatic summaries)".into()
+            format!(
+                "abc-smc (APMC, semi-automatic summaries{}{})",
+                if quant {
+                    " with the check statistics' quantiles"
+                } else {
+                    ""
+                },
+                if adjusted {
+                    ", regression-adjusted"
+                } else {
+                    ""
+                }
+            )
         },
         simulations: post.simulations,
         particles: post.weights.len(),

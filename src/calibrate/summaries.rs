@@ -457,6 +457,32 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
     out
 }
 
+/// The quantiles 10, 25, 50, 75, 90 % of each component of the per-profile and
+/// per-position sets of the predictive check's statistics ([`super::mmd::statistic_sets`]):
+/// 7 × 5 + 2 × 5 = 45 values.
+pub fn quantile_summaries(ctx: &crate::check::stats::StatContext, e: &[f64]) -> Vec<f64> {
+    let (pr, po) = super::mmd::statistic_sets(ctx, e);
+    let mut out = Vec::with_capacity(45);
+    for set in [&pr, &po] {
+        for k in 0..set.dim {
+            let mut v = set.column(k);
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            for q in QUANTILES {
+                out.push(if n == 0 {
+                    0.0
+                } else {
+                    v[((q * (n - 1) as f64).round() as usize).min(n - 1)]
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The quantiles of [`quantile_summaries`].
+pub const QUANTILES: [f64; 5] = [0.1, 0.25, 0.5, 0.75, 0.9];
+
 #[cfg(test)]
 mod tests {
     use super::*;
