@@ -43,6 +43,14 @@
 //!    ρ(y, y_obs) = (Σ_k ((s_k(y) − s_k(y_obs))/MAD_k)²)^½, MAD_k of s_k under the prior
 //!    predictive (the t = 0 draws).
 //!
+//!    The raw summaries f (default, [`Distance::SummariesQuantiles`], issue 30) are the 42
+//!    pooled statistics of [`summaries::summaries`] followed by 45 quantiles
+//!    ([`summaries::quantile_summaries`]): the 10, 25, 50, 75 and 90 % quantiles of each
+//!    component of the predictive check's per-profile 7-vectors and per-position 2-vectors
+//!    (the sets of [`mmd::statistic_sets`]). They describe the distributions the check
+//!    compares, where the 42 pool them into means; the regression picks what carries
+//!    information. `--distance summaries` ([`Distance::Summaries`]) uses the 42 alone.
+//!
 //!    With `--distance mmd` ([`Distance::Mmd`], issue 30) the distance is instead
 //!    ρ = MMD²_u(profiles) + MMD²_u(positions), the unbiased squared maximum mean
 //!    discrepancy between the measured and the simulated table's per-profile and
@@ -73,7 +81,8 @@
 //! same bytes with any number of threads. The keys differ from synth's streams: the
 //! simulations never replay the data's own draw even at the campaign seed.
 //!
-//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`mmd`] (the MMD
+//! Layout: [`params`] (options), [`summaries`] (raw summary statistics and the check
+//! statistics' quantiles), [`mmd`] (the MMD
 //! distance), [`abc`] (the sampler).
 
 pub mod abc;

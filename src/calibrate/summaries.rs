@@ -33,6 +33,13 @@
 //!
 //! A summary that cannot be formed (no peak, no pair) takes a fixed fallback value, so
 //! every vector is finite.
+//!
+//! [`quantile_summaries`] (issue 30; the default distance appends them to the 42): the
+//! quantiles 10, 25, 50, 75, 90 % (the value at rank round(q·(n − 1)) of the sorted
+//! sample) of each component of the predictive check's per-profile set (signal energy,
+//! mean delay, RMS delay spread, signal bins, first arrival, peaks, angular power profile;
+//! silent profiles as the censored point of [`super::mmd`]) and per-position set (angular
+//! spread, share of directions with signal): 7·5 + 2·5 = 45 values, 0 for an empty set.
 
 use crate::campaign::layout::Layout;
 use crate::units::C0;
