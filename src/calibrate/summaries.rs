@@ -495,6 +495,37 @@ mod tests {
     use super::*;
 
     #[test]
+    fn quantiles_of_the_check_statistics() {
+        // one position, 5 directions; direction d has one echo of 1000·(d + 1) at bin d + 2
+        let ctx = crate::check::stats::StatContext {
+            np: 1,
+            nd: 5,
+            nb: 20,
+            bin_ns: 1.0,
+            first_bin: 0,
+            mu: 1.0,
+            angles_deg: vec![-20.0, -10.0, 0.0, 10.0, 20.0],
+        };
+        let mut e = vec![1.0; 5 * 20];
+        for d in 0..5 {
+            e[d * 20 + d + 2] = 1000.0 * (d + 1) as f64;
+        }
+        let q = quantile_summaries(&ctx, &e);
+        assert_eq!(q.len(), 45);
+        // signal energy (component 0): ranks round(q·4) = 0, 1, 2, 3, 4 → d = 0..4
+        for (i, d) in [0usize, 1, 2, 3, 4].iter().enumerate() {
+            let want = 10.0 * (1000.0 * (*d + 1) as f64 - 1.0).log10();
+            assert!((q[i] - want).abs() < 1e-9, "{i}: {} vs {want}", q[i]);
+        }
+        // first arrival (component 4): d + 2 ns; the median is 4 ns
+        assert!((q[4 * 5 + 2] - 4.0).abs() < 1e-12);
+        // signal bins (component 3): 1 in every profile
+        assert!(q[15..20].iter().all(|v| *v == 1.0));
+        // per position: the share of directions with signal is 1
+        assert!(q[40..45].iter().all(|v| *v == 1.0));
+    }
+
+    #[test]
     fn noise_only_and_one_echo_are_finite() {
         let layout = Layout::from_geojson(
             r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"perimeter"},"geometry":{"type":"Polygon","coordinates":[[[-5,-5],[5,-5],[5,5],[-5,5],[-5,-5]]]}}]}"#,
