@@ -43,6 +43,14 @@
 //!    ρ(y, y_obs) = (Σ_k ((s_k(y) − s_k(y_obs))/MAD_k)²)^½, MAD_k of s_k under the prior
 //!    predictive (the t = 0 draws).
 //!
+//!    The raw summaries f (default, [`Distance::SummariesQuantiles`], issue 30) are the 42
+//!    pooled statistics of [`summaries::summaries`] followed by 45 quantiles
+//!    ([`summaries::quantile_summaries`]): the 10, 25, 50, 75 and 90 % quantiles of each
+//!    component of the predictive check's per-profile 7-vectors and per-position 2-vectors
+//!    (the sets of [`mmd::statistic_sets`]). They describe the distributions the check
+//!    compares, where the 42 pool them into means; the regression picks what carries
+//!    information. `--distance summaries` ([`Distance::Summaries`]) uses the 42 alone.
+//!
 //!    With `--distance mmd` ([`Distance::Mmd`], issue 30) the distance is instead
 //!    ρ = MMD²_u(profiles) + MMD²_u(positions), the unbiased squared maximum mean
 //!    discrepancy between the measured and the simulated table's per-profile and
@@ -73,7 +81,8 @@
 //! same bytes with any number of threads. The keys differ from synth's streams: the
 //! simulations never replay the data's own draw even at the campaign seed.
 //!
-//! Layout: [`params`] (options), [`summaries`] (raw summary statistics), [`mmd`] (the MMD
+//! Layout: [`params`] (options), [`summaries`] (raw summary statistics and the check
+//! statistics' quantiles), [`mmd`] (the MMD
 //! distance), [`abc`] (the sampler).
 
 pub mod abc;
@@ -334,11 +343,17 @@ pub fn calibrate(
         },
     };
     let stat_ctx = crate::check::context(energy);
+    // issue 30: the check statistics' quantiles appended to the pooled summaries
+    let quant = params.distance == Distance::SummariesQuantiles;
     let (observed, reference) = if mmd_mode {
         let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
         (vec![0.0], Some(r))
     } else {
-        (summaries::summaries(&ctx, &energy.data), None)
+        let mut f = summaries::summaries(&ctx, &energy.data);
+        if quant {
+            f.extend(summaries::quantile_summaries(&stat_ctx, &energy.data));
+        }
+        (f, None)
     };
     let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
         let mut e = sim.energies(&prior.model_at(x), s)?;
@@ -349,7 +364,13 @@ pub fn calibrate(
         Ok(match &reference {
             // the subsample's stream: the simulation's seed, under its own key
             Some(r) => vec![r.distance(&stat_ctx, &e, s ^ 0x4d4d_445f_5355_4253)],
-            None => summaries::summaries(&ctx, &e),
+            None => {
+                let mut f = summaries::summaries(&ctx, &e);
+                if quant {
+                    f.extend(summaries::quantile_summaries(&stat_ctx, &e));
+                }
+                f
+            }
         })
     };
     let post = abc::apmc(&prior.box_prior(), &observed, &opts, simulate, progress)?;
@@ -386,10 +407,20 @@ pub fn calibrate(
     model.calibration = Some(CalibrationMeta {
         method: if mmd_mode {
             "abc-smc (APMC, MMD of per-profile and per-position statistics)".into()
-        } else if adjusted {
-            "abc-smc (APMC, semi-automatic summaries, regression-adjusted)".into()
         } else {
-            "abc-smc (APMC, semi-automatic summaries)".into()
+            format!(
+                "abc-smc (APMC, semi-automatic summaries{}{})",
+                if quant {
+                    " with the check statistics' quantiles"
+                } else {
+                    ""
+                },
+                if adjusted {
+                    ", regression-adjusted"
+                } else {
+                    ""
+                }
+            )
         },
         simulations: post.simulations,
         particles: post.weights.len(),

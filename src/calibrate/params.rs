@@ -16,7 +16,8 @@
 //! * `cull` — as `synth`'s (default 1e-3), in [0, 1);
 //! * `adjust` — report the regression-adjusted particles (default) or the raw ones
 //!   (`--distance summaries` only: the MMD has no summaries to regress on);
-//! * `distance` — [`Distance::Summaries`] (default) or [`Distance::Mmd`].
+//! * `distance` — [`Distance::SummariesQuantiles`] (default), [`Distance::Summaries`]
+//!   or [`Distance::Mmd`].
 
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
@@ -28,6 +29,11 @@ pub enum Distance {
     /// parameters ([`summaries`](super::summaries), issue 19).
     #[value(name = "summaries", help = None::<&str>)]
     Summaries,
+    /// The semi-automatic summaries with 45 more raw statistics: the quantiles 10, 25,
+    /// 50, 75, 90 % of the predictive check's per-profile and per-position statistics
+    /// ([`quantile_summaries`](super::summaries::quantile_summaries), issue 30).
+    #[value(name = "summaries-quantiles", help = None::<&str>)]
+    SummariesQuantiles,
     /// The MMD between the per-profile and per-position statistics' distributions
     /// ([`mmd`](super::mmd), issue 30).
     #[value(name = "mmd", help = None::<&str>)]
@@ -73,7 +79,7 @@ impl Default for CalibrateParams {
             seed: None,
             cull: 1e-3,
             adjust: true,
-            distance: Distance::Summaries,
+            distance: Distance::SummariesQuantiles,
         }
     }
 }

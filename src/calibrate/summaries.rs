@@ -33,6 +33,13 @@
 //!
 //! A summary that cannot be formed (no peak, no pair) takes a fixed fallback value, so
 //! every vector is finite.
+//!
+//! [`quantile_summaries`] (issue 30; the default distance appends them to the 42): the
+//! quantiles 10, 25, 50, 75, 90 % (the value at rank round(q·(n − 1)) of the sorted
+//! sample) of each component of the predictive check's per-profile set (signal energy,
+//! mean delay, RMS delay spread, signal bins, first arrival, peaks, angular power profile;
+//! silent profiles as the censored point of [`super::mmd`]) and per-position set (angular
+//! spread, share of directions with signal): 7·5 + 2·5 = 45 values, 0 for an empty set.
 
 use crate::campaign::layout::Layout;
 use crate::units::C0;
@@ -457,9 +464,66 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
     out
 }
 
+/// The quantiles 10, 25, 50, 75, 90 % of each component of the per-profile and
+/// per-position sets of the predictive check's statistics ([`super::mmd::statistic_sets`]):
+/// 7 × 5 + 2 × 5 = 45 values.
+pub fn quantile_summaries(ctx: &crate::check::stats::StatContext, e: &[f64]) -> Vec<f64> {
+    let (pr, po) = super::mmd::statistic_sets(ctx, e);
+    let mut out = Vec::with_capacity(45);
+    for set in [&pr, &po] {
+        for k in 0..set.dim {
+            let mut v = set.column(k);
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            for q in QUANTILES {
+                out.push(if n == 0 {
+                    0.0
+                } else {
+                    v[((q * (n - 1) as f64).round() as usize).min(n - 1)]
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The quantiles of [`quantile_summaries`].
+pub const QUANTILES: [f64; 5] = [0.1, 0.25, 0.5, 0.75, 0.9];
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quantiles_of_the_check_statistics() {
+        // one position, 5 directions; direction d has one echo of 1000·(d + 1) at bin d + 2
+        let ctx = crate::check::stats::StatContext {
+            np: 1,
+            nd: 5,
+            nb: 20,
+            bin_ns: 1.0,
+            first_bin: 0,
+            mu: 1.0,
+            angles_deg: vec![-20.0, -10.0, 0.0, 10.0, 20.0],
+        };
+        let mut e = vec![1.0; 5 * 20];
+        for d in 0..5 {
+            e[d * 20 + d + 2] = 1000.0 * (d + 1) as f64;
+        }
+        let q = quantile_summaries(&ctx, &e);
+        assert_eq!(q.len(), 45);
+        // signal energy (component 0): ranks round(q·4) = 0, 1, 2, 3, 4 → d = 0..4
+        for (i, d) in [0usize, 1, 2, 3, 4].iter().enumerate() {
+            let want = 10.0 * (1000.0 * (*d + 1) as f64 - 1.0).log10();
+            assert!((q[i] - want).abs() < 1e-9, "{i}: {} vs {want}", q[i]);
+        }
+        // first arrival (component 4): d + 2 ns; the median is 4 ns
+        assert!((q[4 * 5 + 2] - 4.0).abs() < 1e-12);
+        // signal bins (component 3): 1 in every profile
+        assert!(q[15..20].iter().all(|v| *v == 1.0));
+        // per position: the share of directions with signal is 1
+        assert!(q[40..45].iter().all(|v| *v == 1.0));
+    }
 
     #[test]
     fn noise_only_and_one_echo_are_finite() {

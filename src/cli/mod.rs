@@ -203,9 +203,11 @@ pub struct CalibrateArgs {
     /// Seed (default: the campaign's).
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
-    /// The ABC distance: `summaries` (semi-automatic summaries, issue 19) or `mmd` (the
-    /// MMD between the per-profile and per-position statistics' distributions, issue 30).
-    #[arg(long, value_enum, default_value = "summaries")]
+    /// The ABC distance: `summaries-quantiles` (semi-automatic summaries of the 42 pooled
+    /// statistics and the check statistics' quantiles, issue 30), `summaries` (the 42
+    /// pooled statistics only, issue 19) or `mmd` (the MMD between the per-profile and
+    /// per-position statistics' distributions, issue 30).
+    #[arg(long, value_enum, default_value = "summaries-quantiles")]
     pub distance: pradar::calibrate::Distance,
 }
 
