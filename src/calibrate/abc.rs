@@ -395,6 +395,17 @@ where
             .cholesky()
             .ok_or_else(|| Error::param("calibrate", "the particles' covariance is singular"))?;
         let l = chol.l();
+        // ln of the normalising constants, so that new particles' weights are on the scale
+        // of the generation-0 draws (weight π/π = 1) and of earlier kept particles:
+        // ln π = −Σ ln(hi − lo) on the box, ln φ_Σ(0) = −(d/2)·ln 2π − Σ ln L_kk
+        let ln_prior: f64 = -prior
+            .lo
+            .iter()
+            .zip(&prior.hi)
+            .map(|(lo, hi)| (hi - lo).max(f64::MIN_POSITIVE).ln())
+            .sum::<f64>();
+        let ln_phi0 = -0.5 * dim as f64 * (2.0 * std::f64::consts::PI).ln()
+            - (0..dim).map(|k| l[(k, k)].ln()).sum::<f64>();
         let cum: Vec<f64> = w
             .iter()
             .scan(0.0, |acc, x| {
@@ -426,7 +437,8 @@ where
                     }
                 }
                 let f = simulate(&th, rng.gen())?;
-                // w ∝ π(θ) / Σ_j w_j K_Σ(θ | θ_j); π is constant on the box
+                // w = π(θ) / Σ_j (w_j/Σw) φ_Σ(θ − θ_j), both densities normalised (π is
+                // constant on the box); q is the sum without φ's constant
                 let q: f64 = theta
                     .iter()
                     .zip(&w)
@@ -441,7 +453,7 @@ where
                     f,
                     s: Vec::new(),
                     d: 0.0,
-                    w: 1.0 / q.max(1e-300),
+                    w: (ln_prior - ln_phi0 - q.max(1e-300).ln()).exp(),
                 })
             })
             .collect::<Result<_>>()?;
