@@ -292,6 +292,10 @@ pub struct MapArgs {
     /// EKF negative means: reflected (true) or clamped to the lowest mean (false).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().reflect, action = clap::ArgAction::Set)]
     pub ekf_reflect: bool,
+    /// Scalable EKF: split each bin's information over the tiles it touches (false: the
+    /// plain tiled update, overconfident).
+    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().split, action = clap::ArgAction::Set)]
+    pub ekf_split: bool,
     /// Pose noise given to the mapper: position standard deviation per axis, m.
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_m: f64,

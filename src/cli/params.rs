@@ -146,6 +146,7 @@ impl MapArgs {
                     kappa: self.kappa,
                     free_space: self.ekf_free_space,
                     reflect: self.ekf_reflect,
+                    split: self.ekf_split,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {
