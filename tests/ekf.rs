@@ -658,14 +658,22 @@ fn scalable_against_dense(strict: bool) {
 }
 
 /// Item 4 of issue 17 in full: psi within 10 %, means within 10 % RMS relative and the
-/// std at least 0.9x the dense std in at least 99 % of the updated cells. The tiled filter
-/// meets the means only (figures printed by `scalable_matches_dense_on_a_coarse_corridor`:
-/// psi 18.3 % apart, the scalable map's the lower at 2.63 vs 3.22; means 8.7 % RMS
-/// relative; std at least 0.9x dense in 62 % of the cells, lowest ratio 0.007): it drops
-/// the negative cross-tile covariances a range ring creates, so later rows reduce each
-/// tile's variance as if they informed it alone. Run with `--ignored`.
+/// std at least 0.9x the dense std in at least 99 % of the updated cells. Unmet, with the
+/// information split of issue 31 as without it (figures printed by
+/// `scalable_matches_dense_on_a_coarse_corridor`; `docs/mapping.md`): psi 18.3 % apart (the
+/// scalable map's the lower), means 51.7 % RMS relative, std >= 0.9x dense in 55.7 % of the
+/// cells (plain tiled update: 16.6 %, 43.9 %, 56.7 %). The cause measured is the
+/// nonlinearity, not the tiling: in the default prior regime the dense filter itself has a
+/// NEES 97–220 times its expectation (`nees_in_the_default_prior_regime`), so two
+/// overconfident filters are compared, and small differences are amplified by the
+/// relinearisation (and the occluders confirmed against each filter's own map): dropping
+/// only the covariance between the grid's two halves (two 20 x 20 tiles) leaves std >= 0.9x
+/// dense in 77.5 % of the cells, means 27.5 % apart, and a dense filter kept exact within
+/// each pose and block-diagonal between poses 86.2 %; in the near-linear regime of the NEES
+/// test the split tiled filter's std is >= the dense filter's in every cell. Run with
+/// `--ignored`.
 #[test]
-#[ignore = "unmet by the tiled approximation: psi 16.6 % apart, means 43.9 % RMS, std >= 0.9x dense in 57 % of cells (with free-space evidence; 18.3 %, 8.7 %, 62 % before issue 31)"]
+#[ignore = "unmet by the tiled approximation: psi 18.3 % apart, means 51.7 % RMS, std >= 0.9x dense in 55.7 % of cells (information split; plain update 16.6 %, 43.9 %, 56.7 %); the dense filter itself is inconsistent in this nonlinear regime"]
 fn scalable_meets_the_dense_criterion() {
     scalable_against_dense(true);
 }
@@ -826,4 +834,406 @@ fn bad_ekf_parameters_give_one_clear_error() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(!err.contains("panicked"));
     }
+}
+
+// ---------------------------------------------------------------- NEES (issue 31, item 3)
+
+/// A NEES regime: the filter's prior N(μ0, σ0²·I), which is also the truth's distribution,
+/// and the relative model error ε of the noise model (the other EKF parameters at their
+/// defaults).
+#[derive(Clone, Copy)]
+struct Regime {
+    mu0: f64,
+    sigma0: f64,
+    model_error: f64,
+    /// The truth is |x| (the model sees x², so only |x| is identifiable; for a prior that
+    /// reaches below zero).
+    fold: bool,
+}
+
+/// The figures of [`nees`]: updated cells n, runs N, the two-sided 95 % band of the
+/// summed NEES (χ²(N·n)) and the summed NEES of the dense, the tiled (information split)
+/// and the plain tiled filter; the smallest ratio of tiled to dense std over the cells and
+/// runs.
+struct Nees {
+    n: usize,
+    runs: usize,
+    band: (f64, f64),
+    dense: f64,
+    tiled: f64,
+    plain: f64,
+    min_std_ratio: f64,
+}
+
+impl Nees {
+    fn anees(&self, sum: f64) -> f64 {
+        sum / (self.n * self.runs) as f64
+    }
+    fn inside(&self, sum: f64) -> bool {
+        sum >= self.band.0 && sum <= self.band.1
+    }
+    fn print(&self, what: &str) {
+        let (lo, hi) = (self.anees(self.band.0), self.anees(self.band.1));
+        eprintln!(
+            "NEES {what}: {} updated cells x {} runs, 95 % band of the average NEES / n [{lo:.3}, {hi:.3}]: dense {:.3}, tiled (split) {:.3}, tiled (plain) {:.3}; tiled (split) std >= {:.3}x dense",
+            self.n,
+            self.runs,
+            self.anees(self.dense),
+            self.anees(self.tiled),
+            self.anees(self.plain),
+            self.min_std_ratio
+        );
+    }
+}
+
+/// The NEES scene: `side` x `side` cells of `cell_m` centred in the room, directions in
+/// `step_deg` steps.
+#[derive(Clone, Copy)]
+struct Scene {
+    cell_m: f64,
+    side: usize,
+    step_deg: f64,
+}
+
+/// NEES of the dense and the tiled filter over `runs` Monte Carlo runs (issue 31 item 3).
+///
+/// Scene: a grid of `scene.side`² cells at the centre of a 6 m room ([`SMALL`]: 10 x 10
+/// cells of 0.3 m, [`DENSE_SCAN`]: 12 x 12 of 0.25 m; 4 x 4 tiles) seen from 8 poses around
+/// it (16-element array, whose wide beams make each bin's range ring cross several tiles;
+/// the half-plane in `scene.step_deg` steps; 57.5–63.5 GHz). Each run draws a truth map x from the
+/// filter's own prior N(μ0, σ0²·I) and simulates every (pose, direction) observation
+/// from the filter's own model: z_k = h_k(x) + √R_k(x)·w, w ~ N(0, 1), h and R the
+/// kernel-folded prediction and noise model of [`Linearized::new`] evaluated at the truth
+/// (N0 = 1e-12, TW of the band, one pulse). No sight model and no free-space evidence: this
+/// tests the filters' update, not the pipeline's choice of rows. The dense, the tiled
+/// (information split) and the plain tiled filter run over the same observations.
+///
+/// NEES of a run: ε = (x̂ − x)ᵀ P⁻¹ (x̂ − x) over the updated cells (P_ii below σ0²), with
+/// the dense filter's full covariance, and for a tiled filter the sum of the same form over
+/// its blocks (what it holds). Summed over the N runs it is χ²(N·n) for a consistent
+/// filter; the band is its 2.5 % and 97.5 % quantiles.
+fn nees(scene: Scene, reg: Regime, runs: usize, seed0: u64) -> Nees {
+    use rand_distr::{Distribution, StandardNormal};
+    use rayon::prelude::*;
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("room.geojson"),
+        r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"perimeter"},"geometry":{"type":"Polygon","coordinates":[[[0,0],[6,0],[6,6],[0,6],[0,0]]]}}]}"#,
+    )
+    .unwrap();
+    let t = String::from(
+        "schema_version = 1\nname = \"room\"\nlayout = \"room.geojson\"\nseed = 1\n[band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n[array]\nelements = 16\n[directions]\nstart_deg = -90.0\nstop_deg = 90.0\nstep_deg = STEP\n[noise]\nfloor_dbm = -100.0\n[processing]\ncoupling = \"gate\"\ngate_ns = 3.0\nmax_delay_ns = 40.0\nnoise_from_ns = 60.0\n",
+    );
+    let mut t = t.replace("STEP", &format!("{:?}", scene.step_deg));
+    for (x, y, h) in [
+        (3.0, 0.5, 90.0),
+        (1.0, 0.8, 60.0),
+        (5.0, 0.8, 120.0),
+        (0.5, 3.0, 0.0),
+        (5.5, 3.0, 180.0),
+        (3.0, 5.5, 270.0),
+        (1.0, 5.2, 300.0),
+        (5.0, 5.2, 240.0),
+    ] {
+        t.push_str(&format!(
+            "[[poses]]\nx_m = {x}\ny_m = {y}\nheading_deg = {h}\n"
+        ));
+    }
+    std::fs::write(dir.join("campaign.toml"), t).unwrap();
+    let c = pradar::campaign::Campaign::load(&dir.join("campaign.toml")).unwrap();
+    let m = &c.manifest;
+    let proc = pradar::energy::EnergyProcessor::new(m.band, m.processing).unwrap();
+    let tb = proc.bin_width_ns();
+    let min_bin = 2 + (m.processing.gate_ns / tb).ceil() as usize;
+    let (cell, side) = (scene.cell_m, scene.side);
+    let spec = GridSpec {
+        x0_m: 3.0 - cell * side as f64 / 2.0,
+        y0_m: 3.0 - cell * side as f64 / 2.0,
+        cell_m: cell,
+        cols: side,
+        rows: side,
+    };
+    let gp = GridParams {
+        cell_m: cell,
+        margin_m: 0.0,
+        ..Default::default()
+    };
+    let model =
+        ObservationModel::new(spec, &gp.check().unwrap(), m, proc.nbins(), tb, min_bin).unwrap();
+    let params = |split: bool| {
+        EkfParams {
+            mu0: reg.mu0,
+            sigma0: reg.sigma0,
+            model_error: reg.model_error,
+            split,
+            ..Default::default()
+        }
+        .check()
+        .unwrap()
+    };
+    // dense (the split does not apply to it), tiled with the split, plain tiled
+    let (pd, ps, pp) = (params(true), params(true), params(false));
+    let kern =
+        pradar::mapping::ekf::truncate_kernel(&window_kernel(&c).unwrap(), pd.kernel_floor_db);
+    let noise = NoiseModel {
+        n0: 1e-12,
+        tw: proc.tw(),
+        pulses: 1.0,
+        model_error: reg.model_error,
+    };
+    let n = spec.len();
+    // the observations' rows and coefficients (the truth only sets z)
+    let mut rows = Vec::new();
+    for p in 0..model.poses.len() {
+        let geom = model.pose_geometry(p);
+        for d in 0..model.directions() {
+            let mut scratch = vec![0.0; n];
+            let o = Observation::build(
+                &model.beam(&geom, d),
+                &vec![0.0; model.bins],
+                &kern,
+                model.min_bin,
+                &mut scratch,
+            );
+            if o.rows() > 0 {
+                rows.push(o);
+            }
+        }
+    }
+    let v0 = reg.sigma0 * reg.sigma0;
+    // NEES of a filter over the cells `upd`, block by block of what it holds
+    let nees_of = |f: &dyn RrcsFilter, x: &[f64], upd: &[usize]| -> f64 {
+        let mut blocks: Vec<Vec<usize>> = Vec::new();
+        for &i in upd {
+            match blocks.iter_mut().find(|b| f.covariance(b[0], i).is_some()) {
+                Some(b) => b.push(i),
+                None => blocks.push(vec![i]),
+            }
+        }
+        blocks
+            .iter()
+            .map(|b| {
+                let k = b.len();
+                let pm = nalgebra::DMatrix::from_fn(k, k, |a, c| f.covariance(b[a], b[c]).unwrap());
+                let e = nalgebra::DVector::from_fn(k, |a, _| f.mean()[b[a]] - x[b[a]]);
+                e.dot(
+                    &nalgebra::Cholesky::new(pm)
+                        .expect("P positive definite")
+                        .solve(&e),
+                )
+            })
+            .sum()
+    };
+    let run = |f: &mut dyn RrcsFilter, obs: &[Observation], p: &pradar::mapping::EkfValid| {
+        for o in obs {
+            let lin = Linearized::new(o, f.mean(), &noise);
+            f.update(o, &lin).unwrap();
+            f.project_positive(p.x_min(), p.reflect);
+        }
+    };
+    let per_run: Vec<(usize, f64, f64, f64, f64)> = (0..runs)
+        .into_par_iter()
+        .map(|r| {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed0 + r as u64);
+            let x: Vec<f64> = (0..n)
+                .map(|_| {
+                    let w: f64 = StandardNormal.sample(&mut rng);
+                    let v = reg.mu0 + reg.sigma0 * w;
+                    if reg.fold {
+                        v.abs()
+                    } else {
+                        v
+                    }
+                })
+                .collect();
+            let obs: Vec<Observation> = rows
+                .iter()
+                .map(|o| {
+                    let mut o = o.clone();
+                    let at_truth = Linearized::new(&o, &x, &noise);
+                    for j in 0..o.rows() {
+                        let w: f64 = StandardNormal.sample(&mut rng);
+                        o.z[j] = at_truth.h[j] + at_truth.r[j].sqrt() * w;
+                    }
+                    o
+                })
+                .collect();
+            let mut dense = DenseEkf::new(n, &pd).unwrap();
+            run(&mut dense, &obs, &pd);
+            let mut tiled = TiledEkf::new(side, side, ps.tile, &ps).unwrap();
+            run(&mut tiled, &obs, &ps);
+            let mut plain = TiledEkf::new(side, side, pp.tile, &pp).unwrap();
+            run(&mut plain, &obs, &pp);
+            let upd: Vec<usize> = (0..n)
+                .filter(|&i| dense.variances()[i] < v0 * (1.0 - 1e-9))
+                .collect();
+            let (vd, vt) = (dense.variances(), tiled.variances());
+            let ratio = upd
+                .iter()
+                .map(|&i| (vt[i] / vd[i]).sqrt())
+                .fold(f64::INFINITY, f64::min);
+            (
+                upd.len(),
+                nees_of(&dense, &x, &upd),
+                nees_of(&tiled, &x, &upd),
+                nees_of(&plain, &x, &upd),
+                ratio,
+            )
+        })
+        .collect();
+    let nu = per_run[0].0;
+    assert!(
+        per_run.iter().all(|r| r.0 == nu),
+        "the updated cells depend on the geometry only"
+    );
+    let dof = (nu * runs) as f64;
+    let chi = ChiSquared::new(dof).unwrap();
+    Nees {
+        n: nu,
+        runs,
+        band: (chi.inverse_cdf(0.025), chi.inverse_cdf(0.975)),
+        dense: per_run.iter().map(|r| r.1).sum(),
+        tiled: per_run.iter().map(|r| r.2).sum(),
+        plain: per_run.iter().map(|r| r.3).sum(),
+        min_std_ratio: per_run.iter().map(|r| r.4).fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// The near-linear regime: prior mean 10 prior standard deviations above zero (μ0 = 1 m,
+/// σ0 = 0.1 m), so the neglected term c̃·δ² of h = c̃·x² is at most 3σ0/(2μ0) = 15 % of the
+/// linear term 2c̃·x̂·δ at three prior standard deviations, less once the first updates
+/// have shrunk δ, and no mean comes near zero (no reflection); ε = 0.1 (each bin's energy
+/// known to 10 %: the posterior std ends at 2–16 % of the prior's, where the plain tiled
+/// filter's overconfidence shows).
+const NEAR_LINEAR: Regime = Regime {
+    mu0: 1.0,
+    sigma0: 0.1,
+    model_error: 0.1,
+    fold: false,
+};
+
+/// The default suite's scene: 10 x 10 cells of 0.3 m (100 cells, 9 tiles), 10° steps
+/// (19 directions per pose): a few seconds for 20 runs of the dense filter.
+const SMALL: Scene = Scene {
+    cell_m: 0.3,
+    side: 10,
+    step_deg: 10.0,
+};
+
+/// A denser scene: 12 x 12 cells of 0.25 m, 5° steps (neighbouring beams overlap more, so
+/// each range ring is seen more often within a pose).
+const DENSE_SCAN: Scene = Scene {
+    cell_m: 0.25,
+    side: 12,
+    step_deg: 5.0,
+};
+
+/// Issue 31 item 3: over 20 Monte Carlo runs in the near-linear regime the NEES of the
+/// dense filter and of the tiled filter (information split) lie in the two-sided 95 % χ²
+/// band, and the plain tiled filter (the split off, the filter before this change) lies
+/// above it, so the test tells the two apart. Figures (`docs/mapping.md`): average NEES per
+/// cell dense 0.982, split 0.986, plain 1.252 against the band [0.939, 1.063] (the five
+/// seed sets of the pooled test: dense 0.965–1.020 and split 0.973–1.028 inside in 5 of 5,
+/// plain 1.216–1.369 above in 5 of 5). Pooled over 100 runs, and in a denser scan or at the
+/// default model error, the split is not inside (`nees_pooled_over_100_runs_in_four_configurations`).
+#[test]
+fn nees_of_the_dense_and_the_tiled_filter_is_inside_the_chi2_band() {
+    let t0 = std::time::Instant::now();
+    let r = nees(SMALL, NEAR_LINEAR, 20, 1000);
+    r.print(&format!(
+        "10 x 10 cells, 10° steps, near-linear regime, ε = 0.1 ({:.1} s)",
+        t0.elapsed().as_secs_f64()
+    ));
+    assert!(r.n >= 100, "too few updated cells");
+    assert!(r.inside(r.dense), "dense filter inconsistent");
+    assert!(r.inside(r.tiled), "tiled filter inconsistent");
+    assert!(
+        r.plain > r.band.1,
+        "the plain tiled filter should be overconfident here"
+    );
+    assert!(r.min_std_ratio >= 0.9, "tiled std below 0.9x dense");
+}
+
+/// [`nees`] over `sets` sets of 20 runs (seeds 1000·k + run, k = 1..=sets), pooled: the
+/// sums add and the band is χ²(n·20·sets)'s.
+fn nees_pooled(scene: Scene, reg: Regime, sets: u64) -> Nees {
+    let all: Vec<Nees> = (1..=sets).map(|k| nees(scene, reg, 20, 1000 * k)).collect();
+    let n = all[0].n;
+    let runs = 20 * sets as usize;
+    let chi = statrs::distribution::ChiSquared::new((n * runs) as f64).unwrap();
+    use statrs::distribution::ContinuousCDF;
+    Nees {
+        n,
+        runs,
+        band: (chi.inverse_cdf(0.025), chi.inverse_cdf(0.975)),
+        dense: all.iter().map(|r| r.dense).sum(),
+        tiled: all.iter().map(|r| r.tiled).sum(),
+        plain: all.iter().map(|r| r.plain).sum(),
+        min_std_ratio: all
+            .iter()
+            .map(|r| r.min_std_ratio)
+            .fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// The same test pooled over 100 runs (five seed sets) in four near-linear configurations
+/// (the default suite's scene and the 12 x 12 scene at 5° steps, each at ε = 0.1 and at
+/// the default ε = 0.5), where the band is ±2–3 %: the dense filter is inside in all four,
+/// the tiled filter with the information split only in the default suite's (pooled average
+/// NEES per cell 0.996; 1.057 in the denser scan at ε = 0.1, above the band; 0.967–0.969
+/// at ε = 0.5, below it), the plain tiled update in none (1.07–1.60). The split is a
+/// heuristic, not a bound (`mapping::ekf::tiled`): its discount is right on average, not
+/// for every amount of repetition of a ring within a pose. Run with `--ignored` (about
+/// 4 min on 2 cores).
+#[test]
+#[ignore = "unmet by the tiled filter: pooled average NEES per cell 1.057 (12 x 12, 5° steps, ε = 0.1), 0.969 and 0.967 (ε = 0.5) against bands of ±2–3 %"]
+fn nees_pooled_over_100_runs_in_four_configurations() {
+    let mut fails = Vec::new();
+    for (scene, name) in [
+        (SMALL, "10 x 10, 10° steps"),
+        (DENSE_SCAN, "12 x 12, 5° steps"),
+    ] {
+        for eps in [0.1, 0.5] {
+            let reg = Regime {
+                model_error: eps,
+                ..NEAR_LINEAR
+            };
+            let r = nees_pooled(scene, reg, 5);
+            r.print(&format!("{name}, near-linear regime, ε = {eps}, pooled"));
+            for (filter, v) in [("dense", r.dense), ("tiled", r.tiled)] {
+                if !r.inside(v) {
+                    fails.push(format!("{name}, ε = {eps}: {filter} {:.3}", r.anees(v)));
+                }
+            }
+        }
+    }
+    assert!(fails.is_empty(), "outside the band: {}", fails.join("; "));
+}
+
+/// The default prior (μ0 = 0.01 m, σ0 = 0.1 m: the prior reaches far below zero, the
+/// truth is |x|) and the default ε = 0.5: far from linear, the dense filter is not
+/// consistent either (average NEES per cell 96.8 against [0.949, 1.052]; 97–220 over five
+/// seed sets; the tiled filters 91–211; the strong cells dominate: the EKF splits a ring's
+/// energy between its cells at the first linearisations and keeps a tight, wrong split). So the NEES test is run in the near-linear regime, and
+/// the dense criterion on the corridor (`scalable_meets_the_dense_criterion`) compares two
+/// overconfident filters. Run with `--ignored`.
+#[test]
+#[ignore = "unmet by the dense filter too: average NEES per cell 96.8 in the default prior (nonlinear) regime"]
+fn nees_in_the_default_prior_regime() {
+    let d = EkfParams::default();
+    let r = nees(
+        DENSE_SCAN,
+        Regime {
+            mu0: d.mu0,
+            sigma0: d.sigma0,
+            model_error: d.model_error,
+            fold: true,
+        },
+        20,
+        1000,
+    );
+    r.print("12 x 12 cells, 5° steps, default prior and ε");
+    assert!(r.inside(r.dense) && r.inside(r.tiled));
 }

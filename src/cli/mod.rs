@@ -306,6 +306,10 @@ pub struct MapArgs {
     /// Minimum aspect of `--ghost aspect`, in two-way −3 dB main-lobe widths, [0, 36].
     #[arg(long, default_value_t = pradar::mapping::grid::GhostParams::default().aspect_lobes, value_parser = ranges::aspect_lobes, allow_negative_numbers = true)]
     pub ghost_aspect_lobes: f64,
+    /// Scalable EKF: split each bin's information over the tiles it touches (false: the
+    /// plain tiled update, overconfident).
+    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().split, action = clap::ArgAction::Set)]
+    pub ekf_split: bool,
     /// Pose noise given to the mapper: position standard deviation per axis, m.
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_m: f64,

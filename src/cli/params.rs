@@ -153,6 +153,7 @@ impl MapArgs {
                     free_space: self.ekf_free_space,
                     reflect: self.ekf_reflect,
                     ghost,
+                    split: self.ekf_split,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {

@@ -2,9 +2,10 @@
 //! switch ([`EkfVariant`]).
 //!
 //! Defaults (reasons in [`crate::mapping::ekf`]): μ0 = 0.01 m, σ0 = 0.1 m, ε = 0.5, kernel
-//! floor −30 dB, κ = 3.09, free-space evidence on, negative means reflected, the scalable filter with 4 × 4 tiles, at most 20,000 cells for the
-//! dense filter. Derived: the binary threshold η = Φ(κ) on p = P(x > μ0) and the lowest
-//! mean kept by the positivity step, 1e-3·μ0.
+//! floor −30 dB, κ = 3.09, free-space evidence on, negative means reflected, the scalable
+//! filter with 4 × 4 tiles and each bin's information split over its tiles, at most 20,000
+//! cells for the dense filter. Derived: the binary threshold η = Φ(κ) on p = P(x > μ0) and
+//! the lowest mean kept by the positivity step, 1e-3·μ0.
 
 use crate::error::{Error, Result};
 use crate::mapping::grid::GhostParams;
@@ -61,6 +62,10 @@ pub struct EkfParams {
     /// A cell whose mean went negative: reflected (x → −x, the model's sign symmetry) when
     /// true, clamped to the lowest mean (projection onto x ≥ 0) when false.
     pub reflect: bool,
+    /// Scalable filter: split each bin's information over the tiles it touches
+    /// ([`crate::mapping::ekf::tiled`] module docs); false: the plain tiled update (the
+    /// filter before issue 31), which is overconfident.
+    pub split: bool,
     /// Implementation (scalable).
     pub variant: EkfVariant,
     /// Tile side of the scalable filter, cells (4).
@@ -91,6 +96,7 @@ impl Default for EkfParams {
             kappa: KAPPA,
             free_space: true,
             reflect: true,
+            split: true,
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,
