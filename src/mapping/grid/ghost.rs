@@ -221,19 +221,7 @@ impl<'a> GhostJudge<'a> {
         clamp: f64,
         occupied: &[bool],
     ) -> (Vec<f64>, Vec<bool>) {
-        use rayon::prelude::*;
-        let keep: Vec<Vec<bool>> = self
-            .records
-            .par_iter()
-            .map(|r| {
-                let poly = self.final_polygon(r, occupied);
-                r.evidence
-                    .iter()
-                    .flatten()
-                    .map(|&(c, a)| self.stands(r, &poly, c, a))
-                    .collect()
-            })
-            .collect();
+        let keep = self.verdicts(occupied);
         let mut l = vec![l0; n];
         let mut observed = vec![false; n];
         for (r, k) in self.records.iter().zip(&keep) {
@@ -251,27 +239,33 @@ impl<'a> GhostJudge<'a> {
     /// `mirror`, EKF: per cell the evidence (mean rises) of the poses that cannot see it
     /// under the final map `occupied`.
     pub fn explained(&self, n: usize, occupied: &[bool]) -> Vec<f64> {
+        let keep = self.verdicts(occupied);
+        let mut out = vec![0.0; n];
+        for (r, k) in self.records.iter().zip(&keep) {
+            for (&(c, a), &kept) in r.evidence.iter().flatten().zip(k) {
+                if a > 0.0 && !kept {
+                    out[c as usize] += a as f64;
+                }
+            }
+        }
+        out
+    }
+
+    /// Per pose record, per piece of evidence (in order): whether it stands under the
+    /// pose's polygon rebuilt against the final map `occupied` ([`Self::stands`]).
+    fn verdicts(&self, occupied: &[bool]) -> Vec<Vec<bool>> {
         use rayon::prelude::*;
-        let parts: Vec<Vec<(u32, f32)>> = self
-            .records
+        self.records
             .par_iter()
             .map(|r| {
                 let poly = self.final_polygon(r, occupied);
                 r.evidence
                     .iter()
                     .flatten()
-                    .filter(|&&(c, a)| a > 0.0 && !self.stands(r, &poly, c, a))
-                    .copied()
+                    .map(|&(c, a)| self.stands(r, &poly, c, a))
                     .collect()
             })
-            .collect();
-        let mut out = vec![0.0; n];
-        for part in parts {
-            for (c, a) in part {
-                out[c as usize] += a as f64;
-            }
-        }
-        out
+            .collect()
     }
 
     /// The two-way −3 dB main-lobe width θ₃ of the direction nearest broadside, rad.
