@@ -422,3 +422,128 @@ fn read_binary_pgm(path: &Path) -> Vec<bool> {
     }
     out
 }
+
+/// The walls the echoes can show at all: the ceiling of "walls found within one cell" for a
+/// mapper that places occupancy on detected echoes in line of sight (issue 31's must-show
+/// asks ≥ 0.85). A wall cell is *shown* when a cell of its 8-neighbourhood (the walls-found
+/// tolerance) lies in line of sight of some pose (through the layout's walls, as the
+/// observable region), inside the two-way −3 dB main lobe of some direction of that pose,
+/// within a bin where the run's own detector (`pradar map`'s P_fa, peak and
+/// range-side-lobe tests) fires. Reads the layout and the energy table (no truth); printed
+/// beside the mappers' walls found (building and observable).
+///
+/// Asserts that on the observable walls the ceiling is ≥ 0.9 in every scene (measured
+/// 0.930 / 0.978 / 1.000 / 1.000): there the must-show is within the data's reach and a
+/// shortfall is the mapper's. On the building the ceiling is 0.555 / 0.607 / 0.812 /
+/// 0.805 (corridor N = 16, 100, office N = 16, 100): the building's wall cells no pose
+/// sees in its main lobe (178 / 180 of 364 in the corridor, 78 / 86 of 293 in the office)
+/// put 0.85 out of reach of any mapper that respects line of sight (the boresight
+/// baseline, which credits echoes beyond the walls, finds 0.604 / 0.673 / 0.894 / 0.908).
+#[test]
+fn walls_the_echoes_can_show() {
+    use pradar::energy::EnergySource;
+    use pradar::mapping::job::{load_runs, runs_regions};
+    use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, Method, OgParams};
+    use pradar::params::ParamGuard;
+    let figs = figures();
+    let mut failures = Vec::new();
+    for (name, n, c, e) in scenes() {
+        let opts = MapOptions {
+            method: Method::Og,
+            runs: vec![MapRun {
+                campaign: c.clone(),
+                energy: e.clone(),
+            }],
+            out: PathBuf::from("unused"),
+            elements: None,
+            grid: GridParams::default(),
+            og: OgParams::default(),
+            ekf: EkfParams::default(),
+            pose_noise: Default::default(),
+        }
+        .check()
+        .unwrap();
+        let (runs, reference) = load_runs(&opts).unwrap();
+        let regions = runs_regions(&runs, &reference).unwrap();
+        let run = &runs[0];
+        let m = &run.model;
+        let spec = m.spec;
+        let main = m.params.main_weight() as f32;
+        let tol = spec.cell_m * std::f64::consts::FRAC_1_SQRT_2;
+        let mut evidenced = vec![false; spec.len()];
+        let np = m.poses.len();
+        for p in 0..np {
+            let part = run.energy.load(p, p + 1).unwrap();
+            let det = run.detector.detect_pose(&part, p);
+            let g = m.pose_geometry(p);
+            let pose = m.poses[p];
+            let at = geo::Coord {
+                x: pose.x_m,
+                y: pose.y_m,
+            };
+            for (d, det) in det.iter().enumerate() {
+                let beam = m.beam(&g, d);
+                let bins = det.len().min(beam.ptr.len() - 1);
+                for b in (0..bins).filter(|&b| det[b]) {
+                    for j in beam.bin_range(b) {
+                        let cell = beam.cell[j] as usize;
+                        if beam.weight[j] < main || evidenced[cell] {
+                            continue;
+                        }
+                        let centre = spec.center(cell / spec.cols, cell % spec.cols);
+                        if !run.layout.occluded(at, centre, tol) {
+                            evidenced[cell] = true;
+                        }
+                    }
+                }
+            }
+        }
+        let (rows, cols) = (spec.rows, spec.cols);
+        let near = |cell: usize| {
+            let (r, c) = ((cell / cols) as isize, (cell % cols) as isize);
+            (-1..=1).any(|dr| {
+                (-1..=1).any(|dc| {
+                    let (rr, cc) = (r + dr, c + dc);
+                    rr >= 0
+                        && cc >= 0
+                        && (rr as usize) < rows
+                        && (cc as usize) < cols
+                        && evidenced[rr as usize * cols + cc as usize]
+                })
+            })
+        };
+        let wall = |i: usize| reference.cells[i] == CellClass::Occupied;
+        let ceiling = |region: &[bool]| {
+            let cells: Vec<usize> = (0..spec.len()).filter(|&i| wall(i) && region[i]).collect();
+            let shown = cells.iter().filter(|&&i| near(i)).count();
+            (shown, cells.len())
+        };
+        let (sb, nb) = ceiling(&regions.building);
+        let (so, no) = ceiling(&regions.observable);
+        let scene = &figs.iter().find(|(s, k, _)| s == name && k == n).unwrap().2;
+        let found = |method: &str, region: &str| {
+            f(
+                &scene[method],
+                &["metrics", "three_class", region, "walls_found_1"],
+            )
+        };
+        eprintln!(
+            "{name} N={n}: wall cells shown by a main-lobe detection (within one cell): building {sb} of {nb} = {:.3} (og {:.3}, ekf {:.3}, og-boresight {:.3}), observable {so} of {no} = {:.3} (og {:.3}, ekf {:.3}, og-boresight {:.3})",
+            sb as f64 / nb as f64,
+            found("og", "building"),
+            found("ekf", "building"),
+            found("og-boresight", "building"),
+            so as f64 / no as f64,
+            found("og", "observable"),
+            found("ekf", "observable"),
+            found("og-boresight", "observable"),
+        );
+        if (so as f64) < 0.9 * no as f64 {
+            failures.push(format!(
+                "{name} N={n}: observable walls shown {:.3} < 0.9",
+                so as f64 / no as f64
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
