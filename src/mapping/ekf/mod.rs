@@ -132,7 +132,7 @@
 //! still explains it. A cell on no detected ring (raised only by bins without a
 //! detection) explains no echo and is not occupied. Measured (`docs/mapping.md`, issue 31,
 //! "Item 2 (continued)"): in all four scenes of `tests/occlusion.rs` building wrong cells
-//! −16 to −18 %, room cells marked occupied 6.0–8.5 % → 3.4–4.4 %, cells beyond the walls
+//! −9 to −18 %, room cells marked occupied 6.0–8.5 % → 3.4–4.4 %, cells beyond the walls
 //! ≤ 4.3 %, F1 within one cell up, walls found −0.005 to −0.038; the variants not kept (the
 //! −3 dB arcs only, κ, the mirror ghost rule, a ring without the detected-ring requirement)
 //! are there too. The binary map (below) is taken with it; the soft map of an
