@@ -122,16 +122,27 @@ fn fig6_maps_both_sizes_with_both_mappers_on_three_seeds() {
 }
 
 #[test]
-#[ignore = "unmet on the corridor's model data (1 of 3 seeds for either mapper): N = 100 finds more wall cells but marks more room cells occupied, the model's clutter clusters in the room (per-class figures: docs/mapping.md, README fig6)"]
+#[ignore = "unmet for the EKF: three-class building wrong cells N = 16 vs N = 100 OG 328/315, 331/326, 358/357 (3 of 3), EKF 383/376, 388/419, 458/495 (1 of 3; 0 of 3 without the arc explanation): at N = 100 the EKF marks 4.8-8.9 % of the room's free cells occupied on model data (docs/mapping.md, issue 31)"]
 fn fig6_n16_has_more_wrong_cells_than_n100_in_every_seed() {
     let v = json(&fig6().1.join("fig6/fig6.json"));
+    let mut failures = Vec::new();
     for m in ["og", "ekf"] {
         for seed in 1..=3 {
-            let a = &find(&v, &format!("model_s{seed}_n16_{m}"))["wrong_interior"];
-            let b = &find(&v, &format!("model_s{seed}_n100_{m}"))["wrong_interior"];
-            assert!(a.as_u64() > b.as_u64(), "{m} seed {seed}: {a} vs {b}");
+            // three-class building wrong cells (issue 31): structure missed + free cells
+            // marked occupied, the truth objects' zones not scored
+            let w = |n: usize| {
+                find(&v, &format!("model_s{seed}_n{n}_{m}"))["three_class"]["building"]["wrong"]
+                    .as_u64()
+                    .unwrap()
+            };
+            let (a, b) = (w(16), w(100));
+            println!("{m} seed {seed}: three-class building wrong N = 16 {a}, N = 100 {b}");
+            if a <= b {
+                failures.push(format!("{m} seed {seed}: {a} vs {b}"));
+            }
         }
     }
+    assert!(failures.is_empty(), "NOT MET:\n{}", failures.join("\n"));
 }
 
 #[test]

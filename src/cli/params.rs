@@ -154,6 +154,7 @@ impl MapArgs {
                     reflect: self.ekf_reflect,
                     ghost,
                     split: self.ekf_split,
+                    arc_explain: self.ekf_arc_explain,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {

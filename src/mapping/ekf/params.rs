@@ -2,7 +2,8 @@
 //! switch ([`EkfVariant`]).
 //!
 //! Defaults (reasons in [`crate::mapping::ekf`]): μ0 = 0.01 m, σ0 = 0.1 m, ε = 0.5, kernel
-//! floor −30 dB, κ = 3.09, free-space evidence on, negative means reflected, the scalable
+//! floor −30 dB, κ = 3.09, free-space evidence on, arc explanation γ = −26.5 dB, negative
+//! means reflected, the scalable
 //! filter with 4 × 4 tiles and each bin's information split over its tiles, at most 20,000
 //! cells for the dense filter. Derived: the binary threshold η = Φ(κ) on p = P(x > μ0) and
 //! the lowest mean kept by the positivity step, 1e-3·μ0.
@@ -66,6 +67,10 @@ pub struct EkfParams {
     /// ([`crate::mapping::ekf::tiled`] module docs); false: the plain tiled update (the
     /// filter before issue 31), which is overconfident.
     pub split: bool,
+    /// Arc explanation γ ([`crate::mapping::ekf`] module docs): a cell is occupied only if
+    /// on some detected echo's range ring its share c̃·x̂² is at least γ times the ring's
+    /// largest ([`ARC_EXPLAIN`]); 0 = off.
+    pub arc_explain: f64,
     /// Implementation (scalable).
     pub variant: EkfVariant,
     /// Tile side of the scalable filter, cells (4).
@@ -86,6 +91,14 @@ pub type EkfValid = Valid<EkfParams>;
 /// the reference.
 pub const KAPPA: f64 = 3.090_232_306_167_813;
 
+/// The default arc-explanation γ: 10^(−26.5/10) = 2.24·10⁻³, the two-way peak side-lobe
+/// level of a uniform linear array (−13.26 dB one way; the mapper's array model has uniform
+/// amplitude). A cell of the ring's strongest RRCS seen at the first side-lobe peak still
+/// explains its echo at this γ; a cell whose share is below it on every ring it lies on
+/// is not needed by any echo (reasons and measurements: [`crate::mapping::ekf`],
+/// `docs/mapping.md`).
+pub const ARC_EXPLAIN: f64 = 2.238_721_138_568_339e-3;
+
 impl Default for EkfParams {
     fn default() -> Self {
         EkfParams {
@@ -97,6 +110,7 @@ impl Default for EkfParams {
             free_space: true,
             reflect: true,
             split: true,
+            arc_explain: ARC_EXPLAIN,
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,
@@ -109,7 +123,8 @@ impl ParamGuard for EkfParams {
     type Checked = EkfValid;
 
     /// Every field in range: μ0 > 0, σ0 > 0, ε ≥ 0, kernel floor < 0 dB, κ ≥ 0, tile in
-    /// 1..=64 cells, `max_dense_cells` > 0, the ghost rule's parameters in range.
+    /// 1..=64 cells, `max_dense_cells` > 0, γ in [0, 1], the ghost rule's parameters in
+    /// range.
     fn check(&self) -> Result<EkfValid> {
         if !(self.mu0.is_finite() && self.mu0 > 0.0) {
             return Err(Error::param(
@@ -131,6 +146,9 @@ impl ParamGuard for EkfParams {
         }
         if !(self.kappa.is_finite() && self.kappa >= 0.0) {
             return Err(Error::param("kappa", "must be >= 0"));
+        }
+        if !(0.0..=1.0).contains(&self.arc_explain) {
+            return Err(Error::param("arc_explain", "must be in [0, 1]"));
         }
         if self.tile == 0 || self.tile > 64 {
             return Err(Error::param("tile", "must be in 1..=64 cells"));

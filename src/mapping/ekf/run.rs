@@ -62,13 +62,14 @@ pub fn ekf_run(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EkfStats> {
     ekf_run_judged(
-        model, src, kernel, params, noise, sight, filter, None, progress,
+        model, src, kernel, params, noise, sight, filter, None, None, progress,
     )
 }
 
 /// [`ekf_run`] that also records, with a sight model, each pose's echoes and the rise of
 /// each cell's mean in the pose's energy updates (net over its directions, the positive
-/// part) for a ghost rule ([`crate::mapping::grid::ghost`]).
+/// part) for a ghost rule ([`crate::mapping::grid::ghost`]) and, with `arcs`, the main-lobe
+/// arc of every observed echo ([`EchoArcs`]).
 #[allow(clippy::too_many_arguments)]
 pub fn ekf_run_judged(
     model: &ObservationModel,
@@ -79,6 +80,7 @@ pub fn ekf_run_judged(
     sight: Option<Sight<'_>>,
     filter: &mut dyn RrcsFilter,
     mut judge: Option<&mut GhostJudge<'_>>,
+    mut arcs: Option<&mut EchoArcs>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EkfStats> {
     let n = model.spec.len();
@@ -108,6 +110,7 @@ pub fn ekf_run_judged(
         f64,
         u64,
         Option<ScanEchoes>,
+        Vec<Vec<(u32, f32)>>,
     );
     let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<Built> {
         let tb = Instant::now();
@@ -122,7 +125,8 @@ pub fn ekf_run_judged(
             let vis = s.occlusion.visibility(model, &geom, &echoes);
             (echoes, vis, s.occlusion.guard_bins())
         });
-        let obs: Vec<(Observation, Option<FreeSpace>, u64)> = (0..model.directions())
+        type Dir = (Observation, Option<FreeSpace>, u64, Vec<Vec<(u32, f32)>>);
+        let obs: Vec<Dir> = (0..model.directions())
             .into_par_iter()
             .map_init(
                 || vec![0.0; n],
@@ -133,7 +137,7 @@ pub fn ekf_run_judged(
                             ptr: vec![0],
                             ..Default::default()
                         };
-                        return (none, None, 0);
+                        return (none, None, 0, Vec::new());
                     }
                     let prof = energy.profile(p, d);
                     let mut bins = prof.len().min(model.bins);
@@ -183,16 +187,29 @@ pub fn ekf_run_judged(
                             });
                         }
                     }
-                    (o, free, withheld)
+                    let arcs = match &seen {
+                        Some((echoes, _, _)) => echo_arcs(&o, &echoes.det[d]),
+                        None => Vec::new(),
+                    };
+                    (o, free, withheld, arcs)
                 },
             )
             .collect();
         let withheld = obs.iter().map(|o| o.2).sum();
+        let mut arcs = Vec::new();
+        let obs = obs
+            .into_iter()
+            .map(|o| {
+                arcs.extend(o.3);
+                (o.0, o.1)
+            })
+            .collect();
         Ok((
-            obs.into_iter().map(|o| (o.0, o.1)).collect(),
+            obs,
             tb.elapsed().as_secs_f64(),
             withheld,
             seen.map(|s| s.0),
+            arcs,
         ))
     };
     // the filter's binary map (EkfMap's rule)
@@ -205,7 +222,12 @@ pub fn ekf_run_judged(
         None
     };
     for p in 0..np {
-        let (obs, build_s, withheld, echoes) = current.take().expect("built")?;
+        let (obs, build_s, withheld, echoes, pose_arcs) = current.take().expect("built")?;
+        if let Some(a) = arcs.as_deref_mut() {
+            for arc in pose_arcs {
+                a.push(p as u32, &arc);
+            }
+        }
         let recording = judge.is_some() && echoes.is_some();
         let mut rise: Vec<std::collections::BTreeMap<u32, f64>> =
             vec![Default::default(); obs.len()];
@@ -333,6 +355,60 @@ fn free_space(
     Some((f, cells.into_iter().map(|c| c.1).collect()))
 }
 
+/// The range rings of one observation's echoes: for each kept row whose bin holds a
+/// detection, every cell with a coefficient in that row (main and side lobes down to the
+/// observation model's floor), with its coefficient c̃.
+fn echo_arcs(o: &Observation, det: &[bool]) -> Vec<Vec<(u32, f32)>> {
+    (0..o.rows())
+        .filter(|&r| det.get(o.bin[r] as usize).copied().unwrap_or(false))
+        .map(|r| {
+            (o.ptr[r]..o.ptr[r + 1])
+                .filter(|&e| o.coef[e] > 0.0)
+                .map(|e| (o.cell[e], o.coef[e] as f32))
+                .collect::<Vec<_>>()
+        })
+        .filter(|arc| !arc.is_empty())
+        .collect()
+}
+
+/// The range rings (arcs) of the echoes a run observed (one per detected bin of a kept row,
+/// [`ekf_run_judged`]), for the arc-explanation step ([`EkfMap::explain`]): compressed rows
+/// of (cell, c̃) and the pose of each arc.
+#[derive(Debug, Clone, Default)]
+pub struct EchoArcs {
+    /// Row pointers into `cell`/`coef`, one row per arc.
+    pub ptr: Vec<usize>,
+    /// Cells of the arcs.
+    pub cell: Vec<u32>,
+    /// Their coefficients c̃ in the echo's bin.
+    pub coef: Vec<f32>,
+    /// Pose of each arc.
+    pub pose: Vec<u32>,
+}
+
+impl EchoArcs {
+    /// Append one arc seen from pose `pose`.
+    pub fn push(&mut self, pose: u32, arc: &[(u32, f32)]) {
+        if self.ptr.is_empty() {
+            self.ptr.push(0);
+        }
+        for &(c, v) in arc {
+            self.cell.push(c);
+            self.coef.push(v);
+        }
+        self.ptr.push(self.cell.len());
+        self.pose.push(pose);
+    }
+    /// Number of arcs.
+    pub fn len(&self) -> usize {
+        self.pose.len()
+    }
+    /// True without arcs.
+    pub fn is_empty(&self) -> bool {
+        self.pose.is_empty()
+    }
+}
+
 /// What the EKF can see (`map --method ekf` always gives it): the run's detector and its
 /// occlusion model ([`crate::mapping::grid::visibility`]). With it, an observation keeps
 /// only the bins up to its beam's occluder plus the guard, less the rows around weaker
@@ -365,6 +441,16 @@ pub struct EkfMap {
     /// ([`crate::mapping::grid::ghost`]; zeros without one): the decisions use
     /// x̂ − discount.
     pub discount: Vec<f64>,
+    /// Echo arcs through each cell ([`EkfMap::explain`]; zeros before it).
+    pub arcs: Vec<u32>,
+    /// Distinct poses of those arcs.
+    pub arc_poses: Vec<u32>,
+    /// The cell's largest share c̃·x'² of an arc relative to the arc's strongest cell (0 on
+    /// no arc).
+    pub arc_share: Vec<f64>,
+    /// Cells on at least one echo arc none of which they explain ([`EkfMap::explain`] with
+    /// γ > 0): never decided occupied.
+    pub unexplained: Vec<bool>,
 }
 
 impl EkfMap {
@@ -378,6 +464,57 @@ impl EkfMap {
             mu0: params.mu0,
             kappa: params.kappa,
             discount: vec![0.0; rows * cols],
+            arcs: vec![0; rows * cols],
+            arc_poses: vec![0; rows * cols],
+            arc_share: vec![0.0; rows * cols],
+            unexplained: vec![false; rows * cols],
+        }
+    }
+
+    /// The arc-explanation step (module docs of [`super`]): with x'_i = max(x̂_i − d_i, 0)
+    /// (d the ghost rule's discount), the energy of an echo's range ring (every cell with a
+    /// coefficient c̃ in the echo's bin, [`EchoArcs`]) is explained by its cells in
+    /// proportion to c̃_i·x'_i²; a cell explains the echo when its share is at least `gamma`
+    /// times the ring's largest. With `gamma` > 0 and at least one run's rings given, a cell
+    /// that explains no echo (including a cell on no echo's ring: raised by bins without a
+    /// detection only) is marked unexplained and never decided occupied. Also counts the
+    /// rings and their distinct poses per cell and keeps each cell's largest relative share.
+    pub fn explain(&mut self, arcs: &[EchoArcs], gamma: f64) {
+        let n = self.mean.len();
+        let x: Vec<f64> = self
+            .mean
+            .iter()
+            .zip(&self.discount)
+            .map(|(&m, &d)| (m - d).max(0.0))
+            .collect();
+        let mut explained = vec![false; n];
+        let mut last_pose = vec![u32::MAX; n];
+        let mut seen_run = vec![usize::MAX; n];
+        for (ri, run) in arcs.iter().enumerate() {
+            for a in 0..run.len() {
+                let es = run.ptr[a]..run.ptr[a + 1];
+                let share = |e: usize| run.coef[e] as f64 * x[run.cell[e] as usize].powi(2);
+                let max = es.clone().map(share).fold(0.0f64, f64::max);
+                for e in es {
+                    let c = run.cell[e] as usize;
+                    self.arcs[c] += 1;
+                    if last_pose[c] != run.pose[a] || seen_run[c] != ri {
+                        self.arc_poses[c] += 1;
+                        last_pose[c] = run.pose[a];
+                        seen_run[c] = ri;
+                    }
+                    let rel = if max > 0.0 { share(e) / max } else { 1.0 };
+                    self.arc_share[c] = self.arc_share[c].max(rel);
+                    if share(e) >= gamma * max {
+                        explained[c] = true;
+                    }
+                }
+            }
+        }
+        if gamma > 0.0 && !arcs.is_empty() {
+            for (u, e) in self.unexplained.iter_mut().zip(&explained) {
+                *u = !e;
+            }
         }
     }
 
@@ -426,15 +563,24 @@ impl EkfMap {
         }
         m
     }
-    /// p_i = Φ((x̂_i − d_i − μ0)/σ̂_i), d_i the ghost rule's discount.
+    /// p_i = Φ((x̂_i − d_i − μ0)/σ̂_i), d_i the ghost rule's discount; at most η = Φ(κ) for
+    /// an unexplained cell ([`EkfMap::explain`]).
     pub fn probs(&self) -> Vec<f64> {
         self.mean
             .iter()
             .zip(&self.discount)
             .map(|(&m, &d)| m - d)
             .zip(&self.std)
-            .map(|(m, &s)| {
-                if s > 0.0 {
+            .zip(&self.unexplained)
+            .map(|((m, &s), &u)| {
+                if u {
+                    // not decided occupied: capped at the binary threshold
+                    normal_cdf(self.kappa).min(if s > 0.0 {
+                        normal_cdf((m - self.mu0) / s)
+                    } else {
+                        0.0
+                    })
+                } else if s > 0.0 {
                     normal_cdf((m - self.mu0) / s)
                 } else if m > self.mu0 {
                     1.0
@@ -444,13 +590,15 @@ impl EkfMap {
             })
             .collect()
     }
-    /// Binary map: x̂ − d − κ·σ̂ > μ0 (d the ghost rule's discount).
+    /// Binary map: x̂ − d − κ·σ̂ > μ0 (d the ghost rule's discount) and not unexplained
+    /// ([`EkfMap::explain`]).
     pub fn binary(&self) -> Vec<bool> {
         self.mean
             .iter()
             .zip(&self.discount)
             .zip(&self.std)
-            .map(|((&m, &d), &s)| m - d - self.kappa * s > self.mu0)
+            .zip(&self.unexplained)
+            .map(|(((&m, &d), &s), &u)| !u && m - d - self.kappa * s > self.mu0)
             .collect()
     }
 }
@@ -489,6 +637,49 @@ pub fn std_grey(s: f64, sigma0: f64) -> u8 {
 mod tests {
     use super::*;
     use crate::params::ParamGuard;
+
+    /// The arc explanation: one ring over cells 0–2 (equal c̃) seen from pose 0 and a second
+    /// over cells 0–1 from pose 1; cell 3 on no ring. Cell 0 (x̂ 1 m) explains both rings;
+    /// cell 1 (x̂ 0.04 m: share 1.6e-3 < γ = 2.24e-3) and cell 2 (x̂ 0.05 m: share 2.5e-3 ≥ γ)
+    /// and cell 3 are occupied by the κ rule alone; with the step cell 1 (explains nothing)
+    /// and cell 3 (on no ring) are cleared, cell 2 stays; γ = 0 clears nothing.
+    #[test]
+    fn arc_explanation_clears_cells_that_explain_no_echo() {
+        let params = EkfParams::default().check().unwrap();
+        let mut arcs = EchoArcs::default();
+        arcs.push(0, &[(0, 1.0), (1, 1.0), (2, 1.0)]);
+        arcs.push(1, &[(0, 2.0), (1, 2.0)]);
+        assert_eq!(arcs.len(), 2);
+        let map = EkfMap {
+            rows: 1,
+            cols: 4,
+            mean: vec![1.0, 0.04, 0.05, 0.5],
+            std: vec![1e-3; 4],
+            mu0: params.mu0,
+            kappa: params.kappa,
+            discount: vec![0.0; 4],
+            arcs: vec![0; 4],
+            arc_poses: vec![0; 4],
+            arc_share: vec![0.0; 4],
+            unexplained: vec![false; 4],
+        };
+        assert_eq!(map.binary(), vec![true; 4]);
+        let mut off = map.clone();
+        off.explain(std::slice::from_ref(&arcs), 0.0);
+        assert_eq!(off.binary(), vec![true; 4]);
+        assert_eq!(off.arcs, vec![2, 2, 1, 0]);
+        assert_eq!(off.arc_poses, vec![2, 2, 1, 0]);
+        let mut on = map.clone();
+        on.explain(std::slice::from_ref(&arcs), params.arc_explain);
+        assert_eq!(on.binary(), vec![true, false, true, false]);
+        assert!((on.arc_share[1] - 0.04f64.powi(2)).abs() < 1e-12);
+        // an unexplained cell's soft value is capped at η
+        assert!(on.probs()[1] <= params.eta() && on.probs()[0] > params.eta());
+        // without rings (no sight model) nothing is judged
+        let mut none = map;
+        none.explain(&[], params.arc_explain);
+        assert_eq!(none.binary(), vec![true; 4]);
+    }
 
     /// Five rows (bins 10..=14) over three cells; threshold 1.0, noise mean 0.2 (excess
     /// 0.8), kernel half-width 1, occluder at bin 14. Row 10: cells 0 (c̃ 0.4) and 1 (0.1);

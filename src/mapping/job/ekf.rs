@@ -5,7 +5,8 @@
 //! after each run; with several runs each run is also mapped alone by a fresh filter.
 //! Files: `ekf.*` (soft map p, YAML thresholds η and 1 − η), `ekf_binary.*`, `ekf_mean.*`
 //! ([`mean_grey`]), `ekf_std.*` ([`std_grey`]), `ekf_rrcs.csv` (row, col, x_m, y_m, mean_m,
-//! std_m, p, occupied), `reference.*` and `metrics.json` (with the EKF section
+//! std_m, p, occupied, arcs, arc_poses, arc_share: the arc explanation's counts,
+//! [`EkfMap::explain`]), `reference.*` and `metrics.json` (with the EKF section
 //! [`EkfReport`]: parameters, η, kernel half-width, work statistics per run, covariance
 //! bytes).
 
@@ -17,8 +18,8 @@ use crate::campaign::layout::{GridSpec, ReferenceMap};
 use crate::energy::EnergySource;
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{
-    ekf_run_judged, mean_grey, new_filter, std_grey, truncate_kernel, EkfMap, EkfReport, EkfStats,
-    EkfValid, EkfVariant, NoiseModel, Sight,
+    ekf_run_judged, mean_grey, new_filter, std_grey, truncate_kernel, EchoArcs, EkfMap, EkfReport,
+    EkfStats, EkfValid, EkfVariant, NoiseModel, Sight,
 };
 use crate::mapping::grid::{GhostJudge, GhostRule, Occlusion};
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
@@ -150,6 +151,13 @@ fn filter_runs(
         })
     };
     let mut judges: Vec<GhostJudge<'_>> = Vec::new();
+    let mut arcs: Vec<EchoArcs> = Vec::new();
+    let judged =
+        |f: &dyn crate::mapping::ekf::RrcsFilter, judges: &[GhostJudge<'_>], arcs: &[EchoArcs]| {
+            let mut m = EkfMap::judged(f, spec.rows, spec.cols, params, judges);
+            m.explain(arcs, params.arc_explain);
+            m
+        };
     let mut done = 0;
     let mut stats = Vec::new();
     let mut fusion = Vec::new();
@@ -157,6 +165,7 @@ fn filter_runs(
     for (i, l) in inp.loaded.iter().enumerate() {
         let base = done;
         let mut j = judge(i);
+        let mut a = EchoArcs::default();
         let st = ekf_run_judged(
             &l.model,
             &l.energy,
@@ -166,12 +175,14 @@ fn filter_runs(
             Some(inp.sight(i)),
             filter.as_mut(),
             j.as_mut(),
+            Some(&mut a),
             &|d, _| progress(base + d, total),
         )?;
         judges.extend(j);
+        arcs.push(a);
         done += l.model.poses.len();
         stats.push(st);
-        let snap = EkfMap::judged(filter.as_ref(), spec.rows, spec.cols, params, &judges);
+        let snap = judged(filter.as_ref(), &judges, &arcs);
         let m = score_binary(&snap.binary(), &inp.reference, &inp.region);
         fusion.push(FusionRow {
             runs: i + 1,
@@ -185,6 +196,7 @@ fn filter_runs(
         for (i, l) in inp.loaded.iter().enumerate() {
             let mut f = new_filter(params, spec.rows, spec.cols)?;
             let mut j = judge(i);
+            let mut a = EchoArcs::default();
             ekf_run_judged(
                 &l.model,
                 &l.energy,
@@ -194,20 +206,15 @@ fn filter_runs(
                 Some(inp.sight(i)),
                 f.as_mut(),
                 j.as_mut(),
+                Some(&mut a),
                 &|_, _| {},
             )?;
-            let snap = EkfMap::judged(
-                f.as_ref(),
-                spec.rows,
-                spec.cols,
-                params,
-                &j.into_iter().collect::<Vec<_>>(),
-            );
+            let snap = judged(f.as_ref(), &j.into_iter().collect::<Vec<_>>(), &[a]);
             alone.push(score_binary(&snap.binary(), &inp.reference, &inp.region));
         }
     }
     Ok(Filtered {
-        map: EkfMap::judged(filter.as_ref(), spec.rows, spec.cols, params, &judges),
+        map: judged(filter.as_ref(), &judges, &arcs),
         stats,
         fusion,
         alone,
@@ -233,14 +240,23 @@ fn write_ekf_files(out: &Path, spec: &GridSpec, map: &EkfMap, params: &EkfValid)
         .map(|&s| std_grey(s, params.sigma0))
         .collect();
     output::write_map_files(out, "ekf_std", spec, &sg, 0.65, 0.196)?;
-    let mut csv = String::from("row,col,x_m,y_m,mean_m,std_m,p,occupied\n");
+    let mut csv =
+        String::from("row,col,x_m,y_m,mean_m,std_m,p,occupied,arcs,arc_poses,arc_share\n");
     for r in 0..spec.rows {
         for c in 0..spec.cols {
             let i = r * spec.cols + c;
             let ctr = spec.center(r, c);
             csv.push_str(&format!(
-                "{r},{c},{:.4},{:.4},{:.6e},{:.6e},{:.6},{}\n",
-                ctr.x, ctr.y, map.mean[i], map.std[i], probs[i], bin[i] as u8
+                "{r},{c},{:.4},{:.4},{:.6e},{:.6e},{:.6},{},{},{},{:.4e}\n",
+                ctr.x,
+                ctr.y,
+                map.mean[i],
+                map.std[i],
+                probs[i],
+                bin[i] as u8,
+                map.arcs[i],
+                map.arc_poses[i],
+                map.arc_share[i]
             ));
         }
     }
