@@ -82,7 +82,9 @@ mod tests {
         let before = calls.load(std::sync::atomic::Ordering::SeqCst);
         assert_eq!(f(1), 2); // pushed out: made again
         assert_eq!(calls.load(std::sync::atomic::Ordering::SeqCst), before + 1);
-        assert!(M.get_or(format!("err"), || Err::<u64, &str>("no")).is_err());
-        assert_eq!(M.get_or::<()>(format!("err"), || Ok(7)).unwrap(), 7);
+        assert!(M
+            .get_or("err".to_string(), || Err::<u64, &str>("no"))
+            .is_err());
+        assert_eq!(M.get_or::<()>("err".to_string(), || Ok(7)).unwrap(), 7);
     }
 }
