@@ -649,5 +649,14 @@ fn in_memory_simulator_is_synth() {
             written.data == mem,
             "model {k}: in-memory energies differ from synth's"
         );
+        // the layout's rays made once serve every cluster level (`model::levels`' search):
+        // the same energies, bit for bit; rays of another seed are refused
+        let fixed = sim.layout_rays(model, 11).unwrap();
+        let mut other = model.clone();
+        other.cluster_rrcs.value *= 3.0;
+        assert!(
+            sim.energies_with(&other, 11, &fixed).unwrap() == sim.energies(&other, 11).unwrap()
+        );
+        assert!(sim.energies_with(model, 12, &fixed).is_err());
     }
 }

@@ -25,6 +25,7 @@
 pub mod ekf;
 pub mod grid;
 pub mod job;
+mod memo;
 pub mod metrics;
 pub mod og;
 pub mod output;

@@ -65,6 +65,7 @@
 
 use super::channel::SeenRay;
 use super::diffuse::DiffuseWalls;
+use super::synth::LayoutRays;
 use super::walls::{specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
 use crate::campaign::manifest::Campaign;
@@ -73,6 +74,7 @@ use crate::energy::EnergyMatrix;
 use crate::error::Result;
 use crate::params::ParamGuard;
 use crate::units::wrap_rad;
+use rayon::prelude::*;
 
 /// What the level estimates used.
 #[derive(Debug, Clone, PartialEq)]
@@ -103,9 +105,16 @@ pub const LEVEL_SEEDS: [u64; 8] = [11, 12, 13, 14, 15, 16, 17, 18];
 /// The mean number of signal bins (E > 10μ, after the gate) per profile of energies `e`
 /// (one or more matrices of `nb`-bin profiles; module docs, step 3).
 pub fn mean_signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> f64 {
+    let (n, profiles) = signal_bins(e, nb, first_bin, mu);
+    n as f64 / profiles.max(1) as f64
+}
+
+/// (signal bins, profiles) of [`mean_signal_bins`]: its sums, which add over sets of
+/// profiles.
+fn signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> (usize, usize) {
     // a profile without a sweep (NaN, `[sweeps] missing`) is not counted
     let present = |prof: &&[f64]| !prof.first().is_some_and(|v| v.is_nan());
-    let profiles = e.chunks(nb.max(1)).filter(present).count().max(1);
+    let profiles = e.chunks(nb.max(1)).filter(present).count();
     let n: usize = e
         .chunks(nb.max(1))
         .filter(present)
@@ -116,7 +125,7 @@ pub fn mean_signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> f64 
                 .count()
         })
         .sum();
-    n as f64 / profiles as f64
+    (n, profiles)
 }
 
 fn median(v: Vec<f64>) -> Option<f64> {
@@ -361,17 +370,33 @@ pub fn fit_levels(
     };
     // enough draws for LEVEL_POSES pose-draws (at least 4, at most the seeds)
     let draws = LEVEL_POSES.div_ceil(np.max(1)).clamp(4, LEVEL_SEEDS.len());
+    // the layout's rays of each draw do not depend on σ: made once per seed (only when
+    // the search runs), and the draws of one σ made in parallel (each its own energies,
+    // so the bytes do not depend on the thread count)
+    let fixed: std::sync::OnceLock<Vec<LayoutRays>> = std::sync::OnceLock::new();
     let level = |sigma: f64| -> Result<f64> {
         let mut m = base.clone();
         m.cluster_rrcs.value = sigma;
-        let mut e = Vec::with_capacity(draws * np * nd * nb);
-        for &s in &LEVEL_SEEDS[..draws] {
-            let mut d = sim.energies(&m, s)?;
-            // the measured campaign's missing sweeps are missing from the draws too
-            em.meta.mask_missing(nd, nb, &mut d);
-            e.extend(d);
-        }
-        Ok(mean_signal_bins(&e, nb, first_bin, mu))
+        let fixed = match fixed.get() {
+            Some(f) => f,
+            None => {
+                let made = (LEVEL_SEEDS[..draws].par_iter())
+                    .map(|&s| sim.layout_rays(&m, s))
+                    .collect::<Result<Vec<_>>>()?;
+                fixed.get_or_init(|| made)
+            }
+        };
+        let counts = (LEVEL_SEEDS[..draws].par_iter().zip(fixed))
+            .map(|(&s, f)| -> Result<(usize, usize)> {
+                let mut d = sim.energies_with(&m, s, f)?;
+                // the measured campaign's missing sweeps are missing from the draws too
+                em.meta.mask_missing(nd, nb, &mut d);
+                Ok(signal_bins(&d, nb, first_bin, mu))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        // the mean over every draw's profiles at once, as `mean_signal_bins` of them all
+        let (n, profiles) = counts.iter().fold((0, 0), |(n, k), &(a, b)| (n + a, k + b));
+        Ok(n as f64 / profiles.max(1) as f64)
     };
     let (lo, hi) = (1e-6f64.ln(), 10f64.ln());
     let mut at_bound = false;

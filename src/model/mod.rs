@@ -74,4 +74,6 @@ pub use channel::{ChannelModel, ModelCluster, ModelRay, RaySource, SeenRay};
 pub use diffuse::{DiffusePoint, DiffuseWalls};
 pub use params::{SynthParams, SynthValid};
 pub use response::BandPattern;
-pub use synth::{default_truth_dir, synth, synth_channel, EnergySimulator, SynthReport};
+pub use synth::{
+    default_truth_dir, synth, synth_channel, EnergySimulator, LayoutRays, SynthReport,
+};

@@ -224,8 +224,18 @@ impl EnergySimulator {
     /// Draw `model` (checked, every quantity with a value) with `seed` and return its
     /// energies, position-major (as [`synth`] with that seed).
     pub fn energies(&self, model: &ModelConfig, seed: u64) -> Result<Vec<f64>> {
-        let channel = ChannelModel::draw(&self.layout, model, seed)?;
-        let walls = match &channel.config.diffuse {
+        self.energies_with(model, seed, &self.layout_rays(model, seed)?)
+    }
+
+    /// The rays every pose sees from the layout's own parts for draws of `model` with
+    /// `seed`: the diffuse wall points (`[diffuse]`) and the specular walls and vertices
+    /// (`[walls]`), in the order [`EnergySimulator::energies`] adds them after the
+    /// clusters' rays, those arriving too late for any profile left out. They do not
+    /// depend on the model's clusters, so a search over the cluster level (`model::levels`)
+    /// makes them once per seed and hands them to [`EnergySimulator::energies_with`].
+    pub fn layout_rays(&self, model: &ModelConfig, seed: u64) -> Result<LayoutRays> {
+        model.check()?;
+        let walls = match &model.diffuse {
             Some(d) => Some(DiffuseWalls::draw(
                 &self.layout,
                 d,
@@ -236,28 +246,85 @@ impl EnergySimulator {
         };
         let resp = &self.resp;
         let min_amp2 = resp.cull * resp.noise_mean / (resp.g_peak * resp.g_peak);
+        let last = self.last_arrival();
+        let per_pose = (self.poses.iter())
+            .map(|&at| {
+                let mut rays = Vec::new();
+                if let Some(w) = &walls {
+                    rays.extend(w.rays_from(&self.layout, at, min_amp2));
+                }
+                if let Some(w) = &model.walls {
+                    rays.extend(super::walls::geometry_rays(&self.layout, at, w, seed));
+                }
+                rays.retain(|r| r.tau_s <= last);
+                rays
+            })
+            .collect();
+        Ok(LayoutRays {
+            parts: layout_parts(model),
+            seed,
+            per_pose,
+        })
+    }
+
+    /// [`EnergySimulator::energies`] with the layout's rays made beforehand by
+    /// [`EnergySimulator::layout_rays`] for a model with the same `[diffuse]` and `[walls]`
+    /// and the same `seed` (refused otherwise): the same energies, bit for bit.
+    pub fn energies_with(
+        &self,
+        model: &ModelConfig,
+        seed: u64,
+        fixed: &LayoutRays,
+    ) -> Result<Vec<f64>> {
+        let channel = ChannelModel::draw(&self.layout, model, seed)?;
+        if fixed.seed != seed
+            || fixed.parts != layout_parts(&channel.config)
+            || fixed.per_pose.len() != self.poses.len()
+        {
+            return Err(Error::param(
+                "layout_rays",
+                "made for another seed, [diffuse] or [walls]",
+            ));
+        }
+        let resp = &self.resp;
         let (np, nd, nb) = self.shape();
-        let last = (nb * resp.l) as f64 * resp.dt + resp.kernel_reach + 5e-9;
+        let last = self.last_arrival();
         let mut energies = vec![0.0; np * nd * nb];
         for (p, profiles) in energies.chunks_mut(nd * nb).enumerate() {
             let at = self.poses[p];
             let heading = self.headings_deg[p];
             let mut rays = channel.rays_from(&self.layout, at, heading);
-            if let Some(w) = &walls {
-                rays.extend(w.rays_from(&self.layout, at, min_amp2));
-            }
-            if let Some(w) = &channel.config.walls {
-                rays.extend(super::walls::geometry_rays(&self.layout, at, w, seed));
-            }
             // a ray arriving after the last sample plus the kernel's reach (and the group
             // delay, clamped to ±1 ns) adds nothing to any profile: dropped before the
             // per-direction loop (the same energies, far fewer pattern look-ups in a
-            // large hall)
+            // large hall); the layout's rays were filtered alike
             rays.retain(|r| r.tau_s <= last);
+            rays.extend_from_slice(&fixed.per_pose[p]);
             resp.position(p, heading.to_radians(), &rays, seed, profiles);
         }
         Ok(energies)
     }
+
+    /// The latest delay, s, a ray can have and still reach a profile: the last sample plus
+    /// the kernel's reach and 5 ns (the group delay is clamped to ±1 ns).
+    fn last_arrival(&self) -> f64 {
+        let resp = &self.resp;
+        (resp.proc.nbins() * resp.l) as f64 * resp.dt + resp.kernel_reach + 5e-9
+    }
+}
+
+/// The rays of the layout's own parts per pose for one seed and one `[diffuse]` and
+/// `[walls]` ([`EnergySimulator::layout_rays`]).
+pub struct LayoutRays {
+    /// The model's `[diffuse]` and `[walls]` they were made for ([`layout_parts`]).
+    parts: String,
+    seed: u64,
+    per_pose: Vec<Vec<SeenRay>>,
+}
+
+/// A model's `[diffuse]` and `[walls]` as text (NaN compares equal to itself there).
+fn layout_parts(model: &ModelConfig) -> String {
+    format!("{:?} {:?}", model.diffuse, model.walls)
 }
 
 impl EnergySimulator {

@@ -7,6 +7,7 @@
 use crate::campaign::manifest::{Manifest, Steering};
 use crate::campaign::pattern::ArrayPattern;
 use crate::error::{Error, Result};
+use crate::mapping::memo::Memo;
 use crate::units::wrap_rad;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -25,7 +26,13 @@ pub(super) struct GainModel {
     pub(super) gmax: Vec<f64>,
     /// Per direction: device-frame angle intervals (rad, within (−π, π]) where w ≥ floor.
     pub(super) intervals: Vec<Vec<(f64, f64)>>,
+    /// The inputs the tables were made from (array, band, directions, floor) as text:
+    /// the key of [`GAIN_MEMO`] and of the scoring region's memo.
+    pub(super) source: String,
 }
+
+/// Gain models already made in this process ([`crate::mapping::memo`]).
+static GAIN_MEMO: Memo<GainModel> = Memo::new();
 
 fn lookup(table: &[f64], deg: f64) -> f64 {
     if !(-90.0..=90.0).contains(&deg) {
@@ -39,6 +46,12 @@ fn lookup(table: &[f64], deg: f64) -> f64 {
 
 impl GainModel {
     pub(super) fn new(m: &Manifest, floor: f64) -> Result<GainModel> {
+        let source = format!("{:?} {:?} {:?} {:?}", m.array, m.band, m.directions, floor);
+        GAIN_MEMO.get_or(source.clone(), || GainModel::make(m, floor, source))
+    }
+
+    /// [`GainModel::new`] without the memo.
+    fn make(m: &Manifest, floor: f64, source: String) -> Result<GainModel> {
         let pat = ArrayPattern::new(m.array, m.band.center_hz())?;
         let fc = m.band.center_hz();
         let n_ang = (180.0 / STEP_DEG).round() as usize + 1;
@@ -110,6 +123,7 @@ impl GainModel {
             theta_s: angles,
             gmax,
             intervals,
+            source,
         })
     }
 

@@ -256,6 +256,23 @@ impl ObservationModel {
         crate::units::range_from_delay_s((self.bins as f64 - 0.5) * self.bin_width_s)
     }
 
+    /// Everything the model's geometry and weights are made from, as text (its grid,
+    /// parameters, poses, bins and the gain tables' inputs): two models with the same key
+    /// give the same cells, bearings and weights (the scoring region's memo).
+    pub(crate) fn memo_key(&self) -> String {
+        format!(
+            "{:?} {:?} {:?} {} {} {:?} {:?} {}",
+            self.spec,
+            self.params,
+            self.poses,
+            self.bins,
+            self.min_bin,
+            self.bin_width_s,
+            self.lambda_m,
+            self.gain.source
+        )
+    }
+
     /// Two-way weight of direction `d` towards relative bearing `theta_rel` (rad).
     pub fn weight(&self, d: usize, theta_rel: f64) -> f64 {
         let g = self.gain.gain(d, theta_rel) / self.gain.gmax[d];

@@ -13,6 +13,7 @@ use crate::campaign::manifest::{Campaign, Pose};
 use crate::energy::{EnergyMatrix, EnergySource, EnergyTable};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
+use crate::mapping::memo::Memo;
 use crate::mapping::og::{detection_threshold, Detector, OgValid};
 use std::path::PathBuf;
 
@@ -58,6 +59,16 @@ pub fn min_bin(em: &EnergyMatrix) -> usize {
 /// Bin-averaged window kernel of a point echo, K(m) for m = 0..=32 bins from its peak (the
 /// run's band and processing; any scale).
 pub fn window_kernel(c: &Campaign) -> Result<Vec<f64>> {
+    let m = &c.manifest;
+    let key = format!("{:?} {:?}", m.band, m.processing);
+    WINDOW_MEMO.get_or(key, || window_kernel_of(c))
+}
+
+/// Window kernels already made in this process ([`crate::mapping::memo`]).
+static WINDOW_MEMO: Memo<Vec<f64>> = Memo::new();
+
+/// [`window_kernel`] without the memo.
+fn window_kernel_of(c: &Campaign) -> Result<Vec<f64>> {
     let m = &c.manifest;
     let proc = crate::energy::EnergyProcessor::new(m.band, m.processing)
         .map_err(|e| Error::input(&c.path, e.to_string()))?;

@@ -30,6 +30,7 @@ use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::mapping::grid::ObservationModel;
+use crate::mapping::memo::Memo;
 use crate::mapping::metrics::{evaluate, evaluate_three_class, MapMetrics, ThreeClassMetrics};
 use crate::mapping::og::LogOddsMap;
 use rayon::prelude::*;
@@ -182,6 +183,19 @@ pub fn building_region(layout: &Layout, reference: &ReferenceMap) -> Vec<bool> {
 /// The observable region of a set of runs (module docs): main-lobe coverage within the
 /// usable bins and line of sight through the layout's walls.
 pub fn observable_region(runs: &[&ObservationModel], layout: &Layout) -> Vec<bool> {
+    let keys: Vec<String> = runs.iter().map(|m| m.memo_key()).collect();
+    let key = format!("{keys:?} {layout:?}");
+    REGION_MEMO
+        .get_or::<std::convert::Infallible>(key, || Ok(observable_region_of(runs, layout)))
+        .unwrap_or_else(|e| match e {})
+}
+
+/// Observable regions already made in this process ([`crate::mapping::memo`]): the
+/// experiments score many maps of the same poses.
+static REGION_MEMO: Memo<Vec<bool>> = Memo::new();
+
+/// [`observable_region`] without the memo.
+fn observable_region_of(runs: &[&ObservationModel], layout: &Layout) -> Vec<bool> {
     let mut region = vec![false; runs.first().map_or(0, |m| m.spec.len())];
     for m in runs {
         let main = m.params.main_weight();
