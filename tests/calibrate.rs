@@ -107,6 +107,12 @@ fn calibrate(
 /// `pradar check` (20 draws, its default seed) of `model` against `energy`: whether it
 /// passes, and its largest KS ratio.
 fn check(model: &Path, cpath: &Path, energy: &Path) -> (bool, f64) {
+    let (pass, ratio, _) = check_verdict(model, cpath, energy);
+    (pass, ratio)
+}
+
+/// [`check`], with its verdict line.
+fn check_verdict(model: &Path, cpath: &Path, energy: &Path) -> (bool, f64, String) {
     // not --quiet: the verdict line is the progress output's last line
     let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
         .args([
@@ -136,7 +142,7 @@ fn check(model: &Path, cpath: &Path, energy: &Path) -> (bool, f64) {
         .and_then(|r| r.split_whitespace().next())
         .and_then(|r| r.parse().ok())
         .unwrap_or(f64::NAN);
-    (line.starts_with("PASS:"), ratio)
+    (line.starts_with("PASS:"), ratio, line.to_string())
 }
 
 /// Print each quantity (posterior median, interval, truth, error); return those of the
@@ -475,6 +481,29 @@ fn hall(dir: &Path, hx: f64, n: usize) -> PathBuf {
     path
 }
 
+/// The closed-loop sets of `tests/closed_loop.rs` (sets 1–3 and the Table 1 set without its
+/// `[diffuse]`), as [`hall_sets`] describes them.
+fn hall_set_models() -> [(&'static str, ModelConfig); 4] {
+    [
+        (
+            "set 1 (λ 1.0/ns, AoA 8°, d_c 6 m)",
+            common::hall_model(1.0, 8.0, 6.0),
+        ),
+        (
+            "set 2 (λ 0.43/ns, AoA 16.9°, d_c 8 m)",
+            common::hall_model(0.43, 16.9, 8.0),
+        ),
+        (
+            "set 3 (λ 0.2/ns, AoA 30°, d_c 10 m; interleaved)",
+            common::hall_model(0.2, 30.0, 10.0),
+        ),
+        (
+            "Table 1 (table1_defaults, no [diffuse])",
+            ModelConfig::table1_defaults(),
+        ),
+    ]
+}
+
 /// Priority 2: the closed-loop sets of `tests/closed_loop.rs` (sets 1–3: λ 1.0/0.43/0.2 per
 /// ns, AoA 8/16.9/30°, d_c 6/8/10 m, d_p 0.4 m, Γ 15 ns, γ 4 ns, 5 rays; the Table 1 set
 /// `table1_defaults` without its `[diffuse]`, whose 40 wall points per metre would make
@@ -495,24 +524,7 @@ fn hall(dir: &Path, hx: f64, n: usize) -> PathBuf {
 fn hall_sets() {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = hall(&tmp.path().join("in"), 80.0, 32);
-    let sets = [
-        (
-            "set 1 (λ 1.0/ns, AoA 8°, d_c 6 m)",
-            common::hall_model(1.0, 8.0, 6.0),
-        ),
-        (
-            "set 2 (λ 0.43/ns, AoA 16.9°, d_c 8 m)",
-            common::hall_model(0.43, 16.9, 8.0),
-        ),
-        (
-            "set 3 (λ 0.2/ns, AoA 30°, d_c 10 m; interleaved)",
-            common::hall_model(0.2, 30.0, 10.0),
-        ),
-        (
-            "Table 1 (table1_defaults, no [diffuse])",
-            ModelConfig::table1_defaults(),
-        ),
-    ];
+    let sets = hall_set_models();
     for (k, (name, model)) in sets.iter().enumerate() {
         let dir = tmp.path().join(format!("set{k}"));
         let e = synth(&dir, &cpath, model, 11);
@@ -659,4 +671,283 @@ fn in_memory_simulator_is_synth() {
         );
         assert!(sim.energies_with(model, 12, &fixed).is_err());
     }
+}
+
+/// A scene's name and its checks (pass, largest KS ratio): own table, second realisation.
+type SceneChecks = (String, (bool, f64), (bool, f64));
+
+/// The physics scenes of the predictive check (issue 29, `tests/check.rs`): the corridor,
+/// the office and the furnished hall (48 poses). Each is simulated by the physics simulator
+/// (`simulate` → `energy`, its manifest's seed) and at the next seed (a second
+/// realisation); the first is calibrated with the CLI defaults (`calibrate --seed 5`:
+/// 3000 simulations, population 400, the default prior, `summaries-quantiles`), and the
+/// calibrated model is checked (`pradar check`, 20 draws, its pass rule) against the scene
+/// and against the second realisation. Calibrate reads only the energy table and the
+/// campaign (never the `[scene]` or `[clutter]` truth). With `chain_prior`, the prior is
+/// instead the cluster chain's model of the scene (`pipeline::analyse`, what `reproduce`
+/// runs: it has `[diffuse]` and `[walls]`) with every interval removed, so the default
+/// ranges apply to its 13 free quantities (docs/calibrate.md, "The physics corridor with
+/// `[walls]` free"). Returns per scene (name, own check, second check).
+fn physics_predictive(sims: usize, pop: usize, chain_prior: bool) -> Vec<SceneChecks> {
+    use pradar::campaign::manifest::SweepFormat;
+    let tmp = tempfile::tempdir().unwrap();
+    let mut out = Vec::new();
+    for (name, t) in [
+        ("corridor", common::corridor()),
+        ("office", common::fixture("tests/office.toml")),
+        (
+            "furnished hall",
+            common::fixture("tests/furnished_hall.toml"),
+        ),
+    ] {
+        let dir = tmp.path().join(name.replace(' ', "_"));
+        let t0 = Instant::now();
+        let (c, _) = common::chain(&dir.join("a"), &t, SweepFormat::Parquet);
+        let mut t2 = t.clone();
+        let seed = t2["seed"].as_integer().unwrap();
+        common::set(&mut t2, "seed", seed + 1);
+        let (c2, _) = common::chain(&dir.join("b"), &t2, SweepFormat::Parquet);
+        let sim_s = t0.elapsed().as_secs_f64();
+        let (e, e2) = (dir.join("a/energy.parquet"), dir.join("b/energy.parquet"));
+        let cal = dir.join("cal.toml");
+        let t1 = Instant::now();
+        if chain_prior {
+            let em = pradar::energy::EnergyMatrix::read(&e).unwrap();
+            let a = pradar::pipeline::analyse(&c, &em, &dir.join("a"), false).unwrap();
+            let mut m = a.fit.unwrap().model;
+            for (q, _, _) in pradar::calibrate::DEFAULT_PRIOR {
+                if let Some(x) = m.quantity_mut(q) {
+                    x.interval = None;
+                }
+            }
+            let pp = dir.join("prior.toml");
+            m.save(&pp).unwrap();
+            run(
+                &[
+                    "calibrate",
+                    "--energy",
+                    &s(&e),
+                    "--campaign",
+                    &s(&c.path),
+                    "--out",
+                    &s(&cal),
+                    "--simulations",
+                    &sims.to_string(),
+                    "--population",
+                    &pop.to_string(),
+                    "--seed",
+                    "5",
+                    "--prior",
+                    &s(&pp),
+                ]
+                .map(String::from),
+                None,
+            );
+        } else {
+            calibrate(&e, &c.path, &cal, sims, pop, 5, None, None);
+        }
+        let cal_s = t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let (p1, r1, v1) = check_verdict(&cal, &c.path, &e);
+        let (p2, r2, v2) = check_verdict(&cal, &c2.path, &e2);
+        eprintln!(
+            "== {name} ({} poses): simulate ×2 {sim_s:.0} s, calibrate {cal_s:.0} s, check ×2 {:.0} s\n   own scene:         {v1}\n   second realisation: {v2}",
+            c.manifest.poses.len(),
+            t2.elapsed().as_secs_f64()
+        );
+        eprintln!("{}", std::fs::read_to_string(&cal).unwrap());
+        out.push((name.to_string(), (p1, r1), (p2, r2)));
+    }
+    eprintln!("SUMMARY scene | own check (largest KS ratio) | second realisation");
+    for (n, a, b) in &out {
+        eprintln!(
+            "SUMMARY {n} | {} ({:.2}) | {} ({:.2})",
+            if a.0 { "PASS" } else { "FAIL" },
+            a.1,
+            if b.0 { "PASS" } else { "FAIL" },
+            b.1
+        );
+    }
+    out
+}
+
+/// Issue 30's predictive must-show on the physics scenes with the default distance: the
+/// calibrated model of each scene (corridor, office, furnished hall; CLI defaults) passes
+/// `pradar check` against its scene and against the scene at another seed
+/// ([`physics_predictive`]). `cargo test --release --test tests --
+/// calibrate::physics_scenes_predictive --ignored --nocapture`.
+///
+/// Measured (issue 30, default prior; 2 threads at load 7–9): corridor calibrate 353 s,
+/// check FAIL vs its scene (largest KS ratio 2.97) and vs seed + 1 (3.03); office 339 s,
+/// FAIL (4.05) and FAIL (4.20); the furnished hall (48 poses, ~1400 s estimated) stopped
+/// unfinished. Unmet: without `[diffuse]`/`[walls]` the model cannot reproduce the
+/// physics scenes (docs/calibrate.md).
+#[test]
+#[ignore = "unmet: corridor and office fail check (KS ratio 2.97-4.20, own and seed+1); about 35 min on 2 shared cores"]
+fn physics_scenes_predictive() {
+    assert_predictive(&physics_predictive(3000, 400, false));
+}
+
+/// [`physics_scenes_predictive`] with the cluster chain's model of each scene (intervals
+/// removed) as the prior: `[diffuse]` and `[walls]` free, the matching model. Not run yet
+/// (each simulation ~5× dearer than without `[diffuse]`/`[walls]`; the corridor alone
+/// took 609 s with another calibration on the cores, docs/calibrate.md).
+#[test]
+#[ignore = "about 1-2 h on 2 shared cores (not run)"]
+fn physics_scenes_predictive_chain_prior() {
+    assert_predictive(&physics_predictive(3000, 400, true));
+}
+
+/// Every scene's calibrated model passes against its scene and the second realisation.
+fn assert_predictive(r: &[SceneChecks]) {
+    let failed: Vec<String> = r
+        .iter()
+        .flat_map(|(n, a, b)| {
+            [
+                (!a.0).then(|| format!("{n}: own scene fails (ratio {:.2})", a.1)),
+                (!b.0).then(|| format!("{n}: second realisation fails (ratio {:.2})", b.1)),
+            ]
+        })
+        .flatten()
+        .collect();
+    assert!(failed.is_empty(), "{}", failed.join("; "));
+}
+
+/// The posterior of one contraction run: per quantity of [`QUANTITIES`], (median, lo, hi).
+type Marginals = Vec<(f64, f64, f64)>;
+
+/// Contraction with the campaign: the closed-loop sets `sets` (indices into
+/// [`hall_set_models`]) in the closed loop's 480 m × 12 m hall (`tests/closed_loop.rs`:
+/// 240 random poses, seed 5, 3° steps); at each pose count n of `poses` the campaign has
+/// the first n of those 240 poses (so the pose sets are nested), synth seed 11, calibrated
+/// with `sims` simulations (population `pop`, seed 5, default prior and distance). Prints
+/// per set and quantity the median's error, the 95 % interval at each pose count and the
+/// width ratio ln(hi/lo) at the first pose count over ln(hi/lo) at the last, beside
+/// √(last/first), the ratio of a 1/√poses contraction. Returns per set the marginals at
+/// each pose count.
+fn contraction(sets: &[usize], poses: &[usize], sims: usize, pop: usize) -> Vec<Vec<Marginals>> {
+    let tmp = tempfile::tempdir().unwrap();
+    let models = hall_set_models();
+    let mut all = Vec::new();
+    for &k in sets {
+        let (name, model) = &models[k];
+        let mut per_n = Vec::new();
+        for &n in poses {
+            let dir = tmp.path().join(format!("set{k}_{n}"));
+            let cpath = hall(&dir.join("in"), 240.0, n);
+            let e = synth(&dir, &cpath, model, 11);
+            let t = Instant::now();
+            let got = calibrate(&e, &cpath, &dir.join("cal.toml"), sims, pop, 5, None, None);
+            let wall = t.elapsed().as_secs_f64();
+            let (failures, covered) = score(&format!("{name}, {n} poses"), &got, model, 0.15);
+            eprintln!(
+                "{name}, {n} poses: {wall:.0} s ({:.2} simulations/s); outside 15 % (first six): {}; covered {}/8",
+                sims as f64 / wall,
+                failures.len(),
+                covered.iter().filter(|c| **c).count()
+            );
+            per_n.push(
+                QUANTITIES
+                    .iter()
+                    .map(|(q, pick)| {
+                        let [lo, hi] = got.quantity(q).and_then(|x| x.interval).unwrap();
+                        (pick(&got), lo, hi)
+                    })
+                    .collect::<Marginals>(),
+            );
+        }
+        let (first, last) = (poses[0], poses[poses.len() - 1]);
+        eprintln!(
+            "SUMMARY {name} | quantity | truth | {} | ln-width ratio {first}/{last} (1/√poses: {:.2})",
+            poses
+                .iter()
+                .map(|n| format!("{n} poses: median (error) [lo, hi] hi/lo"))
+                .collect::<Vec<_>>()
+                .join(" | "),
+            (last as f64 / first as f64).sqrt()
+        );
+        for (i, (q, pick)) in QUANTITIES.iter().enumerate() {
+            let t = pick(model);
+            let cells: Vec<String> = per_n
+                .iter()
+                .map(|m| {
+                    let (v, lo, hi) = m[i];
+                    format!(
+                        "{v:.3} ({:+.0} %) [{lo:.3}, {hi:.3}] {:.2}",
+                        100.0 * (v - t) / t,
+                        hi / lo
+                    )
+                })
+                .collect();
+            let w = |m: &Marginals| (m[i].2 / m[i].1).ln();
+            eprintln!(
+                "SUMMARY {name} | {q} | {t:.3} | {} | {:.2}",
+                cells.join(" | "),
+                w(&per_n[0]) / w(&per_n[per_n.len() - 1])
+            );
+        }
+        all.push(per_n);
+    }
+    all
+}
+
+/// Issue 30's contraction must-show, as stated: on the four closed-loop hall sets with 240
+/// poses (the closed loop's 480 m hall), the posterior medians of λ, AoA std, d_c and Γ
+/// within 15 % of the model in every set, and the 95 % intervals of those four shrinking
+/// from 32 to 240 poses roughly as 1/√poses: ln(hi/lo)@32 / ln(hi/lo)@240 at least
+/// 2/3 of √(240/32) = 2.74 (≥ 1.83) in every set. 1200 simulations (population 300) per
+/// calibration, as [`hall_sets`].
+///
+/// Not run in full: 8 calibrations, a 240-pose one 7.1× dearer than a 32-pose one
+/// (measured at 400 simulations: 1464 s vs 205 s on the 2 shared cores), about 5–6 h.
+/// The reduced measurement [`hall_contraction_reduced`] (set 1, a third of the budget)
+/// does not meet it: at 240 poses λ +24 %, AoA +30 %, d_c +28 %, Γ +28 %, width ratios
+/// 0.98/1.06/1.31/1.41 against 2.74. `cargo test --release --test tests --
+/// calibrate::hall_contraction --exact --ignored --nocapture`.
+#[test]
+#[ignore = "about 5-6 h on 2 shared cores (not run); reduced run unmet: medians 24-30 % off, width ratios 0.98-1.41 vs 2.74"]
+fn hall_contraction() {
+    let all = contraction(&[0, 1, 2, 3], &[32, 240], 1200, 300);
+    let sqrt = (240.0f64 / 32.0).sqrt();
+    let models = hall_set_models();
+    let mut failed = Vec::new();
+    for (k, per_n) in all.iter().enumerate() {
+        let (name, model) = &models[k];
+        for i in [0, 1, 2, 4] {
+            let (q, pick) = QUANTITIES[i];
+            let t = pick(model);
+            let (v, lo, hi) = per_n[1][i];
+            if ((v - t) / t).abs() > 0.15 {
+                failed.push(format!("{name} {q}: median {v:.3} vs {t:.3} at 240 poses"));
+            }
+            let ratio = (per_n[0][i].2 / per_n[0][i].1).ln() / (hi / lo).ln();
+            if ratio < sqrt * 2.0 / 3.0 {
+                failed.push(format!(
+                    "{name} {q}: width ratio {ratio:.2} < {:.2}",
+                    sqrt * 2.0 / 3.0
+                ));
+            }
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("; "));
+}
+
+/// A reduced [`hall_contraction`] that fits a session: set 1 only (λ 1.0/ns, AoA 8°, d_c
+/// 6 m), 32 and 240 poses, 400 simulations (population 200, the smallest population at
+/// which the regression adjustment still applies: 10 kept particles per coefficient).
+/// Prints the table of [`contraction`]; asserts nothing (the budget is a third of the
+/// must-show's). `cargo test --release --test tests --
+/// calibrate::hall_contraction_reduced --ignored --nocapture`.
+///
+/// Measured (issue 30, 2 threads at load 6–8; 1671 s in all: 205 s at 32 poses, 1464 s
+/// at 240): medians at 32 → 240 poses λ +38 → +24 %, AoA +23 → +30 %, d_c +2 → +28 %,
+/// Γ −11 → +28 %; hi/lo λ 3.56 → 3.64, AoA 3.15 → 2.96, d_c 2.62 → 2.09, Γ 3.30 → 2.33;
+/// ln-width ratio 32/240 λ 0.98, AoA 1.06, d_c 1.31, Γ 1.41 (1/√poses: 2.74); 8/8
+/// intervals cover at both. A 96-pose point by the CLI on the same inputs (698 s): λ +31 %,
+/// AoA +17 %, d_c +11 %, Γ +45 %, ratio 32/96 1.53/1.56/1.22/1.23 against 1.73 (λ and AoA
+/// narrower at 96 than at 240). Table in docs/calibrate.md.
+#[test]
+#[ignore = "about 30 min on 2 shared cores; figures in docs/calibrate.md"]
+fn hall_contraction_reduced() {
+    contraction(&[0], &[32, 240], 400, 200);
 }

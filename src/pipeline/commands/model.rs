@@ -69,6 +69,14 @@ impl fmt::Display for CalibrateSummary {
             )?;
         }
         let p = &c.posterior;
+        if !p.heldout_r2.is_empty() {
+            let r2: Vec<String> = p.heldout_r2.iter().map(|r| format!("{r:.2}")).collect();
+            writeln!(
+                f,
+                "held-out R² of the summaries' projection (5-fold, last generation; in order): {}",
+                r2.join(" ")
+            )?;
+        }
         write!(
             f,
             "calibrated with {} simulations in {} generations ({:.1} s, {:.1} simulations/s, final ε {:.3}, acceptance {:.3}) -> {} (posterior in {})",
