@@ -298,6 +298,28 @@ pub struct MapArgs {
     /// beam's occluder.
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_echoes, action = clap::ArgAction::Set)]
     pub og_hold_echoes: bool,
+    /// OG (`--method og`): no free evidence at the range of any detection before the
+    /// beam's occluder (a side-lobe-explained one included).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_detections, action = clap::ArgAction::Set)]
+    pub og_hold_detections: bool,
+    /// OG (`--method og`): where a beam's free evidence ends: at its occluder, its first
+    /// echo not explained by a side lobe, or its first detection.
+    #[arg(long, value_enum, default_value = "occluder")]
+    pub og_free_end: pradar::mapping::og::FreeEnd,
+    /// OG (`--method og`): weight in [0, 1] of the free evidence of a beam without an
+    /// occluder (no detection not explained by a side lobe).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_without_occluder)]
+    pub og_free_without_occluder: f64,
+    /// OG (`--method og`): lowest log-odds free evidence can bring a cell to (the clamp,
+    /// −10, by default: no floor).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
+    pub og_free_floor: f64,
+    /// OG (`--method og`): responsibilities weighted by the current belief.
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().resp_belief, action = clap::ArgAction::Set)]
+    pub og_resp_belief: bool,
+    /// OG (`--method og`): no free evidence on a cell the current map holds occupied.
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().keep_surfaces, action = clap::ArgAction::Set)]
+    pub og_keep_surfaces: bool,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
     /// poses spanning a minimum aspect) or none.

@@ -70,7 +70,7 @@ pub mod params;
 pub mod scan;
 
 pub use detector::{detection_threshold, Detector};
-pub use params::{sigmoid, OgParams, OgValid};
+pub use params::{sigmoid, FreeEnd, OgParams, OgValid};
 pub use scan::{og_map, og_map_stats};
 
 use crate::error::{Error, Result};

@@ -2,7 +2,7 @@
 //! (`og-boresight`), see [`crate::mapping::og`] for the equations; [`og_map`] and
 //! [`og_map_stats`] map a run scan by scan.
 
-use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
+use super::{sigmoid, Detector, FreeEnd, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
@@ -15,6 +15,13 @@ use std::time::Instant;
 /// One scan's increments (cell, Δl), detections, detections withheld and evaluated entries.
 type ScanResult = (Vec<(u32, f32)>, u64, u64, u64);
 
+/// DIAGNOSTIC (temporary): trace of (pose, direction, bin, cell, dl, kind) kind 0 free,
+/// 1 occ, 2 withheld before, 3 withheld beyond.
+pub static TRACE_ON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// DIAGNOSTIC trace records.
+pub static TRACE: std::sync::Mutex<Vec<(u32, u32, u32, u32, f32, u8, f32, u32)>> =
+    std::sync::Mutex::new(Vec::new());
+
 /// Side-lobe-aware increments of one scan (beam restricted to what it sees, detections,
 /// occluder bin `first` (`bins` when none), last observed bin `last`, visibility) into
 /// `out`; no free evidence within the guard of a bin of `held` (the main-lobe echoes before
@@ -26,15 +33,20 @@ fn scan_og(
     det: &[bool],
     held: &[u32],
     first: usize,
+    free_end: usize,
+    free_scale: f32,
     last: usize,
     vis: &Visibility,
     belief: &[f32],
     k: &IncrementConstants,
     out: &mut Vec<(u32, f32)>,
+    pd: (u32, u32),
 ) -> (u64, u64) {
+    let tr = TRACE_ON.load(std::sync::atomic::Ordering::Relaxed);
+    let mut rec: Vec<(u32, u32, u32, u32, f32, u8, f32, u32)> = Vec::new();
     let bins = det.len().min(beam.ptr.len() - 1);
-    let lf = k.l_free as f32;
-    for b in k.min_bin..first.min(bins) {
+    let lf = k.l_free as f32 * free_scale;
+    for b in k.min_bin..free_end.min(bins) {
         if held
             .iter()
             .any(|&h| (h as usize).abs_diff(b) <= k.guard_bins)
@@ -44,8 +56,14 @@ fn scan_og(
         }
         for j in beam.bin_range(b) {
             let w = beam.weight[j];
-            if w >= k.free_w && vis.clearable(beam.cell[j]) {
+            if w >= k.free_w
+                && vis.clearable(beam.cell[j])
+                && !(k.keep_surfaces && belief[beam.cell[j] as usize] > k.surface_p)
+            {
                 out.push((beam.cell[j], lf * beam.share[j] * w.min(1.0)));
+                if tr {
+                    rec.push((pd.0, pd.1, b as u32, beam.cell[j], lf * beam.share[j] * w.min(1.0), 0, w, first as u32));
+                }
             }
         }
     }
@@ -64,12 +82,22 @@ fn scan_og(
             // weak surface the main lobe just cleared; beyond it plus the guard: behind the
             // first opaque surface of this beam. Either way not evidence of occupancy here
             withheld += 1;
+            if tr {
+                rec.push((pd.0, pd.1, b as u32, u32::MAX, 0.0, if b < first { 2 } else { 3 }, 0.0, first as u32));
+            }
             continue;
         }
         let rg = beam.bin_range(b);
         let mut denom = 0.0f32;
+        let bel = |c: u32| {
+            if k.resp_belief {
+                belief[c as usize]
+            } else {
+                1.0
+            }
+        };
         for j in rg.clone() {
-            denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
+            denom += beam.weight[j] * beam.share[j] * bel(beam.cell[j]);
         }
         if denom <= 0.0 {
             continue;
@@ -79,9 +107,15 @@ fn scan_og(
             let c = beam.cell[j];
             out.push((
                 c,
-                scale * beam.weight[j] * beam.share[j] * belief[c as usize],
+                scale * beam.weight[j] * beam.share[j] * bel(c),
             ));
+            if tr {
+                rec.push((pd.0, pd.1, b as u32, c, scale * beam.weight[j] * beam.share[j] * bel(c), 1, beam.weight[j], first as u32));
+            }
         }
+    }
+    if tr {
+        TRACE.lock().unwrap().extend(rec);
     }
     (dets, withheld)
 }
@@ -94,6 +128,12 @@ struct IncrementConstants {
     min_bin: usize,
     guard_bins: usize,
     hold_echoes: bool,
+    hold_detections: bool,
+    free_end: FreeEnd,
+    free_without_occluder: f32,
+    resp_belief: bool,
+    keep_surfaces: bool,
+    surface_p: f32,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -214,7 +254,7 @@ pub fn og_map_stats(
                     let evidence = scans.iter().map(|s| s.0.clone()).collect();
                     j.record(p, e, evidence);
                 }
-                apply_scans(&mut map, &mut stats, scans, ctx.clamp);
+                apply_scans(&mut map, &mut stats, scans, ctx.clamp, ctx.floor);
                 progress(pass * np + p + 1, passes * np);
             }
             p0 = p1;
@@ -264,6 +304,8 @@ struct ScanContext<'a> {
     detector: &'a Detector,
     method: Method,
     clamp: f64,
+    /// Lowest log-odds: max(−clamp, free_floor).
+    floor: f64,
     /// Belief above which a cell is a mapped surface: max(0.5, p0).
     surface_p: f32,
     inc: IncrementConstants,
@@ -284,6 +326,7 @@ impl<'a> ScanContext<'a> {
             detector,
             method,
             clamp: params.clamp,
+            floor: params.free_floor.max(-params.clamp),
             surface_p: (super::sigmoid(params.l0()).max(0.5)) as f32,
             inc: IncrementConstants {
                 l_occ: params.l_occ(),
@@ -292,6 +335,12 @@ impl<'a> ScanContext<'a> {
                 min_bin,
                 guard_bins: occlusion.guard_bins(),
                 hold_echoes: params.hold_echoes,
+                hold_detections: params.hold_detections,
+                free_end: params.free_end,
+                free_without_occluder: params.free_without_occluder as f32,
+                resp_belief: params.resp_belief,
+                keep_surfaces: params.keep_surfaces,
+                surface_p: (super::sigmoid(params.l0()).max(0.5)) as f32,
             },
             occlusion,
         }
@@ -324,7 +373,7 @@ impl<'a> ScanContext<'a> {
                         if !em.has(p, d) {
                             return (Vec::new(), 0, 0, 0); // no sweep: no evidence
                         }
-                        self.scan_direction_og(d, g, &echoes, &vis, bel)
+                        self.scan_direction_og(p, d, g, &echoes, &vis, bel)
                     })
                     .collect();
                 (scans, Some(echoes))
@@ -357,6 +406,7 @@ impl<'a> ScanContext<'a> {
     /// The side-lobe-aware increments of direction `d` of a pose's scan.
     fn scan_direction_og(
         &self,
+        p: usize,
         d: usize,
         g: &PoseGeometry,
         echoes: &ScanEchoes,
@@ -368,7 +418,12 @@ impl<'a> ScanContext<'a> {
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
         let mut out = Vec::with_capacity(beam.len() / 2);
-        let held: Vec<u32> = if self.inc.hold_echoes {
+        let held: Vec<u32> = if self.inc.hold_detections {
+            (0..first.min(echoes.det[d].len()))
+                .filter(|&k| echoes.det[d][k])
+                .map(|k| k as u32)
+                .collect()
+        } else if self.inc.hold_echoes {
             echoes.main[d]
                 .iter()
                 .map(|e| e.0)
@@ -377,16 +432,36 @@ impl<'a> ScanContext<'a> {
         } else {
             Vec::new()
         };
+        let free_end = match self.inc.free_end {
+            FreeEnd::Occluder => first,
+            FreeEnd::FirstEcho => echoes.main[d]
+                .first()
+                .map_or(first, |e| (e.0 as usize).min(first)),
+            FreeEnd::FirstDetection => (self.inc.min_bin..first.min(bins))
+                .find(|&k| echoes.det[d][k])
+                .unwrap_or(first),
+        };
+        let mut held = held;
+        if free_end < first {
+            held.push(free_end as u32);
+        }
         let (dets, withheld) = scan_og(
             &beam,
             &echoes.det[d],
             &held,
             first,
+            free_end,
+            if echoes.occluder[d].is_none() {
+                self.inc.free_without_occluder
+            } else {
+                1.0
+            },
             last,
             vis,
             bel,
             &self.inc,
             &mut out,
+            (p as u32, d as u32),
         );
         (out, dets, withheld, beam.len() as u64)
     }
@@ -394,7 +469,13 @@ impl<'a> ScanContext<'a> {
 
 /// Add a pose's scans to the map in direction order (log-odds clamped to ±`clamp` after
 /// every increment) and count them.
-fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>, clamp: f64) {
+fn apply_scans(
+    map: &mut LogOddsMap,
+    stats: &mut OgStats,
+    scans: Vec<ScanResult>,
+    clamp: f64,
+    floor: f64,
+) {
     for (inc, dets, withheld, entries) in scans {
         stats.scans += 1;
         stats.entries += entries;
@@ -403,7 +484,7 @@ fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>
         stats.cell_updates += inc.len() as u64;
         for (c, dl) in inc {
             let c = c as usize;
-            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
+            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(floor, clamp);
             map.observed[c] = true;
         }
     }
