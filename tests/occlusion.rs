@@ -548,403 +548,45 @@ fn walls_the_echoes_can_show() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// DIAGNOSTIC (temporary): why the OG misses wall cells the data show.
+/// Issue 31, "Maps II": the OG's dominant miss of the walls the echoes show is the free
+/// evidence of beams without an occluder (a smooth wall at oblique incidence returns no
+/// echo to them, `docs/mapping.md`). Without it (`--og-free-without-occluder 0`) the OG
+/// finds at least as many observable walls in every scene and, in the office at N = 16,
+/// at least 0.1 more (measured 0.600 → 0.772; corridor N = 16 0.790 → 0.828); the option is
+/// off by default because the office's cells beyond the walls rise to 15–18 % (printed).
 #[test]
-#[ignore = "diagnostic"]
-fn og_missed_walls_causes() {
-    use pradar::energy::EnergySource;
-    use pradar::mapping::job::{load_runs, runs_regions};
-    use pradar::mapping::og::scan::{TRACE, TRACE_ON};
-    use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, Method, OgParams};
-    use pradar::params::ParamGuard;
-    use std::collections::{HashMap, HashSet};
+fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() {
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("og_free_without_occluder");
+    let mut failures = Vec::new();
     for (name, n, c, e) in scenes() {
-        let opts = MapOptions {
-            method: Method::Og,
-            runs: vec![MapRun {
-                campaign: c.clone(),
-                energy: e.clone(),
-            }],
-            out: PathBuf::from("unused"),
-            elements: None,
-            grid: GridParams::default(),
-            og: OgParams::default(),
-            ekf: EkfParams::default(),
-            pose_noise: Default::default(),
-        }
-        .check()
-        .unwrap();
-        let (runs, reference) = load_runs(&opts).unwrap();
-        let regions = runs_regions(&runs, &reference).unwrap();
-        let run = &runs[0];
-        let m = &run.model;
-        let spec = m.spec;
-        TRACE.lock().unwrap().clear();
-        TRACE_ON.store(true, std::sync::atomic::Ordering::SeqCst);
-        let ogp = OgParams::default().check().unwrap();
-        let (map, _) = pradar::mapping::og::og_map_stats(
-            m,
-            &run.energy,
-            &ogp,
-            Method::Og,
-            &run.detector,
-            &|_, _| {},
-        )
-        .unwrap();
-        TRACE_ON.store(false, std::sync::atomic::Ordering::SeqCst);
-        let trace = std::mem::take(&mut *TRACE.lock().unwrap());
-        let occ = map.binary();
-        let main = m.params.main_weight() as f32;
-        let tol = spec.cell_m * std::f64::consts::FRAC_1_SQRT_2;
-        let np = m.poses.len();
-        // showing detections per cell
-        let mut shows: HashMap<usize, Vec<(u32, u32, u32)>> = HashMap::new();
-        let mut detbins: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-        for p in 0..np {
-            let part = run.energy.load(p, p + 1).unwrap();
-            let det = run.detector.detect_pose(&part, p);
-            let g = m.pose_geometry(p);
-            let pose = m.poses[p];
-            let at = geo::Coord {
-                x: pose.x_m,
-                y: pose.y_m,
-            };
-            for (d, det) in det.iter().enumerate() {
-                let beam = m.beam(&g, d);
-                let bins = det.len().min(beam.ptr.len() - 1);
-                for b in (0..bins).filter(|&b| det[b]) {
-                    detbins.entry((p as u32, d as u32)).or_default().push(b as u32);
-                    for j in beam.bin_range(b) {
-                        let cell = beam.cell[j] as usize;
-                        if beam.weight[j] < main {
-                            continue;
-                        }
-                        let centre = spec.center(cell / spec.cols, cell % spec.cols);
-                        if !run.layout.occluded(at, centre, tol) {
-                            shows
-                                .entry(cell)
-                                .or_default()
-                                .push((p as u32, d as u32, b as u32));
-                        }
-                    }
-                }
-            }
-        }
-        let (rows, cols) = (spec.rows, spec.cols);
-        let nbhd = |cell: usize| {
-            let (r, c) = ((cell / cols) as isize, (cell % cols) as isize);
-            let mut v = Vec::new();
-            for dr in -1..=1 {
-                for dc in -1..=1 {
-                    let (rr, cc) = (r + dr, c + dc);
-                    if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
-                        v.push(rr as usize * cols + cc as usize);
-                    }
-                }
-            }
-            v
+        let out = root.join(format!("{name}_{n}"));
+        let j = map_with("og", &["--og-free-without-occluder", "0"], c, e, &out);
+        let base = &figures()
+            .iter()
+            .find(|(s, k, _)| s == name && k == n)
+            .unwrap()
+            .2["og"];
+        let w = |v: &Value| {
+            f(
+                v,
+                &["metrics", "three_class", "observable", "walls_found_1"],
+            )
         };
-        let wall = |i: usize| reference.cells[i] == CellClass::Occupied;
-        // trace indices
-        let mut withheld: HashMap<(u32, u32, u32), u8> = HashMap::new();
-        let mut credited: HashSet<(u32, u32, u32)> = HashSet::new();
-        let mut occ_to: HashMap<(u32, u32, u32, u32), f32> = HashMap::new();
-        let mut occ_sum = vec![0f64; spec.len()];
-        let mut free_sum = vec![0f64; spec.len()];
-        let mut free_pd: HashMap<usize, HashSet<(u32, u32)>> = HashMap::new();
-        let bin_m = 299_792_458.0 * m.bin_width_s / 2.0;
-        let mut free_rec: Vec<(u32, u32, u32, f32, u32, u32)> = Vec::new(); // (p, cell, first, dl, d, b)
-        let mut free_main = vec![0f64; spec.len()];
-        let mut free_det = vec![0f64; spec.len()];
-        let gb = 4u32;
-        let mut free_edge = vec![0f64; spec.len()];
-        let mut occ_main = vec![0f64; spec.len()];
-        for &(p, d, b, cell, dl, k, wt, _first) in &trace {
-            match k {
-                0 => {
-                    free_sum[cell as usize] += dl as f64;
-                    free_rec.push((p, cell, _first, dl, d, b));
-                    if detbins
-                        .get(&(p, d))
-                        .is_some_and(|v| v.iter().any(|&x| x.abs_diff(b) <= gb))
-                    {
-                        free_det[cell as usize] += dl as f64;
-                    }
-                    if wt >= main {
-                        free_main[cell as usize] += dl as f64;
-                    } else {
-                        free_edge[cell as usize] += dl as f64;
-                    }
-                    free_pd.entry(cell as usize).or_default().insert((p, d));
-                }
-                1 => {
-                    credited.insert((p, d, b));
-                    *occ_to.entry((p, d, b, cell)).or_default() += dl;
-                    occ_sum[cell as usize] += dl as f64;
-                    if wt >= main {
-                        occ_main[cell as usize] += dl as f64;
-                    }
-                }
-                _ => {
-                    withheld.insert((p, d, b), k);
-                }
-            }
-        }
-        let mut causes: std::collections::BTreeMap<&str, usize> = Default::default();
-        let (mut o_tot, mut f_tot, mut nout, mut rsum, mut rn) = (0.0, 0.0, 0, 0.0, 0);
-        let mut missed_total = 0;
-        let mut wf_det = 0.0;
-        let (mut wf_main, mut wf_edge, mut wo, mut wo_main, mut wn) = (0.0, 0.0, 0.0, 0.0, 0);
-        for w in (0..spec.len()).filter(|&i| wall(i) && regions.observable[i]) {
-            let nb = nbhd(w);
-            let shown: Vec<usize> = nb.iter().copied().filter(|c| shows.contains_key(c)).collect();
-            if shown.is_empty() || nb.iter().any(|&c| occ[c]) {
-                continue;
-            }
-            missed_total += 1;
-            wf_main += free_main[w];
-            wf_det += free_det[w];
-            wf_edge += free_edge[w];
-            wo += occ_sum[w];
-            wo_main += occ_main[w];
-            wn += 1;
-            // status over the shown neighbour cells
-            let (mut got, mut cut, mut before, mut beyond) = (false, false, 0, 0);
-            let mut best: Option<(f64, f64, usize)> = None;
-            for &c in &shown {
-                for &(p, d, b) in &shows[&c] {
-                    if let Some(&dl) = occ_to.get(&(p, d, b, c as u32)) {
-                        got = true;
-                        rsum += dl as f64;
-                        rn += 1;
-                    } else if credited.contains(&(p, d, b)) {
-                        cut = true;
-                    } else {
-                        match withheld.get(&(p, d, b)) {
-                            Some(2) => before += 1,
-                            Some(3) => beyond += 1,
-                            _ => {}
-                        }
-                    }
-                }
-                if occ_sum[c] > 0.0 && best.map_or(true, |x| occ_sum[c] + free_sum[c] > x.0 + x.1) {
-                    best = Some((occ_sum[c], free_sum[c], c));
-                }
-            }
-            let cause = if got {
-                let (o, f, c) = best.unwrap();
-                o_tot += o;
-                f_tot += f;
-                nout += 1;
-                let showing_pd: HashSet<(u32, u32)> =
-                    shows[&c].iter().map(|x| (x.0, x.1)).collect();
-                let own = free_pd
-                    .get(&c)
-                    .map_or(0, |s| s.iter().filter(|x| showing_pd.contains(x)).count());
-                if own > 0 {
-                    "credited, outweighed by free (incl. a showing beam's own free)"
-                } else {
-                    "credited, outweighed by free of other beams"
-                }
-            } else if cut {
-                "credited to other cells (shown cell cut by the polygon)"
-            } else if before >= beyond && before > 0 {
-                "withheld: before the occluder"
-            } else if beyond > 0 {
-                "withheld: beyond the guard"
-            } else {
-                "no status (min_bin?)"
-            };
-            *causes.entry(cause).or_default() += 1;
-        }
-        // free evidence on the missed wall cells by incidence and occluder distance
-        let mut missed = vec![false; spec.len()];
-        for w in (0..spec.len()).filter(|&i| wall(i) && regions.observable[i]) {
-            let nb = nbhd(w);
-            if nb.iter().any(|c| shows.contains_key(c)) && !nb.iter().any(|&c| occ[c]) {
-                missed[w] = true;
-            }
-        }
-        let mut hist = [[0f64; 3]; 3];
-        let mut near_hist = [0f64; 5];
-        for &(p, cell, first, dl, d, b) in &free_rec {
-            let cell = cell as usize;
-            if !missed[cell] {
-                continue;
-            }
-            let (r, c) = (cell / cols, cell % cols);
-            let horiz = (c > 0 && wall(cell - 1)) || (c + 1 < cols && wall(cell + 1));
-            let vert = (r > 0 && wall(cell - cols)) || (r + 1 < rows && wall(cell + cols));
-            let ctr = spec.center(r, c);
-            let pose = m.poses[p as usize];
-            let (dx, dy) = (ctr.x - pose.x_m, ctr.y - pose.y_m);
-            let range = (dx * dx + dy * dy).sqrt();
-            // incidence from the wall normal: horizontal wall -> normal along y
-            let inc = if horiz && !vert {
-                (dx.abs() / range).asin().to_degrees()
-            } else if vert && !horiz {
-                (dy.abs() / range).asin().to_degrees()
-            } else {
-                -1.0
-            };
-            let ib = if inc < 0.0 { 2 } else if inc < 45.0 { 0 } else { 1 };
-            let gap = first as f64 * bin_m - range;
-            let gbk = if gap < 0.5 { 0 } else if gap < 2.0 { 1 } else { 2 };
-            hist[ib][gbk] += dl as f64;
-            if ib == 0 && gbk == 2 {
-                let nd = detbins
-                    .get(&(p, d))
-                    .and_then(|v| v.iter().map(|&x| x.abs_diff(b)).min())
-                    .map_or(1e9, |x| x as f64 * bin_m);
-                let k = if nd < 0.1 { 0 } else if nd < 0.3 { 1 } else if nd < 1.0 { 2 } else if nd < 1e8 { 3 } else { 4 };
-                near_hist[k] += dl as f64;
-            }
-        }
+        let o = |v: &Value| f(v, &["metrics", "classes", "outside_marked_occupied"]);
+        let (w0, w1) = (w(base), w(&j));
         eprintln!(
-            "  free on missed wall cells by incidence (<45 deg, >=45 deg, corner) x occluder beyond by (<0.5, 0.5-2, >2 m): {:?}",
-            hist.map(|r| r.map(|x| (x * 10.0).round() / 10.0))
+            "{name} N={n}: observable walls found {w0:.3} -> {w1:.3} without the free evidence of beams without an occluder; outside marked occupied {:.4} -> {:.4}",
+            o(base),
+            o(&j)
         );
-        eprintln!(
-            "  of the near-normal, occluder > 2 m beyond: nearest detection of the beam <0.1, 0.1-0.3, 0.3-1, >1 m, none: {:?} (bin {:.3} m)",
-            near_hist.map(|x| (x * 10.0).round() / 10.0), bin_m
-        );
-        eprintln!("{name} N={n}: missed shown observable wall cells {missed_total}");
-        let wn = wn.max(1) as f64;
-        eprintln!(
-            "  the missed wall cells themselves: mean occ {:.2} (main lobe {:.2}), mean free {:.2} from w >= -3 dB, {:.2} from -10..-3 dB; free from bins within 4 of a detection {:.2}",
-            wo / wn, wo_main / wn, wf_main / wn, wf_edge / wn, wf_det / wn
-        );
-        for (k, v) in &causes {
-            eprintln!("  {v:4}  {k}");
-        }
-        eprintln!(
-            "  outweighed: mean occ {:.2}, mean free {:.2} (best neighbour); mean credit per showing detection {:.3}",
-            o_tot / nout.max(1) as f64,
-            f_tot / nout.max(1) as f64,
-            rsum / rn.max(1) as f64
-        );
-    }
-}
-
-/// DIAGNOSTIC (temporary): OG variants from OG_VARIANTS="label:flag flag;label2:..." on the
-/// four scenes.
-#[test]
-#[ignore = "diagnostic"]
-fn og_variants() {
-    let spec = std::env::var("OG_VARIANTS").unwrap_or_else(|_| "default:".into());
-    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("og_variants");
-    for v in spec.split(';') {
-        let (label, flags) = v.split_once(':').unwrap();
-        let flags: Vec<&str> = flags.split_whitespace().collect();
-        for (name, n, c, e) in scenes() {
-            let out = root.join(format!("{name}_{n}_{label}"));
-            let t0 = std::time::Instant::now();
-            let j = map_with("og", &flags, c, e, &out);
-            let secs = t0.elapsed().as_secs_f64();
-            let t = |r: &str, k: &str| f(&j, &["metrics", "three_class", r, k]);
-            eprintln!(
-                "| {name} N = {n} | {label} | {:.0} ({:.0}), {:.3}, {:.3}, {:.1} % | {:.0} ({:.0}), {:.3} | {:.0}, {:.1} % | {:.2} | {:.1} % | {:.2} s",
-                t("building", "wrong"),
-                t("building_all_free", "wrong"),
-                t("building", "walls_found_1"),
-                t("building", "f1_1"),
-                100.0 * t("building", "free_marked_occupied"),
-                t("observable", "wrong"),
-                t("observable_all_free", "wrong"),
-                t("observable", "walls_found_1"),
-                t("whole", "wrong"),
-                100.0 * t("whole", "beyond_marked_occupied"),
-                f(&j, &["metrics", "building", "psi"]),
-                100.0 * f(&j, &["metrics", "classes", "outside_marked_occupied"]),
-                secs,
-            );
+        let need = if name == "office" && *n == 16 {
+            w0 + 0.1
+        } else {
+            w0
+        };
+        if w1 < need {
+            failures.push(format!("{name} N={n}: {w1:.3} < {need:.3}"));
         }
     }
-}
-
-/// DIAGNOSTIC (temporary): the echoes of the office N = 16's beams towards the north wall.
-#[test]
-#[ignore = "diagnostic"]
-fn og_probe() {
-    use pradar::energy::EnergySource;
-    use pradar::mapping::job::load_runs;
-    use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, Method, OgParams};
-    use pradar::params::ParamGuard;
-    let want: usize = std::env::var("PROBE_N").map_or(16, |v| v.parse().unwrap());
-    let scene = std::env::var("PROBE_SCENE").unwrap_or("office".into());
-    let dirs: Vec<usize> = std::env::var("PROBE_DIRS").map_or(vec![30, 32, 34, 35, 36], |v| {
-        v.split(',').map(|x| x.parse().unwrap()).collect()
-    });
-    let poses: Vec<usize> = std::env::var("PROBE_POSES").map_or(vec![1, 3, 5], |v| {
-        v.split(',').map(|x| x.parse().unwrap()).collect()
-    });
-    for (name, n, c, e) in scenes() {
-        if *n != want || *name != scene {
-            continue;
-        }
-        let opts = MapOptions {
-            method: Method::Og,
-            runs: vec![MapRun {
-                campaign: c.clone(),
-                energy: e.clone(),
-            }],
-            out: PathBuf::from("unused"),
-            elements: None,
-            grid: GridParams::default(),
-            og: OgParams::default(),
-            ekf: EkfParams::default(),
-            pose_noise: Default::default(),
-        }
-        .check()
-        .unwrap();
-        let (runs, reference) = load_runs(&opts).unwrap();
-        let run = &runs[0];
-        let m = &run.model;
-        let spec = m.spec;
-        let ogp = OgParams::default().check().unwrap();
-        let occl = run.occlusion(&ogp);
-        let bin_m = occl.bin_m;
-        for &p in &poses {
-            let part = run.energy.load(p, p + 1).unwrap();
-            let det = run.detector.detect_pose(&part, p);
-            let echoes = occl.echoes(m, &part, p, det.clone(), None);
-            let pose = m.poses[p];
-            for &d in &dirs {
-                let th = (pose.heading_deg - 90.0 + 5.0 * d as f64).to_radians();
-                // first wall cell along the boresight
-                let mut wall_r = f64::NAN;
-                let mut r = 0.05;
-                while r < 12.0 {
-                    let (x, y) = (pose.x_m + r * th.cos(), pose.y_m + r * th.sin());
-                    let (cc, rr) = (
-                        ((x - spec.x0_m) / spec.cell_m).floor(),
-                        ((y - spec.y0_m) / spec.cell_m).floor(),
-                    );
-                    if cc >= 0.0 && rr >= 0.0 && (cc as usize) < spec.cols && (rr as usize) < spec.rows {
-                        let cell = rr as usize * spec.cols + cc as usize;
-                        if reference.cells[cell] == CellClass::Occupied {
-                            wall_r = r;
-                            break;
-                        }
-                    }
-                    r += 0.01;
-                }
-                let main: Vec<String> = echoes.main[d]
-                    .iter()
-                    .map(|&(b, en)| format!("{:.2}m:{:.1}dB", b as f64 * bin_m, 10.0 * en.log10()))
-                    .collect();
-                let side: Vec<String> = (0..det[d].len())
-                    .filter(|&k| det[d][k] && !echoes.main[d].iter().any(|x| x.0 as usize == k))
-                    .map(|k| format!("{:.2}", k as f64 * bin_m))
-                    .collect();
-                eprintln!(
-                    "{name} N={n} pose {p} dir {d} (bearing {:.0}): wall at {wall_r:.2} m; occluder {:?}; main [{}]; side-explained [{}]",
-                    th.to_degrees(),
-                    echoes.occluder[d].map(|o| format!("{:.2}", o as f64 * bin_m)),
-                    main.join(" "),
-                    side.join(" ")
-                );
-            }
-        }
-    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

@@ -298,10 +298,6 @@ pub struct MapArgs {
     /// beam's occluder.
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_echoes, action = clap::ArgAction::Set)]
     pub og_hold_echoes: bool,
-    /// OG (`--method og`): no free evidence at the range of any detection before the
-    /// beam's occluder (a side-lobe-explained one included).
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_detections, action = clap::ArgAction::Set)]
-    pub og_hold_detections: bool,
     /// OG (`--method og`): where a beam's free evidence ends: at its occluder, its first
     /// echo not explained by a side lobe, or its first detection.
     #[arg(long, value_enum, default_value = "occluder")]
@@ -314,12 +310,6 @@ pub struct MapArgs {
     /// −10, by default: no floor).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
     pub og_free_floor: f64,
-    /// OG (`--method og`): responsibilities weighted by the current belief.
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().resp_belief, action = clap::ArgAction::Set)]
-    pub og_resp_belief: bool,
-    /// OG (`--method og`): no free evidence on a cell the current map holds occupied.
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().keep_surfaces, action = clap::ArgAction::Set)]
-    pub og_keep_surfaces: bool,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
     /// poses spanning a minimum aspect) or none.

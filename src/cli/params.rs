@@ -142,12 +142,9 @@ impl MapArgs {
                     prior: self.prior,
                     passes: self.passes as usize,
                     hold_echoes: self.og_hold_echoes,
-                    hold_detections: self.og_hold_detections,
                     free_end: self.og_free_end,
                     free_without_occluder: self.og_free_without_occluder,
                     free_floor: self.og_free_floor,
-                    resp_belief: self.og_resp_belief,
-                    keep_surfaces: self.og_keep_surfaces,
                     ghost,
                     ..Default::default()
                 },

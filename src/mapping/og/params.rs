@@ -57,18 +57,10 @@ pub struct OgParams {
     pub free_without_occluder: f64,
     /// Where a beam's free evidence ends (the occluder).
     pub free_end: FreeEnd,
-    /// No free evidence within the guard of any detection before the occluder, a side-lobe
-    /// explained one included (false).
-    pub hold_detections: bool,
     /// Lowest log-odds free evidence can bring a cell to (−10, the clamp: no floor); a
     /// floor above −clamp keeps a cell cleared by many beams within reach of the occupancy
     /// evidence of the beams that see it.
     pub free_floor: f64,
-    /// Responsibilities weighted by the current belief p_i (true); false: by the two-way
-    /// weight and the share alone.
-    pub resp_belief: bool,
-    /// No free evidence on a mapped surface (belief above max(0.5, p0)) (false).
-    pub keep_surfaces: bool,
     /// Ghost rule applied to the `og` map once it is built
     /// ([`crate::mapping::grid::ghost`]; `none`).
     pub ghost: GhostParams,
@@ -87,12 +79,9 @@ impl Default for OgParams {
             side_db: 0.0,
             free_db: -10.0,
             hold_echoes: false,
-            hold_detections: false,
             free_end: FreeEnd::Occluder,
             free_without_occluder: 1.0,
             free_floor: -10.0,
-            resp_belief: true,
-            keep_surfaces: false,
             ghost: GhostParams::default(),
         }
     }
@@ -158,7 +147,10 @@ impl ParamGuard for OgParams {
             return Err(Error::param("prior", "prior log-odds beyond the clamp"));
         }
         if self.free_floor >= logit(self.prior) {
-            return Err(Error::param("free_floor", "must be below the prior's log-odds"));
+            return Err(Error::param(
+                "free_floor",
+                "must be below the prior's log-odds",
+            ));
         }
         Ok(Valid::new(*self))
     }

@@ -15,13 +15,6 @@ use std::time::Instant;
 /// One scan's increments (cell, Δl), detections, detections withheld and evaluated entries.
 type ScanResult = (Vec<(u32, f32)>, u64, u64, u64);
 
-/// DIAGNOSTIC (temporary): trace of (pose, direction, bin, cell, dl, kind) kind 0 free,
-/// 1 occ, 2 withheld before, 3 withheld beyond.
-pub static TRACE_ON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-/// DIAGNOSTIC trace records.
-pub static TRACE: std::sync::Mutex<Vec<(u32, u32, u32, u32, f32, u8, f32, u32)>> =
-    std::sync::Mutex::new(Vec::new());
-
 /// Side-lobe-aware increments of one scan (beam restricted to what it sees, detections,
 /// occluder bin `first` (`bins` when none), last observed bin `last`, visibility) into
 /// `out`; no free evidence within the guard of a bin of `held` (the main-lobe echoes before
@@ -40,10 +33,7 @@ fn scan_og(
     belief: &[f32],
     k: &IncrementConstants,
     out: &mut Vec<(u32, f32)>,
-    pd: (u32, u32),
 ) -> (u64, u64) {
-    let tr = TRACE_ON.load(std::sync::atomic::Ordering::Relaxed);
-    let mut rec: Vec<(u32, u32, u32, u32, f32, u8, f32, u32)> = Vec::new();
     let bins = det.len().min(beam.ptr.len() - 1);
     let lf = k.l_free as f32 * free_scale;
     for b in k.min_bin..free_end.min(bins) {
@@ -56,14 +46,8 @@ fn scan_og(
         }
         for j in beam.bin_range(b) {
             let w = beam.weight[j];
-            if w >= k.free_w
-                && vis.clearable(beam.cell[j])
-                && !(k.keep_surfaces && belief[beam.cell[j] as usize] > k.surface_p)
-            {
+            if w >= k.free_w && vis.clearable(beam.cell[j]) {
                 out.push((beam.cell[j], lf * beam.share[j] * w.min(1.0)));
-                if tr {
-                    rec.push((pd.0, pd.1, b as u32, beam.cell[j], lf * beam.share[j] * w.min(1.0), 0, w, first as u32));
-                }
             }
         }
     }
@@ -82,22 +66,12 @@ fn scan_og(
             // weak surface the main lobe just cleared; beyond it plus the guard: behind the
             // first opaque surface of this beam. Either way not evidence of occupancy here
             withheld += 1;
-            if tr {
-                rec.push((pd.0, pd.1, b as u32, u32::MAX, 0.0, if b < first { 2 } else { 3 }, 0.0, first as u32));
-            }
             continue;
         }
         let rg = beam.bin_range(b);
         let mut denom = 0.0f32;
-        let bel = |c: u32| {
-            if k.resp_belief {
-                belief[c as usize]
-            } else {
-                1.0
-            }
-        };
         for j in rg.clone() {
-            denom += beam.weight[j] * beam.share[j] * bel(beam.cell[j]);
+            denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
         }
         if denom <= 0.0 {
             continue;
@@ -107,15 +81,9 @@ fn scan_og(
             let c = beam.cell[j];
             out.push((
                 c,
-                scale * beam.weight[j] * beam.share[j] * bel(c),
+                scale * beam.weight[j] * beam.share[j] * belief[c as usize],
             ));
-            if tr {
-                rec.push((pd.0, pd.1, b as u32, c, scale * beam.weight[j] * beam.share[j] * bel(c), 1, beam.weight[j], first as u32));
-            }
         }
-    }
-    if tr {
-        TRACE.lock().unwrap().extend(rec);
     }
     (dets, withheld)
 }
@@ -128,12 +96,8 @@ struct IncrementConstants {
     min_bin: usize,
     guard_bins: usize,
     hold_echoes: bool,
-    hold_detections: bool,
     free_end: FreeEnd,
     free_without_occluder: f32,
-    resp_belief: bool,
-    keep_surfaces: bool,
-    surface_p: f32,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -335,12 +299,8 @@ impl<'a> ScanContext<'a> {
                 min_bin,
                 guard_bins: occlusion.guard_bins(),
                 hold_echoes: params.hold_echoes,
-                hold_detections: params.hold_detections,
                 free_end: params.free_end,
                 free_without_occluder: params.free_without_occluder as f32,
-                resp_belief: params.resp_belief,
-                keep_surfaces: params.keep_surfaces,
-                surface_p: (super::sigmoid(params.l0()).max(0.5)) as f32,
             },
             occlusion,
         }
@@ -373,7 +333,7 @@ impl<'a> ScanContext<'a> {
                         if !em.has(p, d) {
                             return (Vec::new(), 0, 0, 0); // no sweep: no evidence
                         }
-                        self.scan_direction_og(p, d, g, &echoes, &vis, bel)
+                        self.scan_direction_og(d, g, &echoes, &vis, bel)
                     })
                     .collect();
                 (scans, Some(echoes))
@@ -406,7 +366,6 @@ impl<'a> ScanContext<'a> {
     /// The side-lobe-aware increments of direction `d` of a pose's scan.
     fn scan_direction_og(
         &self,
-        p: usize,
         d: usize,
         g: &PoseGeometry,
         echoes: &ScanEchoes,
@@ -418,12 +377,7 @@ impl<'a> ScanContext<'a> {
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
         let mut out = Vec::with_capacity(beam.len() / 2);
-        let held: Vec<u32> = if self.inc.hold_detections {
-            (0..first.min(echoes.det[d].len()))
-                .filter(|&k| echoes.det[d][k])
-                .map(|k| k as u32)
-                .collect()
-        } else if self.inc.hold_echoes {
+        let mut held: Vec<u32> = if self.inc.hold_echoes {
             echoes.main[d]
                 .iter()
                 .map(|e| e.0)
@@ -441,7 +395,6 @@ impl<'a> ScanContext<'a> {
                 .find(|&k| echoes.det[d][k])
                 .unwrap_or(first),
         };
-        let mut held = held;
         if free_end < first {
             held.push(free_end as u32);
         }
@@ -461,7 +414,6 @@ impl<'a> ScanContext<'a> {
             bel,
             &self.inc,
             &mut out,
-            (p as u32, d as u32),
         );
         (out, dets, withheld, beam.len() as u64)
     }
