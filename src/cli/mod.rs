@@ -306,6 +306,10 @@ pub struct MapArgs {
     /// occluder (no detection not explained by a side lobe).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_without_occluder)]
     pub og_free_without_occluder: f64,
+    /// OG (`--method og`): a direction without an occluder bounds the visibility polygon
+    /// at its first detection (or is interpolated from its neighbours without one).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().bound_silent, action = clap::ArgAction::Set)]
+    pub og_bound_silent: bool,
     /// OG (`--method og`): lowest log-odds free evidence can bring a cell to (the clamp,
     /// −10, by default: no floor).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]

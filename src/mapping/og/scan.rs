@@ -98,6 +98,7 @@ struct IncrementConstants {
     hold_echoes: bool,
     free_end: FreeEnd,
     free_without_occluder: f32,
+    bound_silent: bool,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -301,6 +302,7 @@ impl<'a> ScanContext<'a> {
                 hold_echoes: params.hold_echoes,
                 free_end: params.free_end,
                 free_without_occluder: params.free_without_occluder as f32,
+                bound_silent: params.bound_silent,
             },
             occlusion,
         }
@@ -326,7 +328,21 @@ impl<'a> ScanContext<'a> {
                 let echoes = self
                     .occlusion
                     .echoes(self.model, em, p, dets, Some(&occupied));
-                let vis = self.occlusion.visibility(self.model, g, &echoes);
+                let vis = if self.inc.bound_silent {
+                    let mut pe = echoes.clone();
+                    pe.missing.resize(nd, false);
+                    for d in 0..nd {
+                        if pe.occluder[d].is_none() {
+                            match (self.inc.min_bin..pe.det[d].len()).find(|&k| pe.det[d][k]) {
+                                Some(k) => pe.occluder[d] = Some(k),
+                                None => pe.missing[d] = true,
+                            }
+                        }
+                    }
+                    self.occlusion.visibility(self.model, g, &pe)
+                } else {
+                    self.occlusion.visibility(self.model, g, &echoes)
+                };
                 let scans = (0..nd)
                     .into_par_iter()
                     .map(|d| {
