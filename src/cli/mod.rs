@@ -298,6 +298,22 @@ pub struct MapArgs {
     /// beam's occluder.
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_echoes, action = clap::ArgAction::Set)]
     pub og_hold_echoes: bool,
+    /// OG (`--method og`): where a beam's free evidence ends: at its occluder, its first
+    /// echo not explained by a side lobe, or its first detection.
+    #[arg(long, value_enum, default_value = "occluder")]
+    pub og_free_end: pradar::mapping::og::FreeEnd,
+    /// OG (`--method og`): weight in [0, 1] of the free evidence of a beam without an
+    /// occluder (no detection not explained by a side lobe).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_without_occluder)]
+    pub og_free_without_occluder: f64,
+    /// OG (`--method og`): a direction without an occluder bounds the visibility polygon
+    /// at its first detection (or is interpolated from its neighbours without one).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().bound_silent, action = clap::ArgAction::Set)]
+    pub og_bound_silent: bool,
+    /// OG (`--method og`): lowest log-odds free evidence can bring a cell to (the clamp,
+    /// −10, by default: no floor).
+    #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
+    pub og_free_floor: f64,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
     /// poses spanning a minimum aspect) or none.

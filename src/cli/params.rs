@@ -142,6 +142,10 @@ impl MapArgs {
                     prior: self.prior,
                     passes: self.passes as usize,
                     hold_echoes: self.og_hold_echoes,
+                    free_end: self.og_free_end,
+                    free_without_occluder: self.og_free_without_occluder,
+                    bound_silent: self.og_bound_silent,
+                    free_floor: self.og_free_floor,
                     ghost,
                     ..Default::default()
                 },

@@ -34,7 +34,18 @@
 //!   behind the surface) are withheld, counted in [`OgStats::withheld`]; bins after the
 //!   occluder without a detection give no evidence. With `hold_echoes` (off by default)
 //!   the bins within g of a main-lobe detection before the occluder give no free evidence
-//!   either, and a ghost rule ([`crate::mapping::grid::ghost`], `none` by default) may
+//!   either. Four options, all off by default (issue 31 "Maps II", figures in
+//!   `docs/mapping.md`): `bound_silent` (a direction without an occluder bounds the
+//!   visibility polygon at its first detection, or is interpolated from its neighbours
+//!   without one, instead of at the maximum range), `free_without_occluder` (weight in [0, 1] of the free evidence of
+//!   a beam with no occluder: indoors every bearing ends at a surface, so a beam that
+//!   detects none was most likely looking at a smooth wall at oblique incidence, whose
+//!   specular echo goes elsewhere, and its silence clears that wall), `free_end` (free
+//!   evidence ends at the first main-lobe echo or the first detection instead of the
+//!   occluder) and `free_floor` (a lower clamp for the log-odds). Each finds more of the
+//!   walls the echoes show (`bound_silent`: office N = 16 0.600 → 0.865) but none keeps
+//!   every other must-show figure (cells beyond the walls in the office above 5 %), so the
+//!   defaults stay. A ghost rule ([`crate::mapping::grid::ghost`], `none` by default) may
 //!   judge every pose's increments again against the final map and replay them. The map the occluders are confirmed
 //!   against is the belief the responsibilities use, a cell being a surface when
 //!   p > max(0.5, p0): the scan's snapshot, or the previous pass's map with `passes` ≥ 2;
@@ -70,7 +81,7 @@ pub mod params;
 pub mod scan;
 
 pub use detector::{detection_threshold, Detector};
-pub use params::{sigmoid, OgParams, OgValid};
+pub use params::{sigmoid, FreeEnd, OgParams, OgValid};
 pub use scan::{og_map, og_map_stats};
 
 use crate::error::{Error, Result};
@@ -263,6 +274,27 @@ mod tests {
                     ..Default::default()
                 },
                 "passes",
+            ),
+            (
+                OgParams {
+                    free_floor: 0.0,
+                    ..Default::default()
+                },
+                "free_floor",
+            ),
+            (
+                OgParams {
+                    free_without_occluder: 1.5,
+                    ..Default::default()
+                },
+                "free_without_occluder",
+            ),
+            (
+                OgParams {
+                    free_without_occluder: f64::NAN,
+                    ..Default::default()
+                },
+                "free_without_occluder",
             ),
         ] {
             let e = bad.check().unwrap_err().to_string();

@@ -8,6 +8,20 @@ use crate::error::{Error, Result};
 use crate::mapping::grid::GhostParams;
 use crate::params::{ParamGuard, Valid};
 
+/// Where a beam's free evidence ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FreeEnd {
+    /// At the beam's occluder (its strongest detection not explained by a side lobe).
+    #[value(name = "occluder")]
+    Occluder,
+    /// At its first detection not explained by a side lobe.
+    #[value(name = "first-echo")]
+    FirstEcho,
+    /// At its first detection of any kind (a side-lobe-explained one included).
+    #[value(name = "first-detection")]
+    FirstDetection,
+}
+
 /// Occupancy-grid parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OgParams {
@@ -38,6 +52,19 @@ pub struct OgParams {
     /// surface the beam sees (the wall in front of a stronger multi-bounce image), not free
     /// space.
     pub hold_echoes: bool,
+    /// Weight of the free evidence of a beam without an occluder (no detection not
+    /// explained by a side lobe), in [0, 1] (1: as any other beam's).
+    pub free_without_occluder: f64,
+    /// A direction without an occluder bounds the visibility polygon at its first detection
+    /// (a side-lobe-explained one), or, without any, is interpolated from its neighbours
+    /// (false: at the maximum range).
+    pub bound_silent: bool,
+    /// Where a beam's free evidence ends (the occluder).
+    pub free_end: FreeEnd,
+    /// Lowest log-odds free evidence can bring a cell to (−10, the clamp: no floor); a
+    /// floor above −clamp keeps a cell cleared by many beams within reach of the occupancy
+    /// evidence of the beams that see it.
+    pub free_floor: f64,
     /// Ghost rule applied to the `og` map once it is built
     /// ([`crate::mapping::grid::ghost`]; `none`).
     pub ghost: GhostParams,
@@ -56,6 +83,10 @@ impl Default for OgParams {
             side_db: 0.0,
             free_db: -10.0,
             hold_echoes: false,
+            free_end: FreeEnd::Occluder,
+            free_without_occluder: 1.0,
+            bound_silent: false,
+            free_floor: -10.0,
             ghost: GhostParams::default(),
         }
     }
@@ -108,9 +139,23 @@ impl ParamGuard for OgParams {
         if self.passes == 0 || self.passes > 10 {
             return Err(Error::param("passes", "must be in 1..=10"));
         }
+        if !(self.free_without_occluder.is_finite()
+            && (0.0..=1.0).contains(&self.free_without_occluder))
+        {
+            return Err(Error::param("free_without_occluder", "must be in [0, 1]"));
+        }
+        if !(self.free_floor.is_finite() && self.free_floor < 0.0) {
+            return Err(Error::param("free_floor", "must be < 0 (log-odds)"));
+        }
         self.ghost.check()?;
         if logit(self.prior).abs() >= self.clamp {
             return Err(Error::param("prior", "prior log-odds beyond the clamp"));
+        }
+        if self.free_floor >= logit(self.prior) {
+            return Err(Error::param(
+                "free_floor",
+                "must be below the prior's log-odds",
+            ));
         }
         Ok(Valid::new(*self))
     }

@@ -2,7 +2,7 @@
 //! (`og-boresight`), see [`crate::mapping::og`] for the equations; [`og_map`] and
 //! [`og_map_stats`] map a run scan by scan.
 
-use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
+use super::{sigmoid, Detector, FreeEnd, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
@@ -26,6 +26,8 @@ fn scan_og(
     det: &[bool],
     held: &[u32],
     first: usize,
+    free_end: usize,
+    free_scale: f32,
     last: usize,
     vis: &Visibility,
     belief: &[f32],
@@ -33,8 +35,8 @@ fn scan_og(
     out: &mut Vec<(u32, f32)>,
 ) -> (u64, u64) {
     let bins = det.len().min(beam.ptr.len() - 1);
-    let lf = k.l_free as f32;
-    for b in k.min_bin..first.min(bins) {
+    let lf = k.l_free as f32 * free_scale;
+    for b in k.min_bin..free_end.min(bins) {
         if held
             .iter()
             .any(|&h| (h as usize).abs_diff(b) <= k.guard_bins)
@@ -94,6 +96,9 @@ struct IncrementConstants {
     min_bin: usize,
     guard_bins: usize,
     hold_echoes: bool,
+    free_end: FreeEnd,
+    free_without_occluder: f32,
+    bound_silent: bool,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -214,7 +219,7 @@ pub fn og_map_stats(
                     let evidence = scans.iter().map(|s| s.0.clone()).collect();
                     j.record(p, e, evidence);
                 }
-                apply_scans(&mut map, &mut stats, scans, ctx.clamp);
+                apply_scans(&mut map, &mut stats, scans, ctx.clamp, ctx.floor);
                 progress(pass * np + p + 1, passes * np);
             }
             p0 = p1;
@@ -264,6 +269,8 @@ struct ScanContext<'a> {
     detector: &'a Detector,
     method: Method,
     clamp: f64,
+    /// Lowest log-odds: max(−clamp, free_floor).
+    floor: f64,
     /// Belief above which a cell is a mapped surface: max(0.5, p0).
     surface_p: f32,
     inc: IncrementConstants,
@@ -284,6 +291,7 @@ impl<'a> ScanContext<'a> {
             detector,
             method,
             clamp: params.clamp,
+            floor: params.free_floor.max(-params.clamp),
             surface_p: (super::sigmoid(params.l0()).max(0.5)) as f32,
             inc: IncrementConstants {
                 l_occ: params.l_occ(),
@@ -292,6 +300,9 @@ impl<'a> ScanContext<'a> {
                 min_bin,
                 guard_bins: occlusion.guard_bins(),
                 hold_echoes: params.hold_echoes,
+                free_end: params.free_end,
+                free_without_occluder: params.free_without_occluder as f32,
+                bound_silent: params.bound_silent,
             },
             occlusion,
         }
@@ -317,7 +328,21 @@ impl<'a> ScanContext<'a> {
                 let echoes = self
                     .occlusion
                     .echoes(self.model, em, p, dets, Some(&occupied));
-                let vis = self.occlusion.visibility(self.model, g, &echoes);
+                let vis = if self.inc.bound_silent {
+                    let mut pe = echoes.clone();
+                    pe.missing.resize(nd, false);
+                    for d in 0..nd {
+                        if pe.occluder[d].is_none() {
+                            match (self.inc.min_bin..pe.det[d].len()).find(|&k| pe.det[d][k]) {
+                                Some(k) => pe.occluder[d] = Some(k),
+                                None => pe.missing[d] = true,
+                            }
+                        }
+                    }
+                    self.occlusion.visibility(self.model, g, &pe)
+                } else {
+                    self.occlusion.visibility(self.model, g, &echoes)
+                };
                 let scans = (0..nd)
                     .into_par_iter()
                     .map(|d| {
@@ -368,7 +393,7 @@ impl<'a> ScanContext<'a> {
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
         let mut out = Vec::with_capacity(beam.len() / 2);
-        let held: Vec<u32> = if self.inc.hold_echoes {
+        let mut held: Vec<u32> = if self.inc.hold_echoes {
             echoes.main[d]
                 .iter()
                 .map(|e| e.0)
@@ -377,11 +402,29 @@ impl<'a> ScanContext<'a> {
         } else {
             Vec::new()
         };
+        let free_end = match self.inc.free_end {
+            FreeEnd::Occluder => first,
+            FreeEnd::FirstEcho => echoes.main[d]
+                .first()
+                .map_or(first, |e| (e.0 as usize).min(first)),
+            FreeEnd::FirstDetection => (self.inc.min_bin..first.min(bins))
+                .find(|&k| echoes.det[d][k])
+                .unwrap_or(first),
+        };
+        if free_end < first {
+            held.push(free_end as u32);
+        }
         let (dets, withheld) = scan_og(
             &beam,
             &echoes.det[d],
             &held,
             first,
+            free_end,
+            if echoes.occluder[d].is_none() {
+                self.inc.free_without_occluder
+            } else {
+                1.0
+            },
             last,
             vis,
             bel,
@@ -394,7 +437,13 @@ impl<'a> ScanContext<'a> {
 
 /// Add a pose's scans to the map in direction order (log-odds clamped to ±`clamp` after
 /// every increment) and count them.
-fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>, clamp: f64) {
+fn apply_scans(
+    map: &mut LogOddsMap,
+    stats: &mut OgStats,
+    scans: Vec<ScanResult>,
+    clamp: f64,
+    floor: f64,
+) {
     for (inc, dets, withheld, entries) in scans {
         stats.scans += 1;
         stats.entries += entries;
@@ -403,7 +452,7 @@ fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>
         stats.cell_updates += inc.len() as u64;
         for (c, dl) in inc {
             let c = c as usize;
-            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
+            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(floor, clamp);
             map.observed[c] = true;
         }
     }
