@@ -326,9 +326,9 @@ pub struct MapArgs {
     /// plain tiled update, overconfident).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().split, action = clap::ArgAction::Set)]
     pub ekf_split: bool,
-    /// EKF arc explanation γ in [0, 1]: a cell on an echo's main-lobe arc is occupied only
-    /// if on some arc its share c̃·x̂² of the echo is at least γ times the arc's largest
-    /// (0: off).
+    /// EKF arc explanation γ in [0, 1]: a cell is occupied only if, on the range ring of some
+    /// detected echo (main and side lobes), its share c̃·x̂² of the echo is at least γ times
+    /// the ring's largest (0: off).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().arc_explain, value_parser = ranges::probability)]
     pub ekf_arc_explain: f64,
     /// Pose noise given to the mapper: position standard deviation per axis, m.

@@ -68,8 +68,8 @@ pub fn ekf_run(
 
 /// [`ekf_run`] that also records, with a sight model, each pose's echoes and the rise of
 /// each cell's mean in the pose's energy updates (net over its directions, the positive
-/// part) for a ghost rule ([`crate::mapping::grid::ghost`]) and, with `arcs`, the main-lobe
-/// arc of every observed echo ([`EchoArcs`]).
+/// part) for a ghost rule ([`crate::mapping::grid::ghost`]) and, with `arcs`, the range
+/// ring (main and side lobes) of every detected echo ([`EchoArcs`]).
 #[allow(clippy::too_many_arguments)]
 pub fn ekf_run_judged(
     model: &ObservationModel,

@@ -225,7 +225,7 @@ fn filter_runs(
 fn write_ekf_files(out: &Path, spec: &GridSpec, map: &EkfMap, params: &EkfValid) -> Result<()> {
     let (probs, bin, eta) = (map.probs(), map.binary(), params.eta());
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let soft: Vec<u8> = probs.iter().map(|&p| soft_grey(p)).collect();
+    let soft = soft_pixels(&probs, &bin);
     output::write_map_files(out, "ekf", spec, &soft, eta, 1.0 - eta)?;
     let bgrey: Vec<u8> = bin
         .iter()
@@ -271,5 +271,38 @@ fn covariance_bytes(params: &EkfValid, spec: &GridSpec) -> usize {
             let t = params.tile;
             spec.rows.div_ceil(t) * spec.cols.div_ceil(t) * t * t * t * t * 8
         }
+    }
+}
+
+/// The soft map's pixels, consistent with the binary map under the YAML's
+/// `occupied_thresh` = η: a reader takes pixel v as p = (255 − v)/255, so every p above
+/// 1 − 0.5/255 rounds to v = 0 and reads as occupied. A cell the binary map does not
+/// decide occupied (p ≤ η, e.g. capped at η by the arc explanation) is written no darker
+/// than v = 1 (p = 254/255 < η: unknown to a trinary reader), never as occupied.
+fn soft_pixels(probs: &[f64], occupied: &[bool]) -> Vec<u8> {
+    probs
+        .iter()
+        .zip(occupied)
+        .map(|(&p, &o)| if o { soft_grey(p) } else { soft_grey(p).max(1) })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cell_not_decided_occupied_never_reads_as_occupied() {
+        let eta = 0.999;
+        // p = η (an unexplained cell's cap), just below η, occupied, free
+        let probs = [eta, 0.9985, 0.9999, 0.2];
+        let occupied = [false, false, true, false];
+        let v = soft_pixels(&probs, &occupied);
+        let read = |v: u8| (255.0 - v as f64) / 255.0;
+        assert!(read(v[0]) <= eta && read(v[1]) <= eta, "{v:?}");
+        assert!(read(v[2]) > eta, "{v:?}");
+        assert_eq!(v[3], soft_grey(0.2));
+        // without the rule the cap would read as occupied
+        assert!(read(soft_grey(eta)) > eta);
     }
 }

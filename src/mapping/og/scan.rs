@@ -435,8 +435,8 @@ impl<'a> ScanContext<'a> {
     }
 }
 
-/// Add a pose's scans to the map in direction order (log-odds clamped to ±`clamp` after
-/// every increment) and count them.
+/// Add a pose's scans to the map in direction order (log-odds clamped to [`floor`, `clamp`]
+/// after every increment, `floor` = max(`free_floor`, −`clamp`)) and count them.
 fn apply_scans(
     map: &mut LogOddsMap,
     stats: &mut OgStats,
