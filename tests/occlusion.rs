@@ -517,7 +517,7 @@ fn read_binary_pgm(path: &Path) -> Vec<bool> {
 #[test]
 fn walls_the_echoes_can_show() {
     use pradar::energy::EnergySource;
-    use pradar::mapping::job::{load_runs, runs_regions};
+    use pradar::mapping::job::{load_runs, runs_regions, score_binary};
     use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, Method, OgParams};
     use pradar::params::ParamGuard;
     let figs = figures();
@@ -573,28 +573,16 @@ fn walls_the_echoes_can_show() {
                 }
             }
         }
-        let (rows, cols) = (spec.rows, spec.cols);
-        let near = |cell: usize| {
-            let (r, c) = ((cell / cols) as isize, (cell % cols) as isize);
-            (-1..=1).any(|dr| {
-                (-1..=1).any(|dc| {
-                    let (rr, cc) = (r + dr, c + dc);
-                    rr >= 0
-                        && cc >= 0
-                        && (rr as usize) < rows
-                        && (cc as usize) < cols
-                        && evidenced[rr as usize * cols + cc as usize]
-                })
-            })
+        // the evidence scored as a map by the maps' own scorer: its walls found is the ceiling
+        let shown = score_binary(&evidenced, &reference, &regions)
+            .three_class
+            .expect("the scenes have a truth");
+        let ceiling = |m: &pradar::mapping::metrics::ThreeClassMetrics| {
+            let n = m.structure_cells;
+            ((m.walls_found_1 * n as f64).round() as usize, n)
         };
-        let wall = |i: usize| reference.cells[i] == CellClass::Occupied;
-        let ceiling = |region: &[bool]| {
-            let cells: Vec<usize> = (0..spec.len()).filter(|&i| wall(i) && region[i]).collect();
-            let shown = cells.iter().filter(|&&i| near(i)).count();
-            (shown, cells.len())
-        };
-        let (sb, nb) = ceiling(&regions.building);
-        let (so, no) = ceiling(&regions.observable);
+        let (sb, nb) = ceiling(&shown.building);
+        let (so, no) = ceiling(&shown.observable);
         let scene = &figs.iter().find(|(s, k, _)| s == name && k == n).unwrap().2;
         let found = |method: &str, region: &str| {
             f(
