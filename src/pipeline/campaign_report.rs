@@ -671,6 +671,7 @@ fn run_experiments(
                 lab.preset_sweeps(n, r);
             }
         }
+        lab.prepare(&experiment::Experiment::ALL)?;
         let mut sections = Vec::new();
         for e in experiment::Experiment::ALL {
             let r = lab.run(e)?;

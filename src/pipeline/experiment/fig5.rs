@@ -8,10 +8,7 @@ use crate::error::Result;
 impl Lab<'_> {
     pub(super) fn fig5(&mut self) -> Result<ExperimentResult> {
         let n = self.campaign_elements;
-        let mut cases = vec![self.base_case(DataSource::Sweeps, n, "ekf")];
-        for s in self.seeds() {
-            cases.push(self.base_case(DataSource::Model(s), n, "ekf"));
-        }
+        let cases = self.fig5_cases();
         let done = self.map_all("fig5", &cases)?;
         let tiles = vec![
             self.reference_tile(),
@@ -54,5 +51,15 @@ impl Lab<'_> {
             Vec::new(),
             vec![Figure::EkfMeans(keys)],
         ))
+    }
+
+    /// The campaign's sweeps, then model data at every seed: EKF at the campaign's N.
+    pub(super) fn fig5_cases(&self) -> Vec<super::Case> {
+        let n = self.campaign_elements;
+        let mut cases = vec![self.base_case(DataSource::Sweeps, n, "ekf")];
+        for s in self.seeds() {
+            cases.push(self.base_case(DataSource::Model(s), n, "ekf"));
+        }
+        cases
     }
 }

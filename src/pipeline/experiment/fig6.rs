@@ -43,7 +43,7 @@ impl Lab<'_> {
 
     /// Model data at every size, seed and mapper; then the sweeps at every size and mapper
     /// when every size could be simulated (else why not, as the note).
-    fn fig6_cases(&mut self, sizes: &[usize]) -> (Vec<super::Case>, Option<String>) {
+    pub(super) fn fig6_cases(&mut self, sizes: &[usize]) -> (Vec<super::Case>, Option<String>) {
         let mut cases = Vec::new();
         for &n in sizes {
             for s in self.seeds() {

@@ -12,9 +12,11 @@
 //! perimeter or on a wall). A wrong-cell count is the metric's rate times the region's
 //! cells, rounded.
 //!
-//! Parallelism: an experiment's maps not yet made run in parallel once their data exist
-//! (model data and sweeps are made first, in case order); a map depends only on its
-//! options, so the files do not depend on the thread count or on what ran beside it.
+//! Parallelism: [`Lab::prepare`] gathers the cases of every experiment asked for, makes
+//! their model data in parallel (sweeps at another N in case order), then runs every map
+//! on the pool at once; each experiment then finds its maps made. A map and a model-data
+//! draw depend only on their options and seed, so the files do not depend on the thread
+//! count or on what ran beside them.
 
 use super::super::Progress;
 use super::{Experiment, ExperimentInputs, ExperimentValid};
@@ -290,25 +292,47 @@ impl<'a> Lab<'a> {
 
     /// Model data at N elements and this seed (synth once per process).
     fn model_data(&mut self, elements: usize, seed: u64) -> Result<PathBuf> {
-        if let Some(p) = self.synth_cache.get(&(elements, seed)) {
-            return Ok(p.clone());
+        self.make_model_data(&[(elements, seed)])?;
+        Ok(self.synth_cache[&(elements, seed)].clone())
+    }
+
+    /// Model data at each (N, seed) not made yet, made in parallel (each `synth` depends
+    /// only on its N and seed, so the files do not depend on the thread count).
+    fn make_model_data(&mut self, wanted: &[(usize, u64)]) -> Result<()> {
+        let mut todo: Vec<(usize, u64)> = Vec::new();
+        for k in wanted {
+            if !self.synth_cache.contains_key(k) && !todo.contains(k) {
+                todo.push(*k);
+            }
         }
-        let dir = self.out.join("work").join("synth");
-        let path = dir.join(format!("n{elements}_s{seed}.parquet"));
+        if todo.is_empty() {
+            return Ok(());
+        }
         // a model quantity the fit could not estimate has no value to draw from
         let model = self
             .model
             .require_estimable(&Default::default())
             .map_err(|e| Error::input(&self.inputs.model, e.to_string()))?;
-        let mut c = Campaign::load(&self.inputs.campaign)?;
-        c.set_elements(elements)?;
-        let sp = SynthParams::default()
-            .seed(seed)
-            .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")))
-            .check()?;
-        synth(&c, &model, &path, &sp, &|_, _| {})?;
-        self.synth_cache.insert((elements, seed), path.clone());
-        Ok(path)
+        let campaign = Campaign::load(&self.inputs.campaign)?;
+        let dir = self.out.join("work").join("synth");
+        let made: Vec<PathBuf> = todo
+            .par_iter()
+            .map(|&(elements, seed)| -> Result<PathBuf> {
+                let path = dir.join(format!("n{elements}_s{seed}.parquet"));
+                let mut c = campaign.clone();
+                c.set_elements(elements)?;
+                let sp = SynthParams::default()
+                    .seed(seed)
+                    .truth_dir(dir.join(format!("n{elements}_s{seed}_truth")))
+                    .check()?;
+                synth(&c, &model, &path, &sp, &|_, _| {})?;
+                Ok(path)
+            })
+            .collect::<Result<_>>()?;
+        for (k, p) in todo.into_iter().zip(made) {
+            self.synth_cache.insert(k, p);
+        }
+        Ok(())
     }
 
     /// Sweeps at N elements: the campaign's own, or the campaign simulated again at N (it
@@ -371,6 +395,15 @@ impl<'a> Lab<'a> {
     pub(super) fn map_all(&mut self, label: &str, cases: &[Case]) -> Result<Vec<Mapped>> {
         let cb = (self.progress)(label, cases.len());
         let mut todo: Vec<(String, MapValid)> = Vec::new();
+        // the model data of the maps not made yet, all at once (in parallel)
+        let wanted: Vec<(usize, u64)> = (cases.iter())
+            .filter(|c| !self.map_cache.contains_key(&c.key(&self.params)))
+            .filter_map(|c| match c.source {
+                DataSource::Model(s) => Some((c.elements, s)),
+                DataSource::Sweeps => None,
+            })
+            .collect();
+        self.make_model_data(&wanted)?;
         for c in cases {
             let key = c.key(&self.params);
             if !self.map_cache.contains_key(&key) && todo.iter().all(|(k, _)| *k != key) {
@@ -438,6 +471,31 @@ impl<'a> Lab<'a> {
             tiles,
             columns,
         }
+    }
+
+    /// The cases (maps) of one experiment; sweeps at another N are made on the way.
+    pub fn cases(&mut self, e: Experiment) -> Vec<Case> {
+        match e {
+            Experiment::Fig5 => self.fig5_cases(),
+            Experiment::Fig6 => {
+                let sizes = self.params.compare_elements.clone();
+                self.fig6_cases(&sizes).0
+            }
+            Experiment::PriorSensitivity => self.prior_cases(),
+            Experiment::PoseNoise => self.pose_cases(self.params.pose_elements),
+        }
+    }
+
+    /// Make the maps of all these experiments at once, before [`Lab::run`] runs them one
+    /// by one: their model data in parallel, then every map on the pool, so the cores do
+    /// not wait at the end of each experiment's maps for its slowest one. The maps and
+    /// files are those [`Lab::run`] alone makes (each map depends only on its options).
+    pub fn prepare(&mut self, which: &[Experiment]) -> Result<()> {
+        let mut cases = Vec::new();
+        for &e in which {
+            cases.extend(self.cases(e));
+        }
+        self.map_all("experiments' maps", &cases).map(|_| ())
     }
 
     /// Run one experiment: map its cases, write its files, return its figures.

@@ -149,6 +149,7 @@ pub fn run_experiments(
 ) -> Result<ExperimentsRun> {
     let resolved = prepare_inputs(inputs, &out.join("work"), progress)?;
     let mut lab = Lab::new(resolved, params.clone(), out, progress)?;
+    lab.prepare(which)?;
     let mut results = Vec::new();
     for &e in which {
         results.push(lab.run(e)?);

@@ -49,7 +49,7 @@ impl Lab<'_> {
     }
 
     /// Every seed × setting × mapper at N elements, the noise keyed by the seed.
-    fn pose_cases(&self, n: usize) -> Vec<Case> {
+    pub(super) fn pose_cases(&self, n: usize) -> Vec<Case> {
         let settings = self.pose_settings();
         let mut cases = Vec::new();
         for s in self.seeds() {

@@ -15,17 +15,7 @@ impl Lab<'_> {
         let n = self.params.sensitivity_elements;
         let c = self.params.prior_change;
         let factors = [1.0 - c, 1.0, 1.0 + c];
-        let mut cases = Vec::new();
-        for s in self.seeds() {
-            for f in factors {
-                let mut og = self.base_case(DataSource::Model(s), n, "og");
-                og.og_prior = self.params.og.prior * f;
-                let mut ekf = self.base_case(DataSource::Model(s), n, "ekf");
-                ekf.mu0 = self.params.ekf.mu0 * f;
-                cases.push(og);
-                cases.push(ekf);
-            }
-        }
+        let cases = self.prior_cases();
         let done = self.map_all("prior-sensitivity", &cases)?;
         let panel = self.prior_panel(&done, factors)?;
         let cases: Vec<CaseFigures> = done.into_iter().map(|d| d.0).collect();
@@ -40,6 +30,25 @@ impl Lab<'_> {
             charts,
             vec![Figure::Plot("relative change of psi".into())],
         ))
+    }
+
+    /// Model data at N = `sensitivity_elements`, every seed: the OG and the EKF with their
+    /// prior scaled by each factor 1 − c, 1, 1 + c.
+    pub(super) fn prior_cases(&self) -> Vec<Case> {
+        let n = self.params.sensitivity_elements;
+        let c = self.params.prior_change;
+        let mut cases = Vec::new();
+        for s in self.seeds() {
+            for f in [1.0 - c, 1.0, 1.0 + c] {
+                let mut og = self.base_case(DataSource::Model(s), n, "og");
+                og.og_prior = self.params.og.prior * f;
+                let mut ekf = self.base_case(DataSource::Model(s), n, "ekf");
+                ekf.mu0 = self.params.ekf.mu0 * f;
+                cases.push(og);
+                cases.push(ekf);
+            }
+        }
+        cases
     }
 
     /// The panel: the first seed's OG then EKF maps at each factor.
