@@ -687,8 +687,16 @@ type SceneChecks = (String, (bool, f64), (bool, f64));
 /// instead the cluster chain's model of the scene (`pipeline::analyse`, what `reproduce`
 /// runs: it has `[diffuse]` and `[walls]`) with every interval removed, so the default
 /// ranges apply to its 13 free quantities (docs/calibrate.md, "The physics corridor with
-/// `[walls]` free"). Returns per scene (name, own check, second check).
-fn physics_predictive(sims: usize, pop: usize, chain_prior: bool) -> Vec<SceneChecks> {
+/// `[walls]` free"); with `walls` (and not `chain_prior`) the default prior with the
+/// layout's parts free (`calibrate --walls`). Only the scenes named in `scenes` are run.
+/// Returns per scene (name, own check, second check).
+fn physics_predictive(
+    sims: usize,
+    pop: usize,
+    chain_prior: bool,
+    walls: bool,
+    scenes: &[&str],
+) -> Vec<SceneChecks> {
     use pradar::campaign::manifest::SweepFormat;
     let tmp = tempfile::tempdir().unwrap();
     let mut out = Vec::new();
@@ -700,6 +708,9 @@ fn physics_predictive(sims: usize, pop: usize, chain_prior: bool) -> Vec<SceneCh
             common::fixture("tests/furnished_hall.toml"),
         ),
     ] {
+        if !scenes.contains(&name) {
+            continue;
+        }
         let dir = tmp.path().join(name.replace(' ', "_"));
         let t0 = Instant::now();
         let (c, _) = common::chain(&dir.join("a"), &t, SweepFormat::Parquet);
@@ -739,6 +750,27 @@ fn physics_predictive(sims: usize, pop: usize, chain_prior: bool) -> Vec<SceneCh
                     "5",
                     "--prior",
                     &s(&pp),
+                ]
+                .map(String::from),
+                None,
+            );
+        } else if walls {
+            run(
+                &[
+                    "calibrate",
+                    "--energy",
+                    &s(&e),
+                    "--campaign",
+                    &s(&c.path),
+                    "--out",
+                    &s(&cal),
+                    "--simulations",
+                    &sims.to_string(),
+                    "--population",
+                    &pop.to_string(),
+                    "--seed",
+                    "5",
+                    "--walls",
                 ]
                 .map(String::from),
                 None,
@@ -785,7 +817,7 @@ fn physics_predictive(sims: usize, pop: usize, chain_prior: bool) -> Vec<SceneCh
 #[test]
 #[ignore = "unmet: corridor and office fail check (KS ratio 2.97-4.20, own and seed+1); about 35 min on 2 shared cores"]
 fn physics_scenes_predictive() {
-    assert_predictive(&physics_predictive(3000, 400, false));
+    assert_predictive(&physics_predictive(3000, 400, false, false, &ALL_SCENES));
 }
 
 /// [`physics_scenes_predictive`] with the cluster chain's model of each scene (intervals
@@ -795,8 +827,32 @@ fn physics_scenes_predictive() {
 #[test]
 #[ignore = "about 1-2 h on 2 shared cores (not run)"]
 fn physics_scenes_predictive_chain_prior() {
-    assert_predictive(&physics_predictive(3000, 400, true));
+    assert_predictive(&physics_predictive(3000, 400, true, false, &ALL_SCENES));
 }
+
+/// [`physics_scenes_predictive`] with `calibrate --walls` (the default prior with
+/// `[diffuse]` and `[walls]` free, 13 quantities) on the corridor and the office.
+/// `cargo test --release --test tests -- calibrate::physics_scenes_predictive_walls
+/// --ignored --nocapture`.
+///
+/// Measured (issue 30, fourth session, by the CLI with the test's steps; load 14–17):
+/// corridor calibrate 1788 s, check PASS vs its scene (largest KS ratio 1.50), FAIL vs
+/// seed + 1 (2.32: signal energy, RMS delay spread); office 1623 s, FAIL (2.32) and FAIL
+/// (5.41). Unmet (docs/calibrate.md, "the physics scenes with walls free").
+#[test]
+#[ignore = "unmet: corridor passes its own scene (1.50) but fails seed+1 (2.32), office fails both (2.32, 5.41); about 30 min on 2 shared cores, 60 at load 15"]
+fn physics_scenes_predictive_walls() {
+    assert_predictive(&physics_predictive(
+        3000,
+        400,
+        false,
+        true,
+        &["corridor", "office"],
+    ));
+}
+
+/// The physics scenes of [`physics_predictive`].
+const ALL_SCENES: [&str; 3] = ["corridor", "office", "furnished hall"];
 
 /// Every scene's calibrated model passes against its scene and the second realisation.
 fn assert_predictive(r: &[SceneChecks]) {

@@ -28,7 +28,11 @@
 //! d_p 0.05–1.5 m (synth caps offsets at 1.5 m), Γ 2–60 ns, γ 0.5–20 ns, σ 1e-4–1 m²,
 //! rays 1–20; σ′ 1e-3–1 m²/m, Lambert n 0.2–10. `--prior FILE` (model schema): a free
 //! quantity's `interval = [a, b]` is its prior range (a > 0); `a = b` holds it fixed at a;
-//! no interval keeps the default range.
+//! no interval keeps the default range. `--walls` (no prior file,
+//! [`Prior::default_with_walls`]): the default prior with `[diffuse]` and `[walls]` added,
+//! all 13 quantities free at their default ranges — the layout's own returns (the walls'
+//! continuum, specular feet, corners) that the clusters alone cannot stand in for on a
+//! physics scene; not the default, since each simulation is several times dearer.
 //!
 //! **Method**: adaptive ABC population Monte Carlo (APMC; Lenormand, Jabot & Deffuant,
 //! Comput. Stat. 2013), the ABC-SMC of Beaumont, Cornuet, Marin & Robert (Biometrika 2009)
@@ -142,6 +146,30 @@ impl Prior {
     pub fn default_prior() -> Prior {
         Prior::from_template(ModelConfig::table1_defaults(), Path::new("(default prior)"))
             .expect("the default prior is valid")
+    }
+
+    /// The default prior with the layout's parts free too (`calibrate --walls`): the
+    /// template of [`Prior::default_prior`] with a `[diffuse]` section (σ′, Lambert n free;
+    /// `power_share` 0.5 and `decay` 10 ns, which synth does not draw from) and a
+    /// `[walls]` section (|Γ| of every material, corner σ and edge σ free), each at its
+    /// [`DEFAULT_PRIOR`] range: 13 free quantities.
+    pub fn default_with_walls() -> Prior {
+        use crate::campaign::modelfile::{DiffuseModel, WallModel};
+        let mut m = ModelConfig::table1_defaults();
+        m.diffuse = Some(DiffuseModel {
+            wall_rcs_per_m: Quantity::new(0.02, "m2/m", "exponential"),
+            lambert_exponent: Quantity::new(1.0, "1", "constant"),
+            power_share: Quantity::new(0.5, "1", "constant"),
+            decay: Quantity::new(10.0, "ns", "exponential"),
+        });
+        m.walls = Some(WallModel {
+            specular_gamma: Quantity::new(0.3, "1", "constant"),
+            material_gamma: Default::default(),
+            corner_rcs: Some(Quantity::new(0.05, "m2", "constant")),
+            edge_rcs: Some(Quantity::new(0.05, "m2", "constant")),
+        });
+        Prior::from_template(m, Path::new("(default prior with walls)"))
+            .expect("the default prior with walls is valid")
     }
 
     /// Read a prior file (model schema; see the module docs); errors name the file and field.
@@ -448,6 +476,11 @@ mod tests {
     fn prior_from_template() {
         let d = Prior::default_prior();
         assert_eq!(d.free.len(), 8);
+        let w = Prior::default_with_walls();
+        assert_eq!(w.free.len(), 13);
+        for (k, (name, a, b)) in DEFAULT_PRIOR.iter().enumerate() {
+            assert_eq!((w.free[k].as_str(), w.lo[k], w.hi[k]), (*name, *a, *b));
+        }
         assert_eq!((d.lo[0], d.hi[0]), (0.05, 3.0));
         let mut m = ModelConfig::table1_defaults();
         m.ray_decay.interval = Some([1.0, 8.0]);

@@ -185,6 +185,11 @@ pub struct CalibrateArgs {
     /// prior range (default: the documented wide indoor ranges).
     #[arg(long)]
     pub prior: Option<PathBuf>,
+    /// Without `--prior`: the default prior with the layout's parts free too (`[diffuse]`
+    /// σ′ and Lambert n, `[walls]` |Γ|, corner and edge σ at their default ranges; 13
+    /// free quantities, each simulation several times dearer).
+    #[arg(long, conflicts_with = "prior")]
+    pub walls: bool,
     /// Simulation budget (at least the population).
     #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
     pub simulations: usize,

@@ -86,6 +86,7 @@ impl CalibrateArgs {
             campaign: self.campaign,
             out: self.out,
             prior: self.prior,
+            walls: self.walls,
             report: self.report,
             chain: self.chain,
             params: pradar::calibrate::CalibrateParams {

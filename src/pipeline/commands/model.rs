@@ -25,6 +25,9 @@ pub struct Calibrate {
     pub out: PathBuf,
     /// Prior file (model schema; default: [`crate::calibrate::DEFAULT_PRIOR`]).
     pub prior: Option<PathBuf>,
+    /// Without a prior file: free the layout's parts too
+    /// ([`crate::calibrate::Prior::default_with_walls`]).
+    pub walls: bool,
     /// Budget, population, seed.
     pub params: crate::calibrate::CalibrateParams,
     /// Report folder (`index.html` with the marginal posteriors and correlations, and the
@@ -133,6 +136,7 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
     let params = cmd.params.check()?;
     let prior = match &cmd.prior {
         Some(p) => crate::calibrate::Prior::load(p)?,
+        None if cmd.walls => crate::calibrate::Prior::default_with_walls(),
         None => crate::calibrate::Prior::default_prior(),
     };
     let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
