@@ -568,7 +568,10 @@ fn hall_sets() {
 /// simulations (population 200, seed = the repetition), default prior, then checked
 /// (`pradar check`, 20 draws); the model itself checked against each environment as the
 /// reference. Prints per environment and per quantity: coverage, median |error| of the
-/// median, median and largest interval hi/lo; and the check's pass count.
+/// median, median and largest interval hi/lo; and the check's pass count. Measurement
+/// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy),
+/// `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_TEST_RIDGE=cv` adds `--ridge
+/// cv`, `PRADAR_ABC_TRACE=1` passes the sampler's trace through.
 fn coverage(distance: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = corridor(&tmp.path().join("in"));
