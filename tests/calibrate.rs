@@ -40,6 +40,14 @@ fn run(args: &[String], threads: Option<usize>) {
         "pradar {args:?}: {}",
         String::from_utf8_lossy(&o.stderr)
     );
+    // the sampler's trace (`PRADAR_ABC_TRACE=1`, inherited by the child) passed through
+    if std::env::var("PRADAR_ABC_TRACE").is_ok_and(|v| v == "1") {
+        for l in String::from_utf8_lossy(&o.stderr).lines() {
+            if l.starts_with("abc:") {
+                eprintln!("{l}");
+            }
+        }
+    }
 }
 
 /// `synth` of `model` on campaign `cpath` with `seed` into `dir`; the energy table.
@@ -99,6 +107,10 @@ fn calibrate(
     .into();
     if let Some(d) = distance {
         args.extend(["--distance".to_string(), d.to_string()]);
+    }
+    // measurements of the ridge choice: `PRADAR_TEST_RIDGE=cv|fixed` adds `--ridge`
+    if let Ok(r) = std::env::var("PRADAR_TEST_RIDGE") {
+        args.extend(["--ridge".to_string(), r]);
     }
     run(&args, threads);
     ModelConfig::load(out).unwrap()
@@ -186,6 +198,11 @@ fn corridor(dir: &Path) -> PathBuf {
 /// The prior's hi/lo per quantity of [`QUANTITIES`] (the default prior's ranges).
 const PRIOR_HILO: [f64; 8] = [60.0, 30.0, 20.0 / 0.3, 30.0, 30.0, 40.0, 1e4, 20.0];
 
+/// Whether `PRADAR_COVERAGE_NO_CHECK=1` asks [`coverage`] to skip `pradar check`.
+fn no_check() -> bool {
+    std::env::var("PRADAR_COVERAGE_NO_CHECK").is_ok_and(|v| v == "1")
+}
+
 /// One environment calibrated and scored against the model it was drawn from.
 struct Scored {
     /// Per quantity: the 95 % interval covers the truth.
@@ -227,7 +244,12 @@ fn environment(
         let [lo, hi] = got.quantity(q).and_then(|x| x.interval).unwrap();
         hilo.push(hi / lo);
     }
-    let check = check(&out, cpath, &e);
+    // `PRADAR_COVERAGE_NO_CHECK=1` (measurements of widths only): no `pradar check`
+    let check = if no_check() {
+        (false, f64::NAN)
+    } else {
+        check(&out, cpath, &e)
+    };
     Scored {
         covered,
         err,
@@ -546,12 +568,19 @@ fn hall_sets() {
 /// simulations (population 200, seed = the repetition), default prior, then checked
 /// (`pradar check`, 20 draws); the model itself checked against each environment as the
 /// reference. Prints per environment and per quantity: coverage, median |error| of the
-/// median, median and largest interval hi/lo; and the check's pass count.
+/// median, median and largest interval hi/lo; and the check's pass count. Measurement
+/// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy),
+/// `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_TEST_RIDGE=cv` adds `--ridge
+/// cv`, `PRADAR_ABC_TRACE=1` passes the sampler's trace through.
 fn coverage(distance: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = corridor(&tmp.path().join("in"));
     let truth = ModelConfig::table1_defaults();
-    let reps = 20;
+    // `PRADAR_COVERAGE_ENVS=5`: the five-environment proxy (synth seeds 1000-1004)
+    let reps: usize = std::env::var("PRADAR_COVERAGE_ENVS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
     let t = Instant::now();
     let mut all = Vec::new();
     let mut truth_pass = 0;
@@ -567,7 +596,11 @@ fn coverage(distance: &str) {
             r as u64,
             Some(distance),
         );
-        let (tp, tr) = check(&dir.join("model.toml"), &cpath, &dir.join("e.parquet"));
+        let (tp, tr) = if no_check() {
+            (false, f64::NAN)
+        } else {
+            check(&dir.join("model.toml"), &cpath, &dir.join("e.parquet"))
+        };
         truth_pass += usize::from(tp);
         eprintln!(
             "ENV {distance} {r}: covered {}/8, hi/lo {:.1?}, check {:?}, truth's check ({tp}, {tr:.2})",
@@ -586,7 +619,13 @@ fn coverage(distance: &str) {
         let mut h: Vec<f64> = all.iter().map(|a| a.hilo[i]).collect();
         e.sort_by(f64::total_cmp);
         h.sort_by(f64::total_cmp);
-        let med = |v: &[f64]| 0.5 * (v[reps / 2 - 1] + v[reps / 2]);
+        let med = |v: &[f64]| {
+            if reps % 2 == 1 {
+                v[reps / 2]
+            } else {
+                0.5 * (v[reps / 2 - 1] + v[reps / 2])
+            }
+        };
         eprintln!(
             "SUMMARY {distance} | {q} | {cov}/{reps} | {:.0} % | {:.2} | {:.2}",
             100.0 * med(&e),

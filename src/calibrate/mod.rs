@@ -95,7 +95,7 @@ pub mod params;
 pub mod summaries;
 
 pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior};
-pub use params::{CalibrateParams, CalibrateValid, Distance};
+pub use params::{CalibrateParams, CalibrateValid, Distance, RidgeChoice};
 
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
@@ -369,6 +369,11 @@ pub fn calibrate(
         } else {
             abc::DistanceKind::Projected
         },
+        ridge: match params.ridge {
+            RidgeChoice::Fixed => abc::Ridge::Fixed,
+            RidgeChoice::Cv => abc::Ridge::Cv,
+            RidgeChoice::CvDrop => abc::Ridge::CvDrop,
+        },
     };
     let stat_ctx = crate::check::context(energy);
     // issue 30: the check statistics' quantiles appended to the pooled summaries
@@ -437,11 +442,18 @@ pub fn calibrate(
             "abc-smc (APMC, MMD of per-profile and per-position statistics)".into()
         } else {
             format!(
-                "abc-smc (APMC, semi-automatic summaries{}{})",
+                "abc-smc (APMC, semi-automatic summaries{}{}{})",
                 if quant {
                     " with the check statistics' quantiles"
                 } else {
                     ""
+                },
+                match params.ridge {
+                    RidgeChoice::Fixed => "",
+                    RidgeChoice::Cv => ", ridge by cross-validation",
+                    RidgeChoice::CvDrop => {
+                        ", ridge by cross-validation, uninformative projections dropped"
+                    }
                 },
                 if adjusted {
                     ", regression-adjusted"

@@ -94,6 +94,7 @@ impl CalibrateArgs {
                 population: self.population,
                 seed: self.seed,
                 distance: self.distance,
+                ridge: self.ridge,
                 ..Default::default()
             },
         }
