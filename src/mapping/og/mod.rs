@@ -36,9 +36,11 @@
 //!   the bins within g of a main-lobe detection before the occluder give no free evidence
 //!   either. Four options, all off by default (issue 31 "Maps II", figures in
 //!   `docs/mapping.md`): `bound_silent` (a direction without an occluder bounds the
-//!   visibility polygon at its first detection, or is interpolated from its neighbours
-//!   without one, instead of at the maximum range), `free_without_occluder` (weight in [0, 1] of the free evidence of
-//!   a beam with no occluder: indoors every bearing ends at a surface, so a beam that
+//!   visibility polygon instead of lying at the maximum range: `leak` at its first
+//!   detection, or interpolated from its neighbours without one; `nearer` at the nearer of
+//!   that detection and the range interpolated from its neighbours' occluders;
+//!   [`crate::mapping::grid::SilentBound`]), `free_without_occluder` (weight in [0, 1] of
+//!   the free evidence of a beam with no occluder: indoors every bearing ends at a surface, so a beam that
 //!   detects none was most likely looking at a smooth wall at oblique incidence, whose
 //!   specular echo goes elsewhere, and its silence clears that wall), `free_end` (free
 //!   evidence ends at the first main-lobe echo or the first detection instead of the

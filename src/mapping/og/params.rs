@@ -5,7 +5,7 @@
 //! p_free; the inverse is the logistic function [`sigmoid`].
 
 use crate::error::{Error, Result};
-use crate::mapping::grid::GhostParams;
+use crate::mapping::grid::{GhostParams, SilentBound};
 use crate::params::{ParamGuard, Valid};
 
 /// Where a beam's free evidence ends.
@@ -55,10 +55,9 @@ pub struct OgParams {
     /// Weight of the free evidence of a beam without an occluder (no detection not
     /// explained by a side lobe), in [0, 1] (1: as any other beam's).
     pub free_without_occluder: f64,
-    /// A direction without an occluder bounds the visibility polygon at its first detection
-    /// (a side-lobe-explained one), or, without any, is interpolated from its neighbours
-    /// (false: at the maximum range).
-    pub bound_silent: bool,
+    /// How a direction without an occluder bounds the visibility polygon
+    /// ([`SilentBound`]; `off`: at the maximum range).
+    pub bound_silent: SilentBound,
     /// Where a beam's free evidence ends (the occluder).
     pub free_end: FreeEnd,
     /// Lowest log-odds free evidence can bring a cell to (−10, the clamp: no floor); a
@@ -85,7 +84,7 @@ impl Default for OgParams {
             hold_echoes: false,
             free_end: FreeEnd::Occluder,
             free_without_occluder: 1.0,
-            bound_silent: false,
+            bound_silent: SilentBound::Off,
             free_floor: -10.0,
             ghost: GhostParams::default(),
         }

@@ -6,7 +6,8 @@ use super::{sigmoid, Detector, FreeEnd, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
-    Beam, GhostJudge, GhostRule, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility,
+    Beam, GhostJudge, GhostRule, ObservationModel, Occlusion, PoseGeometry, ScanEchoes,
+    SilentBound, Visibility,
 };
 use crate::params::Valid;
 use rayon::prelude::*;
@@ -98,7 +99,7 @@ struct IncrementConstants {
     hold_echoes: bool,
     free_end: FreeEnd,
     free_without_occluder: f32,
-    bound_silent: bool,
+    bound_silent: SilentBound,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -181,8 +182,10 @@ pub fn og_map_stats(
         Method::Og => params.ghost.rule,
         _ => GhostRule::None,
     };
-    let mut judge = (ghost_rule != GhostRule::None)
-        .then(|| GhostJudge::new(model, &ctx.occlusion, Valid::new(params.ghost)));
+    let mut judge = (ghost_rule != GhostRule::None).then(|| {
+        GhostJudge::new(model, &ctx.occlusion, Valid::new(params.ghost))
+            .with_silent_bound(params.bound_silent)
+    });
     // belief of the previous pass (pass ≥ 2 uses it, fixed, for the responsibilities)
     let mut fixed_belief: Option<Vec<f32>> = None;
     for pass in 0..passes {
@@ -328,17 +331,18 @@ impl<'a> ScanContext<'a> {
                 let echoes = self
                     .occlusion
                     .echoes(self.model, em, p, dets, Some(&occupied));
-                let vis = if self.inc.bound_silent {
+                let vis = if self.inc.bound_silent != SilentBound::Off {
+                    // on a copy: the scan's own occluders (free end, withheld detections)
+                    // stay as they are, only the polygon is bounded
                     let mut pe = echoes.clone();
-                    pe.missing.resize(nd, false);
-                    for d in 0..nd {
-                        if pe.occluder[d].is_none() {
-                            match (self.inc.min_bin..pe.det[d].len()).find(|&k| pe.det[d][k]) {
-                                Some(k) => pe.occluder[d] = Some(k),
-                                None => pe.missing[d] = true,
-                            }
-                        }
-                    }
+                    let leak = echoes.first_detections(self.inc.min_bin);
+                    (pe.occluder, pe.missing) = self.occlusion.bound_silent(
+                        self.model,
+                        &echoes.occluder,
+                        &leak,
+                        &echoes.missing,
+                        self.inc.bound_silent,
+                    );
                     self.occlusion.visibility(self.model, g, &pe)
                 } else {
                     self.occlusion.visibility(self.model, g, &echoes)
