@@ -617,10 +617,13 @@ fn walls_the_echoes_can_show() {
 /// finds at least as many observable walls in every scene and, in the office at N = 16,
 /// at least 0.1 more (measured 0.600 → 0.772; corridor N = 16 0.790 → 0.828). With such a
 /// direction bounding the visibility polygon at its first detection instead
-/// (`--og-bound-silent true`) the OG finds ≥ 0.85 of the office N = 16's observable walls
-/// (measured 0.865) with fewer building wrong cells than the all-free map in every scene.
-/// Both are off by default because the office's cells beyond the walls rise above 5 %
-/// (printed).
+/// (`--og-bound-silent leak`, alias `true`) the OG finds ≥ 0.85 of the office N = 16's
+/// observable walls (measured 0.865) with fewer building wrong cells than the all-free map
+/// in every scene. Bounding it at the nearer of that detection and the range interpolated
+/// from its neighbours' occluders (`--og-bound-silent nearer`) keeps both and never marks
+/// more cells beyond the walls occupied than `leak`, fewer in the office at N = 16
+/// (measured 8.7 → 8.3 %; corridor 3.3 / 3.2 %, office N = 100 11.1 % both). All are off by
+/// default because the office's cells beyond the walls stay above 5 % (printed).
 #[test]
 fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() {
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("og_free_without_occluder");
@@ -639,9 +642,11 @@ fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() 
         };
         let o = |v: &Value| f(v, &["metrics", "classes", "outside_marked_occupied"]);
         let w0 = w(base);
+        let mut leak_outside = f64::NAN;
         for (label, flags) in [
             ("free0", ["--og-free-without-occluder", "0"]),
             ("bound", ["--og-bound-silent", "true"]),
+            ("nearer", ["--og-bound-silent", "nearer"]),
         ] {
             let out = root.join(format!("{name}_{n}_{label}"));
             let j = map_with("og", &flags, c, e, &out);
@@ -657,16 +662,33 @@ fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() 
             let office16 = name == "office" && *n == 16;
             let need = match (label, office16) {
                 ("free0", true) => w0 + 0.1,
-                ("bound", true) => 0.85,
+                ("bound" | "nearer", true) => 0.85,
                 _ => w0,
             };
             if w1 < need {
                 failures.push(format!("{name} N={n} {label}: {w1:.3} < {need:.3}"));
             }
-            if label == "bound" && wrong(&j, "building") >= wrong(&j, "building_all_free") {
+            if label != "free0" && wrong(&j, "building") >= wrong(&j, "building_all_free") {
                 failures.push(format!(
-                    "{name} N={n} bound: building wrong not below all-free"
+                    "{name} N={n} {label}: building wrong not below all-free"
                 ));
+            }
+            match label {
+                "bound" => leak_outside = o(&j),
+                "nearer" => {
+                    let ok = if office16 {
+                        o(&j) < leak_outside
+                    } else {
+                        o(&j) <= leak_outside
+                    };
+                    if !ok {
+                        failures.push(format!(
+                            "{name} N={n} nearer: outside marked occupied {:.4} vs leak {leak_outside:.4}",
+                            o(&j)
+                        ));
+                    }
+                }
+                _ => {}
             }
         }
     }
