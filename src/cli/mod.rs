@@ -316,6 +316,11 @@ pub struct MapArgs {
     /// −10, by default: no floor).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
     pub og_free_floor: f64,
+    /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
+    /// at most this far (m, >= 0) behind the visibility polygon (default: the occlusion
+    /// guard, every visible cell).
+    #[arg(long)]
+    pub og_credit_depth: Option<f64>,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
     /// poses spanning a minimum aspect) or none.

@@ -298,6 +298,20 @@ mod tests {
                 },
                 "free_without_occluder",
             ),
+            (
+                OgParams {
+                    credit_depth_m: Some(-0.01),
+                    ..Default::default()
+                },
+                "credit_depth_m",
+            ),
+            (
+                OgParams {
+                    credit_depth_m: Some(f64::INFINITY),
+                    ..Default::default()
+                },
+                "credit_depth_m",
+            ),
         ] {
             let e = bad.check().unwrap_err().to_string();
             assert!(

@@ -64,6 +64,13 @@ pub struct OgParams {
     /// floor above −clamp keeps a cell cleared by many beams within reach of the occupancy
     /// evidence of the beams that see it.
     pub free_floor: f64,
+    /// Deepest a cell's centre may lie behind the visibility polygon and still get
+    /// occupancy credit from a range ring, m (None: the occlusion guard g, every visible
+    /// cell). A cell whose centre lies more than half a cell beyond the surface along the
+    /// ray does not hold it there; the guard's extra two bins (the window kernel's
+    /// half-width) keep the cells behind the surface visible, and a wall found where it was
+    /// missed comes with a rim of credited cells beyond it.
+    pub credit_depth_m: Option<f64>,
     /// Ghost rule applied to the `og` map once it is built
     /// ([`crate::mapping::grid::ghost`]; `none`).
     pub ghost: GhostParams,
@@ -86,6 +93,7 @@ impl Default for OgParams {
             free_without_occluder: 1.0,
             bound_silent: SilentBound::Off,
             free_floor: -10.0,
+            credit_depth_m: None,
             ghost: GhostParams::default(),
         }
     }
@@ -145,6 +153,11 @@ impl ParamGuard for OgParams {
         }
         if !(self.free_floor.is_finite() && self.free_floor < 0.0) {
             return Err(Error::param("free_floor", "must be < 0 (log-odds)"));
+        }
+        if let Some(x) = self.credit_depth_m {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(Error::param("credit_depth_m", "must be >= 0 m"));
+            }
         }
         self.ghost.check()?;
         if logit(self.prior).abs() >= self.clamp {

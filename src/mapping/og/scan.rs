@@ -70,15 +70,19 @@ fn scan_og(
             continue;
         }
         let rg = beam.bin_range(b);
+        // the ring's cells that may hold the echo (all visible ones by default)
+        let holds = |c: u32| vis.depth[c as usize] <= k.credit_depth;
         let mut denom = 0.0f32;
         for j in rg.clone() {
-            denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
+            if holds(beam.cell[j]) {
+                denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
+            }
         }
         if denom <= 0.0 {
             continue;
         }
         let scale = k.l_occ as f32 / denom;
-        for j in rg {
+        for j in rg.filter(|&j| holds(beam.cell[j])) {
             let c = beam.cell[j];
             out.push((
                 c,
@@ -100,6 +104,8 @@ struct IncrementConstants {
     free_end: FreeEnd,
     free_without_occluder: f32,
     bound_silent: SilentBound,
+    /// Deepest behind the polygon a cell gets occupancy credit, m (+∞: every visible cell).
+    credit_depth: f32,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -306,6 +312,7 @@ impl<'a> ScanContext<'a> {
                 free_end: params.free_end,
                 free_without_occluder: params.free_without_occluder as f32,
                 bound_silent: params.bound_silent,
+                credit_depth: params.credit_depth_m.map_or(f32::INFINITY, |x| x as f32),
             },
             occlusion,
         }
