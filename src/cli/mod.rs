@@ -319,7 +319,7 @@ pub struct MapArgs {
     /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
     /// at most this far (m, >= 0) behind the visibility polygon (default: the occlusion
     /// guard, every visible cell).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub og_credit_depth: Option<f64>,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
