@@ -617,10 +617,21 @@ fn walls_the_echoes_can_show() {
 /// finds at least as many observable walls in every scene and, in the office at N = 16,
 /// at least 0.1 more (measured 0.600 → 0.772; corridor N = 16 0.790 → 0.828). With such a
 /// direction bounding the visibility polygon at its first detection instead
-/// (`--og-bound-silent true`) the OG finds ≥ 0.85 of the office N = 16's observable walls
-/// (measured 0.865) with fewer building wrong cells than the all-free map in every scene.
-/// Both are off by default because the office's cells beyond the walls rise above 5 %
-/// (printed).
+/// (`--og-bound-silent leak`, alias `true`) the OG finds ≥ 0.85 of the office N = 16's
+/// observable walls (measured 0.865) with fewer building wrong cells than the all-free map
+/// in every scene. Bounding it at the nearer of that detection and the range interpolated
+/// from its neighbours' occluders (`--og-bound-silent nearer`) keeps both and never marks
+/// more cells beyond the walls occupied than `leak`, fewer in the office at N = 16
+/// (measured 8.7 → 8.3 %; corridor 3.3 / 3.2 %, office N = 100 11.1 % both). With the
+/// occupancy credit limited to cells at most half a cell behind the polygon as well
+/// (`--og-credit-depth 0.05`) the rim of credited cells beyond the walls goes: the cells
+/// beyond the walls marked occupied fall to ≤ 5 % in three scenes (1.9 / 2.2 / 4.3 %) and
+/// below the default's in the office at N = 100 (9.9 → 7.2 %), the room's to ≤ 5 %
+/// (three-class building, ≤ 4.8 %), the three-class building wrong cells stay below the
+/// all-free map (325 / 310 / 271 / 267; the layout-only ones do not in the office, 301 / 311
+/// vs 293), and the observable walls found stay within 0.01 of the default's
+/// (0.823 / 0.875 / 0.833 / 0.923; ≥ 0.8 asserted in the office at N = 16). All are off by
+/// default (`docs/mapping.md`; figures printed).
 #[test]
 fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() {
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("og_free_without_occluder");
@@ -639,12 +650,19 @@ fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() 
         };
         let o = |v: &Value| f(v, &["metrics", "classes", "outside_marked_occupied"]);
         let w0 = w(base);
-        for (label, flags) in [
-            ("free0", ["--og-free-without-occluder", "0"]),
-            ("bound", ["--og-bound-silent", "true"]),
-        ] {
+        let mut leak_outside = f64::NAN;
+        let runs: [(&str, &[&str]); 4] = [
+            ("free0", &["--og-free-without-occluder", "0"]),
+            ("bound", &["--og-bound-silent", "true"]),
+            ("nearer", &["--og-bound-silent", "nearer"]),
+            (
+                "nearer-credit",
+                &["--og-bound-silent", "nearer", "--og-credit-depth", "0.05"],
+            ),
+        ];
+        for (label, flags) in runs {
             let out = root.join(format!("{name}_{n}_{label}"));
-            let j = map_with("og", &flags, c, e, &out);
+            let j = map_with("og", flags, c, e, &out);
             let w1 = w(&j);
             eprintln!(
                 "{name} N={n} {label}: observable walls found {w0:.3} -> {w1:.3}; outside marked occupied {:.4} -> {:.4}; building wrong {:.0} -> {:.0} (all-free {:.0})",
@@ -657,16 +675,60 @@ fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() 
             let office16 = name == "office" && *n == 16;
             let need = match (label, office16) {
                 ("free0", true) => w0 + 0.1,
-                ("bound", true) => 0.85,
+                ("bound" | "nearer", true) => 0.85,
+                ("nearer-credit", true) => 0.8,
+                ("nearer-credit", false) => w0 - 0.01,
                 _ => w0,
             };
             if w1 < need {
                 failures.push(format!("{name} N={n} {label}: {w1:.3} < {need:.3}"));
             }
-            if label == "bound" && wrong(&j, "building") >= wrong(&j, "building_all_free") {
+            // (nearer-credit: layout-only building wrong above the all-free map in the
+            // office, 301 / 311 vs 293; its three-class figure is asserted below)
+            if matches!(label, "bound" | "nearer")
+                && wrong(&j, "building") >= wrong(&j, "building_all_free")
+            {
                 failures.push(format!(
-                    "{name} N={n} bound: building wrong not below all-free"
+                    "{name} N={n} {label}: building wrong not below all-free"
                 ));
+            }
+            match label {
+                "bound" => leak_outside = o(&j),
+                "nearer" => {
+                    let ok = if office16 {
+                        o(&j) < leak_outside
+                    } else {
+                        o(&j) <= leak_outside
+                    };
+                    if !ok {
+                        failures.push(format!(
+                            "{name} N={n} nearer: outside marked occupied {:.4} vs leak {leak_outside:.4}",
+                            o(&j)
+                        ));
+                    }
+                }
+                "nearer-credit" => {
+                    // the must-show's figures this combination keeps (three-class building)
+                    let t = |k: &str| f(&j, &["metrics", "three_class", "building", k]);
+                    let all_free = f(
+                        &j,
+                        &["metrics", "three_class", "building_all_free", "wrong"],
+                    );
+                    let room = t("free_marked_occupied");
+                    let outside_cap = if name == "office" && *n == 100 {
+                        o(base) // 9.9 % by default: asserted lower, not <= 5 %
+                    } else {
+                        0.05
+                    };
+                    if t("wrong") >= all_free || room > 0.05 || o(&j) >= outside_cap {
+                        failures.push(format!(
+                            "{name} N={n} nearer-credit: building wrong {:.0} (all-free {all_free:.0}), room {room:.4}, outside {:.4} (cap {outside_cap:.4})",
+                            t("wrong"),
+                            o(&j)
+                        ));
+                    }
+                }
+                _ => {}
             }
         }
     }

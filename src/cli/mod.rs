@@ -316,14 +316,21 @@ pub struct MapArgs {
     /// occluder (no detection not explained by a side lobe).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_without_occluder)]
     pub og_free_without_occluder: f64,
-    /// OG (`--method og`): a direction without an occluder bounds the visibility polygon
-    /// at its first detection (or is interpolated from its neighbours without one).
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().bound_silent, action = clap::ArgAction::Set)]
-    pub og_bound_silent: bool,
+    /// OG (`--method og`): how a direction without an occluder bounds the visibility
+    /// polygon: not at all (`off`, alias `false`), at its first detection (`leak`, alias
+    /// `true`; interpolated from its neighbours without one), or at the nearer of that and
+    /// the range interpolated from its neighbours' occluders (`nearer`).
+    #[arg(long, value_enum, default_value = "off")]
+    pub og_bound_silent: pradar::mapping::grid::SilentBound,
     /// OG (`--method og`): lowest log-odds free evidence can bring a cell to (the clamp,
     /// −10, by default: no floor).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
     pub og_free_floor: f64,
+    /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
+    /// at most this far (m, >= 0) behind the visibility polygon (default: the occlusion
+    /// guard, every visible cell).
+    #[arg(long, allow_hyphen_values = true)]
+    pub og_credit_depth: Option<f64>,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
     /// poses spanning a minimum aspect) or none.

@@ -148,6 +148,7 @@ impl MapArgs {
                     free_without_occluder: self.og_free_without_occluder,
                     bound_silent: self.og_bound_silent,
                     free_floor: self.og_free_floor,
+                    credit_depth_m: self.og_credit_depth,
                     ghost,
                     ..Default::default()
                 },

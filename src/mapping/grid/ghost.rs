@@ -17,15 +17,16 @@
 //!   side of W from the radar). So once the map holds the walls, each pose's scan is
 //!   judged again: its occluders are chosen with the *final* binary map as the mapped
 //!   surfaces (the online rule: the strongest echo, or an earlier one on a mapped surface),
-//!   its visibility polygon rebuilt, and the evidence it gave is kept only where that
-//!   polygon allows it — an occupancy increment to a cell of depth δ ≤ g, a free increment
-//!   to a cell of δ < −g (g the occlusion guard: the same test as online). The occupancy
-//!   grid is then replayed from the prior with the kept increments in their original order
-//!   (exactly the online map when nothing is dropped); the EKF, whose updates cannot be
-//!   replayed, subtracts from each cell's mean the rises the poses that cannot see it gave
-//!   (first order: x' = x̂ − Σ_{p: δ_p > g} Δx⁺_p, Δx⁺ the positive change of the mean in
-//!   that pose's energy updates, per direction) and decides x' − κ·σ̂ > μ0. For the OG the
-//!   wall must survive the poses that saw the image first: with `hold_echoes`
+//!   its visibility polygon rebuilt (its silent directions bounded as the mapper bounded
+//!   them online, [`GhostJudge::with_silent_bound`]), and the evidence it gave is kept only
+//!   where that polygon allows it — an occupancy increment to a cell of depth δ ≤ g, a free
+//!   increment to a cell of δ < −g (g the occlusion guard: the same test as online). The
+//!   occupancy grid is then replayed from the prior with the kept increments in their
+//!   original order (exactly the online map when nothing is dropped); the EKF, whose
+//!   updates cannot be replayed, subtracts from each cell's mean the rises the poses that
+//!   cannot see it gave (first order: x' = x̂ − Σ_{p: δ_p > g} Δx⁺_p, Δx⁺ the positive
+//!   change of the mean in that pose's energy updates, per direction) and decides
+//!   x' − κ·σ̂ > μ0. For the OG the wall must survive the poses that saw the image first: with `hold_echoes`
 //!   ([`crate::mapping::og::OgParams`]) a beam gives no free evidence within g of a
 //!   main-lobe echo before its occluder (the EKF's free-space evidence already skips bins
 //!   near a detection). The mirror image itself is not predicted: that needs the reflector
@@ -60,7 +61,7 @@
 //! increment of a run (12 bytes each: 105,000 on the corridor at N = 100), the EKF the
 //! rises of each pose; the judgement is one occluder choice and one polygon per pose.
 
-use super::visibility::{Occlusion, Polygon, ScanEchoes};
+use super::visibility::{Occlusion, Polygon, ScanEchoes, SilentBound};
 use super::ObservationModel;
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
@@ -131,6 +132,8 @@ struct PoseRecord {
     pose: usize,
     main: Vec<Vec<(u32, f64)>>,
     missing: Vec<bool>,
+    /// Per direction: the first detection (recorded when a silent bound is set).
+    leak: Vec<Option<usize>>,
     /// Per direction: (cell, amount) in the order the mapper applied them.
     evidence: Vec<Vec<(u32, f32)>>,
 }
@@ -141,6 +144,8 @@ pub struct GhostJudge<'a> {
     model: &'a ObservationModel,
     occlusion: &'a Occlusion,
     params: GhostValid,
+    /// How the rebuilt polygons bound the silent directions (as the mapper's online ones).
+    silent: SilentBound,
     records: Vec<PoseRecord>,
 }
 
@@ -151,8 +156,16 @@ impl<'a> GhostJudge<'a> {
             model,
             occlusion,
             params,
+            silent: SilentBound::Off,
             records: Vec::new(),
         }
+    }
+
+    /// The judge with the silent directions of the rebuilt polygons bounded by `mode`
+    /// ([`Occlusion::bound_silent`]; `off` unless set), as the mapper bounded them online.
+    pub fn with_silent_bound(mut self, mode: SilentBound) -> Self {
+        self.silent = mode;
+        self
     }
 
     /// The rule.
@@ -167,6 +180,11 @@ impl<'a> GhostJudge<'a> {
             pose: p,
             main: echoes.main.clone(),
             missing: echoes.missing.clone(),
+            leak: if self.silent == SilentBound::Off {
+                Vec::new()
+            } else {
+                echoes.first_detections(self.occlusion.min_bin)
+            },
             evidence,
         });
     }
@@ -195,7 +213,13 @@ impl<'a> GhostJudge<'a> {
                     .occluder_of(self.model, r.pose, d, &r.main[d], Some(occupied))
             })
             .collect();
-        self.occlusion.polygon_of(self.model, &occluder, &r.missing)
+        if self.silent == SilentBound::Off {
+            return self.occlusion.polygon_of(self.model, &occluder, &r.missing);
+        }
+        let (occluder, missing) =
+            self.occlusion
+                .bound_silent(self.model, &occluder, &r.leak, &r.missing, self.silent);
+        self.occlusion.polygon_of(self.model, &occluder, &missing)
     }
 
     /// Whether evidence `amount` of pose record `r` to cell `c` stands under polygon

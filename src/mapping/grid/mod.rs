@@ -47,7 +47,7 @@ pub mod visibility;
 use gain::GainModel;
 pub use ghost::{GhostJudge, GhostParams, GhostRule, GhostValid};
 use std::f64::consts::PI;
-pub use visibility::{Occlusion, Polygon, ScanEchoes, Visibility};
+pub use visibility::{Occlusion, Polygon, ScanEchoes, SilentBound, Visibility};
 
 /// Grid and observation-model parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]

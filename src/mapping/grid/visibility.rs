@@ -36,7 +36,21 @@
 //!   cells straddling the surface are neither cleared nor cut off);
 //! * a detection of direction d in a bin more than g beyond its occluder is withheld
 //!   (shadowed, not observed): it is multipath or an echo from behind the surface, and no
-//!   cell it could be credited to is visible.
+//!   cell it could be credited to is visible;
+//! * silent directions ([`SilentBound`], chosen by the mapper; the OG's `bound_silent`): a
+//!   direction with a sweep but no occluder (its detections, if any, all explained by side
+//!   lobes) is at the maximum range by default (`off`). Indoors every bearing ends at a
+//!   surface, and a beam meeting a smooth wall obliquely sends its specular echo elsewhere,
+//!   so its silence does not mean the space beyond is open. `leak` bounds it at its first
+//!   detection (a leak says a surface lies at that range somewhere in the beam's lobes), or
+//!   leaves it out of the polygon like a missing sweep when it has none; but a leak can lie
+//!   beyond the wall the beam actually meets (the leak of a farther surface). `nearer`
+//!   bounds it at the nearer of its first detection and R_int, the range interpolated
+//!   linearly in 1/R between the nearest directions with an occluder on either side (held
+//!   constant beyond the outermost; the polygon's own rule, exact within h²/8 for a straight
+//!   wall through both neighbours' occluders); with neither, at the maximum range. Both
+//!   only shrink the polygon: fewer cells cleared by that beam and fewer visible to the
+//!   range rings of the others.
 //!
 //! Cost per pose: the side-lobe test O(directions² · detections), the polygon O(cells in
 //! range), the mapped-surface test O(directions · range / cell).
@@ -66,6 +80,23 @@ pub struct Occlusion {
     covered: Vec<bool>,
 }
 
+/// How a direction without an occluder (no detection not explained by a side lobe: a
+/// *silent* direction) bounds the visibility polygon (module docs, "silent directions").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SilentBound {
+    /// At the maximum range, as if the beam had seen through everything.
+    #[value(name = "off", alias = "false")]
+    Off,
+    /// At its first detection (a side-lobe-explained leak); without one, left out of the
+    /// polygon like a missing sweep (its neighbours bound it).
+    #[value(name = "leak", alias = "true")]
+    Leak,
+    /// At the nearer of its first detection and the range interpolated (linear in 1/R)
+    /// between the nearest directions with an occluder on either side.
+    #[value(name = "nearer")]
+    Nearer,
+}
+
 /// The detections of one pose's scan with their occluders.
 #[derive(Debug, Clone, Default)]
 pub struct ScanEchoes {
@@ -87,6 +118,15 @@ impl ScanEchoes {
     /// `bins` when nothing opaque was detected. Detections in later bins are withheld.
     pub fn last_observed(&self, d: usize, guard_bins: usize, bins: usize) -> usize {
         self.occluder[d].map_or(bins, |o| o + guard_bins)
+    }
+
+    /// Per direction the first detected bin at or after `min_bin` (None: no detection), the
+    /// leak [`Occlusion::bound_silent`] bounds a silent direction at.
+    pub fn first_detections(&self, min_bin: usize) -> Vec<Option<usize>> {
+        self.det
+            .iter()
+            .map(|d| (min_bin..d.len()).find(|&k| d[k]))
+            .collect()
     }
 }
 
@@ -286,6 +326,24 @@ impl Occlusion {
         out
     }
 
+    /// The occluders and missing directions of a scan with its silent directions bounded
+    /// by `mode` (module docs, "silent directions"): `occluder` and `missing` per direction
+    /// as in [`ScanEchoes`], `leak` the first detection of any kind per direction. A silent
+    /// direction is one with no occluder and a sweep; the others are returned as they are.
+    pub fn bound_silent(
+        &self,
+        model: &ObservationModel,
+        occluder: &[Option<usize>],
+        leak: &[Option<usize>],
+        missing: &[bool],
+        mode: SilentBound,
+    ) -> (Vec<Option<usize>>, Vec<bool>) {
+        let theta: Vec<f64> = (0..occluder.len())
+            .map(|d| model.direction_rad(d))
+            .collect();
+        bound_silent_of(&theta, self.bin_m, occluder, leak, missing, mode)
+    }
+
     /// The visibility polygon of a scan from its occluders (module docs): samples
     /// (θ_d, 1/R_d), ascending θ.
     pub fn polygon(&self, model: &ObservationModel, echoes: &ScanEchoes) -> Polygon {
@@ -366,6 +424,59 @@ pub struct Polygon {
     samples: Vec<(f64, f64)>,
 }
 
+/// [`Occlusion::bound_silent`] for directions of boresights `theta` (rad) and bins of
+/// `bin_m` metres.
+fn bound_silent_of(
+    theta: &[f64],
+    bin_m: f64,
+    occluder: &[Option<usize>],
+    leak: &[Option<usize>],
+    missing: &[bool],
+    mode: SilentBound,
+) -> (Vec<Option<usize>>, Vec<bool>) {
+    let nd = occluder.len();
+    let mut occ = occluder.to_vec();
+    let mut miss: Vec<bool> = (0..nd)
+        .map(|d| missing.get(d).copied().unwrap_or(false))
+        .collect();
+    if mode == SilentBound::Off {
+        return (occ, miss);
+    }
+    let inv = |k: usize| 1.0 / (k as f64 * bin_m).max(bin_m);
+    // the directions with an occluder, by bearing: (θ, 1/R)
+    let mut known: Vec<(f64, f64)> = (0..nd)
+        .filter(|&d| !miss[d])
+        .filter_map(|d| occluder[d].map(|k| (theta[d], inv(k))))
+        .collect();
+    known.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let silent: Vec<usize> = (0..nd)
+        .filter(|&d| occluder[d].is_none() && !miss[d])
+        .collect();
+    for d in silent {
+        let u_leak = leak.get(d).copied().flatten().map(inv);
+        let u = match mode {
+            SilentBound::Off => None,
+            SilentBound::Leak => u_leak,
+            SilentBound::Nearer => {
+                // the nearer range is the larger 1/R; the interpolation is the polygon's own
+                // rule over the known directions (constant beyond the outermost)
+                let u_int = (!known.is_empty()).then(|| polygon_inverse_range(&known, theta[d]));
+                match (u_leak, u_int) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                }
+            }
+        };
+        match u {
+            Some(u) if u > 0.0 => occ[d] = Some(((1.0 / u) / bin_m).round().max(1.0) as usize),
+            // nothing bounds it: out of the polygon, its neighbours bound it (`leak`), or
+            // no occluder anywhere in the scan (`nearer`: the polygon is empty too)
+            _ => miss[d] = true,
+        }
+    }
+    (occ, miss)
+}
+
 /// The bearing at the centre of bucket `b`, rad.
 fn bucket_centre(b: usize) -> f64 {
     -PI + (b as f64 + 0.5) * 2.0 * PI / BUCKETS as f64
@@ -423,6 +534,76 @@ mod tests {
         // held constant beyond the ends
         assert_eq!(polygon_inverse_range(&samples, -2.0), samples[0].1);
         assert_eq!(polygon_inverse_range(&samples, 2.0), samples[6].1);
+    }
+
+    #[test]
+    fn a_silent_direction_is_bounded_at_the_nearer_of_its_leak_and_its_neighbours() {
+        // five boresights 0.1 rad apart facing a straight wall 2 m away along the normal at
+        // 0 rad (R(θ) = 2/cos θ); bins of 0.01 m; directions 1 and 3 silent, 4 missing
+        let theta = [-0.2, -0.1, 0.0, 0.1, 0.2];
+        let bin = |r: f64| (r / 0.01f64).round() as usize;
+        let wall = |th: f64| 2.0 / f64::cos(th);
+        let occluder = [
+            Some(bin(wall(-0.2))),
+            None,
+            Some(bin(wall(0.0))),
+            None,
+            None,
+        ];
+        let missing = [false, false, false, false, true];
+        // direction 1 leaks at 3 m (a surface beyond the wall), direction 3 at 1.5 m
+        let leak = [None, Some(300), None, Some(150), None];
+        let (o, m) = bound_silent_of(&theta, 0.01, &occluder, &leak, &missing, SilentBound::Off);
+        assert_eq!(
+            (o, m),
+            (occluder.to_vec(), missing.to_vec()),
+            "off: unchanged"
+        );
+        let (o, m) = bound_silent_of(&theta, 0.01, &occluder, &leak, &missing, SilentBound::Leak);
+        assert_eq!(
+            o,
+            vec![occluder[0], Some(300), occluder[2], Some(150), None]
+        );
+        assert_eq!(m, missing.to_vec());
+        let (o, m) = bound_silent_of(
+            &theta,
+            0.01,
+            &occluder,
+            &leak,
+            &missing,
+            SilentBound::Nearer,
+        );
+        // direction 1: the wall interpolated between directions 0 and 2 (linear in 1/R:
+        // within h²/8 = 0.5 % of the wall's 2.010 m, plus half a bin), nearer than its leak;
+        // direction 3: its leak, nearer than the wall held constant from direction 2 (2 m)
+        let r1 = o[1].unwrap() as f64 * 0.01;
+        assert!((r1 - wall(-0.1)).abs() <= 0.02, "{r1} vs {}", wall(-0.1));
+        assert_eq!(o[3], Some(150));
+        assert_eq!((o[0], o[2], o[4]), (occluder[0], occluder[2], None));
+        assert_eq!(m, missing.to_vec());
+        // without a leak: the interpolation alone; without any occluder: out of the polygon
+        let (o, _) = bound_silent_of(
+            &theta,
+            0.01,
+            &occluder,
+            &[None; 5],
+            &missing,
+            SilentBound::Nearer,
+        );
+        assert_eq!(
+            o[3], occluder[2],
+            "held constant beyond the last known direction"
+        );
+        let (o, m) = bound_silent_of(
+            &theta,
+            0.01,
+            &[None; 5],
+            &[None; 5],
+            &[false; 5],
+            SilentBound::Nearer,
+        );
+        assert_eq!(o, vec![None; 5]);
+        assert_eq!(m, vec![true; 5]);
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! p_free; the inverse is the logistic function [`sigmoid`].
 
 use crate::error::{Error, Result};
-use crate::mapping::grid::GhostParams;
+use crate::mapping::grid::{GhostParams, SilentBound};
 use crate::params::{ParamGuard, Valid};
 
 /// Where a beam's free evidence ends.
@@ -55,16 +55,22 @@ pub struct OgParams {
     /// Weight of the free evidence of a beam without an occluder (no detection not
     /// explained by a side lobe), in [0, 1] (1: as any other beam's).
     pub free_without_occluder: f64,
-    /// A direction without an occluder bounds the visibility polygon at its first detection
-    /// (a side-lobe-explained one), or, without any, is interpolated from its neighbours
-    /// (false: at the maximum range).
-    pub bound_silent: bool,
+    /// How a direction without an occluder bounds the visibility polygon
+    /// ([`SilentBound`]; `off`: at the maximum range).
+    pub bound_silent: SilentBound,
     /// Where a beam's free evidence ends (the occluder).
     pub free_end: FreeEnd,
     /// Lowest log-odds free evidence can bring a cell to (−10, the clamp: no floor); a
     /// floor above −clamp keeps a cell cleared by many beams within reach of the occupancy
     /// evidence of the beams that see it.
     pub free_floor: f64,
+    /// Deepest a cell's centre may lie behind the visibility polygon and still get
+    /// occupancy credit from a range ring, m (None: the occlusion guard g, every visible
+    /// cell). A cell whose centre lies more than half a cell beyond the surface along the
+    /// ray does not hold it there; the guard's extra two bins (the window kernel's
+    /// half-width) keep the cells behind the surface visible, and a wall found where it was
+    /// missed comes with a rim of credited cells beyond it.
+    pub credit_depth_m: Option<f64>,
     /// Ghost rule applied to the `og` map once it is built
     /// ([`crate::mapping::grid::ghost`]; `none`).
     pub ghost: GhostParams,
@@ -85,8 +91,9 @@ impl Default for OgParams {
             hold_echoes: false,
             free_end: FreeEnd::Occluder,
             free_without_occluder: 1.0,
-            bound_silent: false,
+            bound_silent: SilentBound::Off,
             free_floor: -10.0,
+            credit_depth_m: None,
             ghost: GhostParams::default(),
         }
     }
@@ -146,6 +153,11 @@ impl ParamGuard for OgParams {
         }
         if !(self.free_floor.is_finite() && self.free_floor < 0.0) {
             return Err(Error::param("free_floor", "must be < 0 (log-odds)"));
+        }
+        if let Some(x) = self.credit_depth_m {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(Error::param("credit_depth_m", "must be >= 0 m"));
+            }
         }
         self.ghost.check()?;
         if logit(self.prior).abs() >= self.clamp {

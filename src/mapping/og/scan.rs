@@ -6,7 +6,8 @@ use super::{sigmoid, Detector, FreeEnd, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
-    Beam, GhostJudge, GhostRule, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility,
+    Beam, GhostJudge, GhostRule, ObservationModel, Occlusion, PoseGeometry, ScanEchoes,
+    SilentBound, Visibility,
 };
 use crate::params::Valid;
 use rayon::prelude::*;
@@ -69,15 +70,19 @@ fn scan_og(
             continue;
         }
         let rg = beam.bin_range(b);
+        // the ring's cells that may hold the echo (all visible ones by default)
+        let holds = |c: u32| vis.depth[c as usize] <= k.credit_depth;
         let mut denom = 0.0f32;
         for j in rg.clone() {
-            denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
+            if holds(beam.cell[j]) {
+                denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
+            }
         }
         if denom <= 0.0 {
             continue;
         }
         let scale = k.l_occ as f32 / denom;
-        for j in rg {
+        for j in rg.filter(|&j| holds(beam.cell[j])) {
             let c = beam.cell[j];
             out.push((
                 c,
@@ -98,7 +103,9 @@ struct IncrementConstants {
     hold_echoes: bool,
     free_end: FreeEnd,
     free_without_occluder: f32,
-    bound_silent: bool,
+    bound_silent: SilentBound,
+    /// Deepest behind the polygon a cell gets occupancy credit, m (+∞: every visible cell).
+    credit_depth: f32,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -181,8 +188,10 @@ pub fn og_map_stats(
         Method::Og => params.ghost.rule,
         _ => GhostRule::None,
     };
-    let mut judge = (ghost_rule != GhostRule::None)
-        .then(|| GhostJudge::new(model, &ctx.occlusion, Valid::new(params.ghost)));
+    let mut judge = (ghost_rule != GhostRule::None).then(|| {
+        GhostJudge::new(model, &ctx.occlusion, Valid::new(params.ghost))
+            .with_silent_bound(params.bound_silent)
+    });
     // belief of the previous pass (pass ≥ 2 uses it, fixed, for the responsibilities)
     let mut fixed_belief: Option<Vec<f32>> = None;
     for pass in 0..passes {
@@ -303,6 +312,7 @@ impl<'a> ScanContext<'a> {
                 free_end: params.free_end,
                 free_without_occluder: params.free_without_occluder as f32,
                 bound_silent: params.bound_silent,
+                credit_depth: params.credit_depth_m.map_or(f32::INFINITY, |x| x as f32),
             },
             occlusion,
         }
@@ -328,17 +338,18 @@ impl<'a> ScanContext<'a> {
                 let echoes = self
                     .occlusion
                     .echoes(self.model, em, p, dets, Some(&occupied));
-                let vis = if self.inc.bound_silent {
+                let vis = if self.inc.bound_silent != SilentBound::Off {
+                    // on a copy: the scan's own occluders (free end, withheld detections)
+                    // stay as they are, only the polygon is bounded
                     let mut pe = echoes.clone();
-                    pe.missing.resize(nd, false);
-                    for d in 0..nd {
-                        if pe.occluder[d].is_none() {
-                            match (self.inc.min_bin..pe.det[d].len()).find(|&k| pe.det[d][k]) {
-                                Some(k) => pe.occluder[d] = Some(k),
-                                None => pe.missing[d] = true,
-                            }
-                        }
-                    }
+                    let leak = echoes.first_detections(self.inc.min_bin);
+                    (pe.occluder, pe.missing) = self.occlusion.bound_silent(
+                        self.model,
+                        &echoes.occluder,
+                        &leak,
+                        &echoes.missing,
+                        self.inc.bound_silent,
+                    );
                     self.occlusion.visibility(self.model, g, &pe)
                 } else {
                     self.occlusion.visibility(self.model, g, &echoes)
