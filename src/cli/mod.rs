@@ -348,6 +348,10 @@ pub struct MapArgs {
     /// the ring's largest (0: off).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().arc_explain, value_parser = ranges::probability)]
     pub ekf_arc_explain: f64,
+    /// EKF arc explanation: distinct poses whose echoes a cell must explain to be occupied
+    /// (1: one echo suffices).
+    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().explain_poses, value_parser = ranges::explain_poses)]
+    pub ekf_explain_poses: u32,
     /// Pose noise given to the mapper: position standard deviation per axis, m.
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_m: f64,

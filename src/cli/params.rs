@@ -162,6 +162,7 @@ impl MapArgs {
                     ghost,
                     split: self.ekf_split,
                     arc_explain: self.ekf_arc_explain,
+                    explain_poses: self.ekf_explain_poses,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {

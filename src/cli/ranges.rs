@@ -33,6 +33,17 @@ fn whole_in(s: &str, lo: usize, hi: usize, why: &str) -> Result<usize, String> {
     }
 }
 
+/// `--ekf-explain-poses`: in [1, 1000] (`EkfParams` explain_poses).
+pub fn explain_poses(s: &str) -> Result<u32, String> {
+    whole_in(
+        s,
+        1,
+        1000,
+        "distinct poses whose echoes a cell must explain",
+    )
+    .map(|v| v as u32)
+}
+
 /// `--k-max`: in [1, 64] (`ClusterParams` k_max, [`pradar::cluster::params::MAX_K`]).
 pub fn k_max(s: &str) -> Result<usize, String> {
     whole_in(

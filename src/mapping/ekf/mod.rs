@@ -135,9 +135,11 @@
 //! −9 to −18 %, room cells marked occupied 6.0–8.5 % → 3.4–4.4 %, cells beyond the walls
 //! ≤ 4.3 %, F1 within one cell up, walls found −0.005 to −0.038; the variants not kept (the
 //! −3 dB arcs only, κ, the mirror ghost rule, a ring without the detected-ring requirement)
-//! are there too. The binary map (below) is taken with it; the soft map of an
-//! unexplained cell is capped at η; the occluders confirmed during the run use the rule
-//! without it.
+//! are there too. `explain_poses` = K (1 by default) asks a cell to explain the echoes of
+//! K distinct poses (a surface seen from several places); measured at K = 2 it clears
+//! more wall cells than room cells, so it is off. The binary map (below) is taken with the
+//! explanation; the soft map of an unexplained cell is capped at η; the occluders
+//! confirmed during the run use the rule without it.
 //!
 //! Ghosts across poses: a ghost rule ([`crate::mapping::grid::ghost`], `none` by default;
 //! [`EkfMap::discount`]) may discount, at the binary decision, the mean rises of the poses

@@ -71,6 +71,9 @@ pub struct EkfParams {
     /// on some detected echo's range ring its share c̃·x̂² is at least γ times the ring's
     /// largest ([`ARC_EXPLAIN`]); 0 = off.
     pub arc_explain: f64,
+    /// Arc explanation: distinct poses whose echoes a cell must explain to be occupied
+    /// ([`crate::mapping::ekf::EkfMap::explain`]; 1: one echo suffices; ≥ 1).
+    pub explain_poses: u32,
     /// Implementation (scalable).
     pub variant: EkfVariant,
     /// Tile side of the scalable filter, cells (4).
@@ -111,6 +114,7 @@ impl Default for EkfParams {
             reflect: true,
             split: true,
             arc_explain: ARC_EXPLAIN,
+            explain_poses: 1,
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,
@@ -149,6 +153,9 @@ impl ParamGuard for EkfParams {
         }
         if !(0.0..=1.0).contains(&self.arc_explain) {
             return Err(Error::param("arc_explain", "must be in [0, 1]"));
+        }
+        if self.explain_poses == 0 {
+            return Err(Error::param("explain_poses", "must be >= 1"));
         }
         if self.tile == 0 || self.tile > 64 {
             return Err(Error::param("tile", "must be in 1..=64 cells"));

@@ -448,6 +448,10 @@ pub struct EkfMap {
     /// The cell's largest share c̃·x'² of an arc relative to the arc's strongest cell (0 on
     /// no arc).
     pub arc_share: Vec<f64>,
+    /// Echo arcs the cell explains (share ≥ γ of the arc's strongest).
+    pub explained_arcs: Vec<u32>,
+    /// Distinct poses of the arcs the cell explains ([`EkfMap::explain`]'s `min_poses`).
+    pub explained_poses: Vec<u32>,
     /// Cells on at least one echo arc none of which they explain ([`EkfMap::explain`] with
     /// γ > 0): never decided occupied.
     pub unexplained: Vec<bool>,
@@ -467,6 +471,8 @@ impl EkfMap {
             arcs: vec![0; rows * cols],
             arc_poses: vec![0; rows * cols],
             arc_share: vec![0.0; rows * cols],
+            explained_arcs: vec![0; rows * cols],
+            explained_poses: vec![0; rows * cols],
             unexplained: vec![false; rows * cols],
         }
     }
@@ -477,9 +483,12 @@ impl EkfMap {
     /// proportion to c̃_i·x'_i²; a cell explains the echo when its share is at least `gamma`
     /// times the ring's largest. With `gamma` > 0 and at least one run's rings given, a cell
     /// that explains no echo (including a cell on no echo's ring: raised by bins without a
-    /// detection only) is marked unexplained and never decided occupied. Also counts the
-    /// rings and their distinct poses per cell and keeps each cell's largest relative share.
-    pub fn explain(&mut self, arcs: &[EchoArcs], gamma: f64) {
+    /// detection only) is marked unexplained and never decided occupied. With `min_poses`
+    /// K > 1 a cell must explain the echoes of at least K distinct poses (a surface seen
+    /// from several places; K = 1 is the rule above). Also counts the rings and their
+    /// distinct poses per cell, the rings it explains and their distinct poses, and keeps
+    /// each cell's largest relative share.
+    pub fn explain(&mut self, arcs: &[EchoArcs], gamma: f64, min_poses: u32) {
         let n = self.mean.len();
         let x: Vec<f64> = self
             .mean
@@ -487,9 +496,10 @@ impl EkfMap {
             .zip(&self.discount)
             .map(|(&m, &d)| (m - d).max(0.0))
             .collect();
-        let mut explained = vec![false; n];
         let mut last_pose = vec![u32::MAX; n];
         let mut seen_run = vec![usize::MAX; n];
+        let mut last_epose = vec![u32::MAX; n];
+        let mut seen_erun = vec![usize::MAX; n];
         for (ri, run) in arcs.iter().enumerate() {
             for a in 0..run.len() {
                 let es = run.ptr[a]..run.ptr[a + 1];
@@ -506,14 +516,20 @@ impl EkfMap {
                     let rel = if max > 0.0 { share(e) / max } else { 1.0 };
                     self.arc_share[c] = self.arc_share[c].max(rel);
                     if share(e) >= gamma * max {
-                        explained[c] = true;
+                        self.explained_arcs[c] += 1;
+                        if last_epose[c] != run.pose[a] || seen_erun[c] != ri {
+                            self.explained_poses[c] += 1;
+                            last_epose[c] = run.pose[a];
+                            seen_erun[c] = ri;
+                        }
                     }
                 }
             }
         }
         if gamma > 0.0 && !arcs.is_empty() {
-            for (u, e) in self.unexplained.iter_mut().zip(&explained) {
-                *u = !e;
+            let k = min_poses.max(1);
+            for (u, &e) in self.unexplained.iter_mut().zip(&self.explained_poses) {
+                *u = e < k;
             }
         }
     }
@@ -661,23 +677,31 @@ mod tests {
             arcs: vec![0; 4],
             arc_poses: vec![0; 4],
             arc_share: vec![0.0; 4],
+            explained_arcs: vec![0; 4],
+            explained_poses: vec![0; 4],
             unexplained: vec![false; 4],
         };
         assert_eq!(map.binary(), vec![true; 4]);
         let mut off = map.clone();
-        off.explain(std::slice::from_ref(&arcs), 0.0);
+        off.explain(std::slice::from_ref(&arcs), 0.0, 1);
         assert_eq!(off.binary(), vec![true; 4]);
         assert_eq!(off.arcs, vec![2, 2, 1, 0]);
         assert_eq!(off.arc_poses, vec![2, 2, 1, 0]);
         let mut on = map.clone();
-        on.explain(std::slice::from_ref(&arcs), params.arc_explain);
+        on.explain(std::slice::from_ref(&arcs), params.arc_explain, 1);
         assert_eq!(on.binary(), vec![true, false, true, false]);
+        assert_eq!(on.explained_arcs, vec![2, 0, 1, 0]);
+        assert_eq!(on.explained_poses, vec![2, 0, 1, 0]);
+        // two poses required: cell 2 explains pose 0's echo only
+        let mut two = map.clone();
+        two.explain(std::slice::from_ref(&arcs), params.arc_explain, 2);
+        assert_eq!(two.binary(), vec![true, false, false, false]);
         assert!((on.arc_share[1] - 0.04f64.powi(2)).abs() < 1e-12);
         // an unexplained cell's soft value is capped at η
         assert!(on.probs()[1] <= params.eta() && on.probs()[0] > params.eta());
         // without rings (no sight model) nothing is judged
         let mut none = map;
-        none.explain(&[], params.arc_explain);
+        none.explain(&[], params.arc_explain, 1);
         assert_eq!(none.binary(), vec![true; 4]);
     }
 

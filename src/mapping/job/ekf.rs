@@ -5,7 +5,8 @@
 //! after each run; with several runs each run is also mapped alone by a fresh filter.
 //! Files: `ekf.*` (soft map p, YAML thresholds η and 1 − η), `ekf_binary.*`, `ekf_mean.*`
 //! ([`mean_grey`]), `ekf_std.*` ([`std_grey`]), `ekf_rrcs.csv` (row, col, x_m, y_m, mean_m,
-//! std_m, p, occupied, arcs, arc_poses, arc_share: the arc explanation's counts,
+//! std_m, p, occupied, arcs, arc_poses, arc_share, explained_arcs, explained_poses: the arc
+//! explanation's counts,
 //! [`EkfMap::explain`]), `reference.*` and `metrics.json` (with the EKF section
 //! [`EkfReport`]: parameters, η, kernel half-width, work statistics per run, covariance
 //! bytes).
@@ -155,7 +156,7 @@ fn filter_runs(
     let judged =
         |f: &dyn crate::mapping::ekf::RrcsFilter, judges: &[GhostJudge<'_>], arcs: &[EchoArcs]| {
             let mut m = EkfMap::judged(f, spec.rows, spec.cols, params, judges);
-            m.explain(arcs, params.arc_explain);
+            m.explain(arcs, params.arc_explain, params.explain_poses);
             m
         };
     let mut done = 0;
@@ -241,13 +242,13 @@ fn write_ekf_files(out: &Path, spec: &GridSpec, map: &EkfMap, params: &EkfValid)
         .collect();
     output::write_map_files(out, "ekf_std", spec, &sg, 0.65, 0.196)?;
     let mut csv =
-        String::from("row,col,x_m,y_m,mean_m,std_m,p,occupied,arcs,arc_poses,arc_share\n");
+        String::from("row,col,x_m,y_m,mean_m,std_m,p,occupied,arcs,arc_poses,arc_share,explained_arcs,explained_poses\n");
     for r in 0..spec.rows {
         for c in 0..spec.cols {
             let i = r * spec.cols + c;
             let ctr = spec.center(r, c);
             csv.push_str(&format!(
-                "{r},{c},{:.4},{:.4},{:.6e},{:.6e},{:.6},{},{},{},{:.4e}\n",
+                "{r},{c},{:.4},{:.4},{:.6e},{:.6e},{:.6},{},{},{},{:.4e},{},{}\n",
                 ctr.x,
                 ctr.y,
                 map.mean[i],
@@ -256,7 +257,9 @@ fn write_ekf_files(out: &Path, spec: &GridSpec, map: &EkfMap, params: &EkfValid)
                 bin[i] as u8,
                 map.arcs[i],
                 map.arc_poses[i],
-                map.arc_share[i]
+                map.arc_share[i],
+                map.explained_arcs[i],
+                map.explained_poses[i]
             ));
         }
     }
