@@ -879,7 +879,7 @@ fn physics_scenes_predictive_chain_prior() {
 /// seed + 1 (2.32: signal energy, RMS delay spread); office 1623 s, FAIL (2.32) and FAIL
 /// (5.41). Unmet (docs/calibrate.md, "the physics scenes with walls free").
 #[test]
-#[ignore = "unmet: corridor passes its own scene (1.50) but fails seed+1 (2.32), office fails both (2.32, 5.41); about 30 min on 2 shared cores, 60 at load 15"]
+#[ignore = "unmet: corridor passes its own scene (1.50) but fails seed+1 (2.32), office fails both (2.32, 5.41); calibrations 1788 + 1623 s at load 14-17 (about 1 h)"]
 fn physics_scenes_predictive_walls() {
     assert_predictive(&physics_predictive(
         3000,

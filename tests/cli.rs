@@ -464,6 +464,15 @@ fn out_of_range_flags_give_one_clear_line() {
     ];
     let reproduce = ["reproduce", "--out", o];
     let experiment = ["experiment", "fig5", "--out", o];
+    let calibrate = [
+        "calibrate",
+        "--energy",
+        "e.parquet",
+        "--campaign",
+        c,
+        "--out",
+        o,
+    ];
     let cases: Vec<(&[&str], &[&str], &str)> = vec![
         (&fit, &["--bootstrap", "0"], "--bootstrap"),
         (&cluster, &["--k-max", "0"], "--k-max"),
@@ -481,6 +490,12 @@ fn out_of_range_flags_give_one_clear_line() {
         (&map, &["--pose-noise-deg", "NaN"], "--pose-noise-deg"),
         (&map, &["--ekf", "sparse"], "--ekf"),
         (&map, &["--method", "ogb"], "--method"),
+        (&map, &["--og-credit-depth", "-1"], "--og-credit-depth"),
+        (&map, &["--og-credit-depth", "nan"], "--og-credit-depth"),
+        (&map, &["--og-bound-silent", "maybe"], "--og-bound-silent"),
+        (&map, &["--ekf-explain-poses", "0"], "--ekf-explain-poses"),
+        (&calibrate, &["--ridge", "lasso"], "--ridge"),
+        (&calibrate, &["--walls", "--prior", "p.toml"], "--walls"),
         (&extract, &["--margin-db", "-1"], "--margin-db"),
         (&extract, &["--margin-db", "inf"], "--margin-db"),
         (&extract, &["--dynamic-range-db", "0"], "--dynamic-range-db"),

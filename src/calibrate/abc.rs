@@ -414,8 +414,8 @@ fn insample_r2(features: &[Vec<f64>], theta: &[Vec<f64>]) -> Vec<f64> {
 /// Cross-validated squared errors of the projection: `k`-fold, row i in fold i mod k,
 /// each fold predicted by the projection (standardisation and ridge fit) fitted on the
 /// other folds, for every relative penalty of `grid`. Returns per grid entry and
-/// parameter the sum of squared held-out errors; None when a fold's fit fails or there
-/// are fewer than 2k rows.
+/// parameter the sum of squared held-out errors (+∞ for a penalty whose fit fails on some
+/// fold); None when there are fewer than 2k rows.
 fn cv_errors(
     features: &[Vec<f64>],
     theta: &[Vec<f64>],
@@ -441,7 +441,12 @@ fn cv_errors(
                 .collect::<Vec<_>>(),
         );
         for (g, c) in grid.iter().enumerate() {
-            let beta = Projection::ridge(&x, &tt, &vec![*c; p]).ok()?;
+            // a penalty whose fit fails on some fold (collinear statistics at a small
+            // penalty) is out of the choice: +∞, the other penalties still compete
+            let Ok(beta) = Projection::ridge(&x, &tt, &vec![*c; p]) else {
+                sse[g].iter_mut().for_each(|e| *e = f64::INFINITY);
+                continue;
+            };
             let pred = &xt * &beta;
             for (r, &i) in test.iter().enumerate() {
                 for kk in 0..p {
@@ -475,7 +480,10 @@ fn heldout_r2(features: &[Vec<f64>], theta: &[Vec<f64>], k: usize, c: f64) -> Ve
         Some(sse) => sse[0]
             .iter()
             .zip(total_ss(theta))
-            .map(|(e, t)| 1.0 - e / t.max(1e-300))
+            .map(|(e, t)| match e.is_finite() {
+                true => 1.0 - e / t.max(1e-300),
+                false => f64::NAN,
+            })
             .collect(),
     }
 }
@@ -503,7 +511,11 @@ fn choose_ridge(features: &[Vec<f64>], theta: &[Vec<f64>], ridge: Ridge) -> (Vec
                     best = g;
                 }
             }
-            (grid[best], 1.0 - sse[best][k] / tot[k].max(1e-300))
+            match sse[best][k].is_finite() {
+                true => (grid[best], 1.0 - sse[best][k] / tot[k].max(1e-300)),
+                // no penalty of the grid could be fitted on every fold
+                false => (FIXED_RIDGE, f64::NAN),
+            }
         })
         .unzip()
 }
@@ -941,18 +953,21 @@ mod tests {
             ridge: Ridge::Cv,
         };
         let obs = vec![0.5, -1.0];
-        let a = apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap();
+        // explicit 1- and 2-thread pools: the global pool may itself have one thread
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap())
+        };
+        let a = run(2);
         for (k, want) in [0.5, -1.0].iter().enumerate() {
             let x: Vec<f64> = a.adjusted.iter().map(|t| t[k]).collect();
             let m = weighted_quantile(&x, &a.weights, 0.5);
             assert!((m - want).abs() < 0.1, "{k}: {m}");
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let b = pool.install(|| apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap());
-        assert_eq!(a, b);
+        assert_eq!(a, run(1));
     }
 
     #[test]

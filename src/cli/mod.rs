@@ -329,7 +329,7 @@ pub struct MapArgs {
     /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
     /// at most this far (m, >= 0) behind the visibility polygon (default: the occlusion
     /// guard, every visible cell).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub og_credit_depth: Option<f64>,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
@@ -349,7 +349,7 @@ pub struct MapArgs {
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().arc_explain, value_parser = ranges::probability)]
     pub ekf_arc_explain: f64,
     /// EKF arc explanation: distinct poses whose echoes a cell must explain to be occupied
-    /// (1: one echo suffices).
+    /// (1: one echo suffices; needs `--ekf-arc-explain` > 0).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().explain_poses, value_parser = ranges::explain_poses)]
     pub ekf_explain_poses: u32,
     /// Pose noise given to the mapper: position standard deviation per axis, m.

@@ -389,7 +389,8 @@ impl<'a> Lab<'a> {
     }
 
     /// Map every case with a progress bar labelled `label`. Each map is made once per
-    /// process: the data of the cases not yet mapped are made first (in case order), then
+    /// process: the data of the cases not yet mapped are made first (model data in parallel,
+    /// sweeps in case order), then
     /// their maps run in parallel. A map depends only on its options, so the results do not
     /// depend on the thread count.
     pub(super) fn map_all(&mut self, label: &str, cases: &[Case]) -> Result<Vec<Mapped>> {

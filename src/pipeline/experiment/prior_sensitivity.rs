@@ -14,7 +14,7 @@ impl Lab<'_> {
     pub(super) fn prior_sensitivity(&mut self) -> Result<ExperimentResult> {
         let n = self.params.sensitivity_elements;
         let c = self.params.prior_change;
-        let factors = [1.0 - c, 1.0, 1.0 + c];
+        let factors = self.prior_factors();
         let cases = self.prior_cases();
         let done = self.map_all("prior-sensitivity", &cases)?;
         let panel = self.prior_panel(&done, factors)?;
@@ -32,14 +32,19 @@ impl Lab<'_> {
         ))
     }
 
+    /// The factors the priors are scaled by: 1 − c, 1, 1 + c (c = `prior_change`).
+    fn prior_factors(&self) -> [f64; 3] {
+        let c = self.params.prior_change;
+        [1.0 - c, 1.0, 1.0 + c]
+    }
+
     /// Model data at N = `sensitivity_elements`, every seed: the OG and the EKF with their
     /// prior scaled by each factor 1 − c, 1, 1 + c.
     pub(super) fn prior_cases(&self) -> Vec<Case> {
         let n = self.params.sensitivity_elements;
-        let c = self.params.prior_change;
         let mut cases = Vec::new();
         for s in self.seeds() {
-            for f in [1.0 - c, 1.0, 1.0 + c] {
+            for f in self.prior_factors() {
                 let mut og = self.base_case(DataSource::Model(s), n, "og");
                 og.og_prior = self.params.og.prior * f;
                 let mut ekf = self.base_case(DataSource::Model(s), n, "ekf");
