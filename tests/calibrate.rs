@@ -761,6 +761,23 @@ fn physics_predictive(
         let (e, e2) = (dir.join("a/energy.parquet"), dir.join("b/energy.parquet"));
         let cal = dir.join("cal.toml");
         let t1 = Instant::now();
+        let mut args: Vec<String> = [
+            "calibrate",
+            "--energy",
+            &s(&e),
+            "--campaign",
+            &s(&c.path),
+            "--out",
+            &s(&cal),
+            "--simulations",
+            &sims.to_string(),
+            "--population",
+            &pop.to_string(),
+            "--seed",
+            "5",
+        ]
+        .map(String::from)
+        .to_vec();
         if chain_prior {
             let em = pradar::energy::EnergyMatrix::read(&e).unwrap();
             let a = pradar::pipeline::analyse(&c, &em, &dir.join("a"), false).unwrap();
@@ -772,48 +789,11 @@ fn physics_predictive(
             }
             let pp = dir.join("prior.toml");
             m.save(&pp).unwrap();
-            run(
-                &[
-                    "calibrate",
-                    "--energy",
-                    &s(&e),
-                    "--campaign",
-                    &s(&c.path),
-                    "--out",
-                    &s(&cal),
-                    "--simulations",
-                    &sims.to_string(),
-                    "--population",
-                    &pop.to_string(),
-                    "--seed",
-                    "5",
-                    "--prior",
-                    &s(&pp),
-                ]
-                .map(String::from),
-                None,
-            );
+            args.extend(["--prior".to_string(), s(&pp)]);
+            run(&args, None);
         } else if walls {
-            run(
-                &[
-                    "calibrate",
-                    "--energy",
-                    &s(&e),
-                    "--campaign",
-                    &s(&c.path),
-                    "--out",
-                    &s(&cal),
-                    "--simulations",
-                    &sims.to_string(),
-                    "--population",
-                    &pop.to_string(),
-                    "--seed",
-                    "5",
-                    "--walls",
-                ]
-                .map(String::from),
-                None,
-            );
+            args.push("--walls".to_string());
+            run(&args, None);
         } else {
             calibrate(&e, &c.path, &cal, sims, pop, 5, None, None);
         }
