@@ -496,32 +496,28 @@ impl EkfMap {
             .zip(&self.discount)
             .map(|(&m, &d)| (m - d).max(0.0))
             .collect();
-        let mut last_pose = vec![u32::MAX; n];
-        let mut seen_run = vec![usize::MAX; n];
-        let mut last_epose = vec![u32::MAX; n];
-        let mut seen_erun = vec![usize::MAX; n];
+        // the (run, pose) each count saw last per cell: a pose's arcs are consecutive in a
+        // run, so a new pair is a new distinct pose (1 to add), a repeat is not (0)
+        let mut last_arc = vec![(usize::MAX, u32::MAX); n];
+        let mut last_explained = vec![(usize::MAX, u32::MAX); n];
+        let new_pose = |last: &mut [(usize, u32)], c: usize, key: (usize, u32)| -> u32 {
+            u32::from(std::mem::replace(&mut last[c], key) != key)
+        };
         for (ri, run) in arcs.iter().enumerate() {
             for a in 0..run.len() {
+                let key = (ri, run.pose[a]);
                 let es = run.ptr[a]..run.ptr[a + 1];
                 let share = |e: usize| run.coef[e] as f64 * x[run.cell[e] as usize].powi(2);
                 let max = es.clone().map(share).fold(0.0f64, f64::max);
                 for e in es {
                     let c = run.cell[e] as usize;
                     self.arcs[c] += 1;
-                    if last_pose[c] != run.pose[a] || seen_run[c] != ri {
-                        self.arc_poses[c] += 1;
-                        last_pose[c] = run.pose[a];
-                        seen_run[c] = ri;
-                    }
+                    self.arc_poses[c] += new_pose(&mut last_arc, c, key);
                     let rel = if max > 0.0 { share(e) / max } else { 1.0 };
                     self.arc_share[c] = self.arc_share[c].max(rel);
                     if share(e) >= gamma * max {
                         self.explained_arcs[c] += 1;
-                        if last_epose[c] != run.pose[a] || seen_erun[c] != ri {
-                            self.explained_poses[c] += 1;
-                            last_epose[c] = run.pose[a];
-                            seen_erun[c] = ri;
-                        }
+                        self.explained_poses[c] += new_pose(&mut last_explained, c, key);
                     }
                 }
             }
