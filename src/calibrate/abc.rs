@@ -105,17 +105,20 @@ pub struct AbcOptions {
     pub ridge: Ridge,
 }
 
-/// The ridge penalty of the semi-automatic projection (`--ridge`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The ridge penalty of the semi-automatic projection (`--ridge`; no effect with the MMD).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Ridge {
     /// λ = 1e-3·n for every parameter (issue 19).
+    #[value(name = "fixed", help = None::<&str>)]
     Fixed,
     /// λ_k = c_k·n per parameter, c_k from [`RIDGE_GRID`] by 5-fold cross-validation on
     /// the particles the projection is fitted on (issue 30).
+    #[value(name = "cv", help = None::<&str>)]
     Cv,
     /// As [`Ridge::Cv`], and a parameter whose projection's held-out R² is ≤ 0 (it
     /// predicts its parameter no better than the mean) is left out of the distance (all
     /// kept when every R² is ≤ 0); it stays in the regression adjustment.
+    #[value(name = "cv-drop", help = None::<&str>)]
     CvDrop,
 }
 

@@ -94,8 +94,8 @@ pub mod mmd;
 pub mod params;
 pub mod summaries;
 
-pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior};
-pub use params::{CalibrateParams, CalibrateValid, Distance, RidgeChoice};
+pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior, Ridge};
+pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
 use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
@@ -369,11 +369,7 @@ pub fn calibrate(
         } else {
             abc::DistanceKind::Projected
         },
-        ridge: match params.ridge {
-            RidgeChoice::Fixed => abc::Ridge::Fixed,
-            RidgeChoice::Cv => abc::Ridge::Cv,
-            RidgeChoice::CvDrop => abc::Ridge::CvDrop,
-        },
+        ridge: params.ridge,
     };
     let stat_ctx = crate::check::context(energy);
     // issue 30: the check statistics' quantiles appended to the pooled summaries
@@ -449,9 +445,9 @@ pub fn calibrate(
                     ""
                 },
                 match params.ridge {
-                    RidgeChoice::Fixed => "",
-                    RidgeChoice::Cv => ", ridge by cross-validation",
-                    RidgeChoice::CvDrop => {
+                    Ridge::Fixed => "",
+                    Ridge::Cv => ", ridge by cross-validation",
+                    Ridge::CvDrop => {
                         ", ridge by cross-validation, uninformative projections dropped"
                     }
                 },

@@ -18,9 +18,10 @@
 //!   (`--distance summaries` only: the MMD has no summaries to regress on);
 //! * `distance` — [`Distance::SummariesQuantiles`] (default), [`Distance::Summaries`]
 //!   or [`Distance::Mmd`];
-//! * `ridge` — the projection's ridge penalty, [`RidgeChoice::Fixed`] (default) or
-//!   [`RidgeChoice::Cv`] or [`RidgeChoice::CvDrop`] (no effect with the MMD).
+//! * `ridge` — the projection's ridge penalty, [`Ridge::Fixed`] (default) or
+//!   [`Ridge::Cv`] or [`Ridge::CvDrop`] (no effect with the MMD).
 
+use super::abc::Ridge;
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 
@@ -40,22 +41,6 @@ pub enum Distance {
     /// ([`mmd`](super::mmd), issue 30).
     #[value(name = "mmd", help = None::<&str>)]
     Mmd,
-}
-
-/// How the semi-automatic projection's ridge penalty is chosen (`--ridge`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum RidgeChoice {
-    /// λ = 1e-3·n for every parameter (issue 19).
-    #[value(name = "fixed", help = None::<&str>)]
-    Fixed,
-    /// λ per parameter by 5-fold cross-validation over 1e-3·n … 1e3·n at every refit
-    /// ([`abc::Ridge::Cv`](super::abc::Ridge::Cv), issue 30).
-    #[value(name = "cv", help = None::<&str>)]
-    Cv,
-    /// As `cv`, and a parameter whose projection's held-out R² is ≤ 0 is left out of the
-    /// distance ([`abc::Ridge::CvDrop`](super::abc::Ridge::CvDrop)).
-    #[value(name = "cv-drop", help = None::<&str>)]
-    CvDrop,
 }
 
 /// The largest population N (the first generation alone is N simulations, and the kernel
@@ -86,7 +71,7 @@ pub struct CalibrateParams {
     /// The distance.
     pub distance: Distance,
     /// The projection's ridge penalty.
-    pub ridge: RidgeChoice,
+    pub ridge: Ridge,
 }
 
 impl Default for CalibrateParams {
@@ -100,7 +85,7 @@ impl Default for CalibrateParams {
             cull: 1e-3,
             adjust: true,
             distance: Distance::SummariesQuantiles,
-            ridge: RidgeChoice::Fixed,
+            ridge: Ridge::Fixed,
         }
     }
 }

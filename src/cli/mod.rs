@@ -218,7 +218,7 @@ pub struct CalibrateArgs {
     /// by 5-fold cross-validation over 1e-3·n … 1e3·n at every refit) or `cv-drop` (as
     /// `cv`, parameters whose held-out R² is ≤ 0 left out of the distance).
     #[arg(long, value_enum, default_value = "fixed")]
-    pub ridge: pradar::calibrate::RidgeChoice,
+    pub ridge: pradar::calibrate::Ridge,
 }
 
 // `pradar check`
