@@ -548,6 +548,7 @@ fn scalable_against_dense(strict: bool) {
         observable: observable_region(&[&l.model], &l.layout),
         building: pradar::mapping::job::building_region(&l.layout, &reference),
         objects: None,
+        edge_band: Vec::new(),
     };
     let dp = EkfParams {
         variant: EkfVariant::Dense,

@@ -540,6 +540,7 @@ fn two_trajectories_fused_beat_either_alone() {
         observable: observable_region(&[&loaded[0].model, &loaded[1].model], &loaded[0].layout),
         building: pradar::mapping::job::building_region(&loaded[0].layout, &reference),
         objects: None,
+        edge_band: Vec::new(),
     };
     let sc = score(&f, &reference, &region);
     assert!((sc.observable.psi - fused).abs() < 1e-12);

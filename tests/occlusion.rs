@@ -383,6 +383,97 @@ fn both_mappers_map_the_building_and_leave_the_outside_free() {
     assert!(failures.is_empty(), "NOT MET:\n{}", failures.join("\n"));
 }
 
+/// Issue 31's (Maps II) must-show for both mappers with their defaults on the corridor and
+/// the office at N = 16 and 100, scored against the three-class reference (structure,
+/// the simulator's objects, free; the band of cells a wall on a grid line touches from
+/// the other side ignored, `mapping::metrics`): over the building fewer wrong cells than
+/// the all-free map; observable walls found within one cell ≥ 0.85; ≤ 5 % of the room's
+/// free cells (building) and ≤ 5 % of the cells beyond the walls (whole map) marked
+/// occupied; F1 within one cell (building) above the boresight baseline's, and ψ
+/// (layout-only, building) below it. Prints the grid (✓ met, ✗ unmet) and lists the misses.
+/// Measured (defaults): 37 of 48 — the OG misses observable walls 0.790 / 0.600 (corridor
+/// and office N = 16), the office N = 100's beyond the walls (7.0 %) and ψ in three scenes
+/// (8.34 / 7.70 / 3.82 vs 7.87 / 7.52 / 3.55); the EKF misses observable walls
+/// 0.812 / 0.809 (N = 16), F1(1) on the corridor N = 16 (0.588 vs 0.599) and ψ on the
+/// corridor (9.70 / 8.39). Both are below the all-free map over the building in every scene
+/// (OG 260 / 235 / 209 / 156, EKF 311 / 283 / 226 / 197 vs 364 / 364 / 293 / 293). The
+/// ghost and fig6 are their own tests.
+#[test]
+#[ignore = "unmet: 37 of 48 (OG observable walls 0.790/0.600 at N = 16, office N = 100 beyond the walls 7.0 %, psi vs boresight in 3 of 4 scenes; EKF observable walls 0.812/0.809 at N = 16, corridor N = 16 F1(1) 0.588 vs 0.599, psi on the corridor)"]
+fn maps_ii_must_show_on_the_three_class_reference() {
+    let mut failures = Vec::new();
+    let mut met = 0;
+    let mut total = 0;
+    for (name, n, figs) in figures() {
+        let bs = &figs["og-boresight"];
+        let t = |j: &Value, region: &str, k: &str| f(j, &["metrics", "three_class", region, k]);
+        for method in ["og", "ekf"] {
+            let j = &figs[method];
+            let checks = [
+                (
+                    "below all-free",
+                    t(j, "building", "wrong"),
+                    t(j, "building_all_free", "wrong"),
+                    t(j, "building", "wrong") < t(j, "building_all_free", "wrong"),
+                ),
+                (
+                    "observable walls",
+                    t(j, "observable", "walls_found_1"),
+                    0.85,
+                    t(j, "observable", "walls_found_1") >= 0.85,
+                ),
+                (
+                    "room",
+                    t(j, "building", "free_marked_occupied"),
+                    0.05,
+                    t(j, "building", "free_marked_occupied") <= 0.05,
+                ),
+                (
+                    "beyond",
+                    t(j, "whole", "beyond_marked_occupied"),
+                    0.05,
+                    t(j, "whole", "beyond_marked_occupied") <= 0.05,
+                ),
+                (
+                    "F1(1) vs boresight",
+                    t(j, "building", "f1_1"),
+                    t(bs, "building", "f1_1"),
+                    t(j, "building", "f1_1") > t(bs, "building", "f1_1"),
+                ),
+                (
+                    "psi vs boresight",
+                    f(j, &["metrics", "building", "psi"]),
+                    f(bs, &["metrics", "building", "psi"]),
+                    f(j, &["metrics", "building", "psi"]) < f(bs, &["metrics", "building", "psi"]),
+                ),
+            ];
+            let grid: Vec<String> = checks
+                .iter()
+                .map(|(what, v, bound, ok)| {
+                    format!("{what} {v:.3} ({bound:.3}) {}", if *ok { "✓" } else { "✗" })
+                })
+                .collect();
+            eprintln!("MUST-SHOW {name} N={n} {method}: {}", grid.join(" | "));
+            for (what, v, bound, ok) in checks {
+                total += 1;
+                if ok {
+                    met += 1;
+                } else {
+                    failures.push(format!(
+                        "{name} N={n} {method}: {what} {v:.3} vs {bound:.3}"
+                    ));
+                }
+            }
+        }
+    }
+    eprintln!("MUST-SHOW met {met} of {total}");
+    assert!(
+        failures.is_empty(),
+        "NOT MET ({met} of {total} met):\n{}",
+        failures.join("\n")
+    );
+}
+
 /// The ghost scene: the office with a strong reflector seen only through the north wall
 /// (the image of a reflector through the wall, path seen via the wall), no clutter.
 fn ghost_scene() -> (toml::Table, [f64; 2]) {

@@ -606,6 +606,55 @@ impl Layout {
         }
         ReferenceMap { spec, cells }
     }
+
+    /// The cells a wall touches only along their edge or at a corner (the boundary band):
+    /// a cell whose closed square meets a wall that its half-open square (the
+    /// [`Layout::rasterize_on`] rule) does not cross. A wall lying exactly on a grid line is
+    /// as near to the cell on either side of it; the rasteriser gives it to the cell above
+    /// or to the right, and this band is the cell on the other side. The three-class scoring
+    /// ([`crate::mapping::metrics::evaluate_three_class`]) treats the two alike, so its
+    /// figures do not depend on that tie-break. Only cells with a reference wall cell among
+    /// their 8 neighbours can be in the band; `reference` is this layout rasterised on
+    /// `reference.spec`.
+    pub fn edge_band(&self, reference: &ReferenceMap) -> Vec<bool> {
+        let spec = reference.spec;
+        let cell_m = spec.cell_m;
+        let eps = 1e-9 * cell_m.max(1.0);
+        let lines: Vec<Line<f64>> = self.walls.iter().map(|w| w.line).collect();
+        let occupied =
+            |r: usize, c: usize| reference.cells[r * spec.cols + c] == CellClass::Occupied;
+        let mut band = vec![false; spec.len()];
+        for r in 0..spec.rows {
+            for c in 0..spec.cols {
+                if occupied(r, c) {
+                    continue;
+                }
+                let near_wall = (r.saturating_sub(1)..(r + 2).min(spec.rows)).any(|rr| {
+                    (c.saturating_sub(1)..(c + 2).min(spec.cols)).any(|cc| occupied(rr, cc))
+                });
+                if !near_wall {
+                    continue;
+                }
+                let lo = Coord {
+                    x: spec.x0_m + c as f64 * cell_m,
+                    y: spec.y0_m + r as f64 * cell_m,
+                };
+                let closed = Rect::new(
+                    Coord {
+                        x: lo.x - eps,
+                        y: lo.y - eps,
+                    },
+                    Coord {
+                        x: lo.x + cell_m + eps,
+                        y: lo.y + cell_m + eps,
+                    },
+                )
+                .to_polygon();
+                band[r * spec.cols + c] = lines.iter().any(|l| closed.intersects(l));
+            }
+        }
+        band
+    }
 }
 
 #[cfg(test)]

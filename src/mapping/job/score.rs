@@ -22,7 +22,8 @@
 //! Three-class figures ([`ThreeClassFigures`], when the run has a truth: [`super::objects`]):
 //! the same three regions scored against structure, objects and free space
 //! ([`evaluate_three_class`], definitions in [`crate::mapping::metrics`]), each beside the
-//! all-free map's. A campaign without a truth has `three_class: null`.
+//! all-free map's, with the cells a wall touches only along an edge as an ignore band
+//! ([`Layout::edge_band`]). A campaign without a truth has `three_class: null`.
 
 use super::objects::{find_truth, load_objects, Objects};
 use super::LoadedRun;
@@ -106,6 +107,9 @@ pub struct Regions {
     pub building: Vec<bool>,
     /// The truth's objects, for the three-class figures (`None`: layout classes only).
     pub objects: Option<Objects>,
+    /// The cells a wall touches only along an edge or at a corner, an ignore band of the
+    /// three-class figures ([`Layout::edge_band`]; empty: none).
+    pub edge_band: Vec<bool>,
 }
 
 /// Score a log-odds map (binary at p > 0.5) against the reference.
@@ -136,9 +140,16 @@ pub fn score_binary(bin: &[bool], reference: &ReferenceMap, regions: &Regions) -
     };
     let (free_marked_occupied, free_cells) = marked(CellClass::Free);
     let (outside_marked_occupied, outside_cells) = marked(CellClass::Outside);
+    let no_band;
+    let band = if regions.edge_band.is_empty() {
+        no_band = vec![false; bin.len()];
+        &no_band
+    } else {
+        &regions.edge_band
+    };
     let three_class = regions.objects.as_ref().map(|o| {
         let e = |m: &[bool], region: &[bool]| {
-            evaluate_three_class(m, &reference.cells, &o.cells, region, rows, cols)
+            evaluate_three_class(m, &reference.cells, band, &o.cells, region, rows, cols)
         };
         ThreeClassFigures {
             objects: o.cells.len(),
@@ -253,6 +264,7 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
     Ok(Regions {
         observable: observable_region(&refs, layout),
         building: building_region(layout, reference),
+        edge_band: layout.edge_band(reference),
         objects,
     })
 }
