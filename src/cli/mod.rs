@@ -214,10 +214,11 @@ pub struct CalibrateArgs {
     /// per-position statistics' distributions, issue 30).
     #[arg(long, value_enum, default_value = "summaries-quantiles")]
     pub distance: pradar::calibrate::Distance,
-    /// The summaries' projection's ridge penalty: `fixed` (1e-3·n) or `cv` (per parameter
-    /// by 5-fold cross-validation over 1e-3·n … 1e3·n at every refit) or `cv-drop` (as
-    /// `cv`, parameters whose held-out R² is ≤ 0 left out of the distance).
-    #[arg(long, value_enum, default_value = "fixed")]
+    /// The summaries' projection's ridge penalty: `cv` (per parameter by 5-fold
+    /// cross-validation over 1e-3·n … 1e3·n at every refit), `fixed` (1e-3·n, issue 19)
+    /// or `cv-drop` (as `cv`, parameters whose held-out R² is ≤ 0 left out of the
+    /// distance).
+    #[arg(long, value_enum, default_value = "cv")]
     pub ridge: pradar::calibrate::Ridge,
 }
 
