@@ -20,8 +20,8 @@
 //!   or [`Distance::Mmd`];
 //! * `ridge` — the projection's ridge penalty, [`Ridge::Cv`] (default: issue 19's fixed
 //!   penalty, [`Ridge::Fixed`], gives 95 % intervals that cover d_c and the rays per
-//!   cluster in only 16 of 20 environments, `docs/calibrate.md`) or [`Ridge::Fixed`] or
-//!   [`Ridge::CvDrop`] (no effect with the MMD).
+//!   cluster in only 16 of 20 environments, `docs/calibrate.md`) or [`Ridge::CvDrop`]
+//!   (no effect with the MMD).
 
 use super::abc::Ridge;
 use crate::error::{Error, Result};

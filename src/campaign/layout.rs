@@ -613,7 +613,9 @@ impl Layout {
     /// as near to the cell on either side of it; the rasteriser gives it to the cell above
     /// or to the right, and this band is the cell on the other side. The three-class scoring
     /// ([`crate::mapping::metrics::evaluate_three_class`]) treats the two alike, so its
-    /// figures do not depend on that tie-break. Only cells with a reference wall cell among
+    /// figures do not depend on that tie-break along a wall (at a convex corner the cell
+    /// the corner point is given to keeps a wall cell, not a band cell, across each
+    /// line: there the tie-break still counts). Only cells with a reference wall cell among
     /// their 8 neighbours can be in the band; `reference` is this layout rasterised on
     /// `reference.spec`.
     pub fn edge_band(&self, reference: &ReferenceMap) -> Vec<bool> {
