@@ -202,6 +202,26 @@ pub(crate) fn median_mad(col: &[f64]) -> (f64, f64) {
     (m, if sd > 1e-12 { sd } else { 1.0 })
 }
 
+/// XᵀX and XᵀΘ of a design X and the parameters Θ, and n (the rows): what every ridge
+/// penalty's solve shares.
+struct NormalEquations {
+    xtx: DMatrix<f64>,
+    xty: DMatrix<f64>,
+    n: usize,
+}
+
+impl NormalEquations {
+    fn new(x: &DMatrix<f64>, theta: &[Vec<f64>]) -> NormalEquations {
+        let n = x.nrows();
+        let p = theta.first().map_or(0, Vec::len);
+        NormalEquations {
+            xtx: x.transpose() * x,
+            xty: x.transpose() * DMatrix::from_fn(n, p, |i, k| theta[i][k]),
+            n,
+        }
+    }
+}
+
 impl Projection {
     /// Median/MAD of each raw summary over `features`.
     fn standardisation(features: &[Vec<f64>]) -> Projection {
@@ -234,10 +254,14 @@ impl Projection {
     /// Ridge slopes of `theta` on the design `x`, column k with penalty c_k·n on the
     /// slopes (not the intercept).
     fn ridge(x: &DMatrix<f64>, theta: &[Vec<f64>], c: &[f64]) -> Result<DMatrix<f64>> {
-        let (n, m1) = (x.nrows(), x.ncols());
+        Projection::ridge_solve(&NormalEquations::new(x, theta), c)
+    }
+
+    /// [`Projection::ridge`] from the normal equations (made once for every penalty).
+    fn ridge_solve(ne: &NormalEquations, c: &[f64]) -> Result<DMatrix<f64>> {
+        let (xtx, xty, n) = (&ne.xtx, &ne.xty, ne.n);
+        let m1 = xtx.ncols();
         let p = c.len();
-        let xtx = x.transpose() * x;
-        let xty = x.transpose() * DMatrix::from_fn(n, p, |i, k| theta[i][k]);
         let mut beta = DMatrix::zeros(m1, p);
         // parameters in a row sharing a penalty share the factorisation
         let mut last: Option<(f64, nalgebra::linalg::Cholesky<f64, nalgebra::Dyn>)> = None;
@@ -389,20 +413,24 @@ struct Particle {
 /// Folds of the cross-validated R² of the projection.
 const FOLDS: usize = 5;
 
-/// R² = 1 − Σ(x − x̂)²/Σ(x − x̄)² per parameter of predictions `pred` of `theta`.
+/// R² = 1 − Σ(x − x̂)²/Σ(x − x̄)² from the residual and total sums of squares.
+fn r2(res: f64, tot: f64) -> f64 {
+    1.0 - res / tot.max(1e-300)
+}
+
+/// R² per parameter of predictions `pred` of `theta`.
 #[cfg(test)]
 fn r_squared(theta: &[Vec<f64>], pred: &[Vec<f64>]) -> Vec<f64> {
-    let n = theta.len() as f64;
-    (0..theta.first().map_or(0, Vec::len))
-        .map(|k| {
-            let m = theta.iter().map(|t| t[k]).sum::<f64>() / n;
-            let tot: f64 = theta.iter().map(|t| (t[k] - m).powi(2)).sum();
+    total_ss(theta)
+        .into_iter()
+        .enumerate()
+        .map(|(k, tot)| {
             let res: f64 = theta
                 .iter()
                 .zip(pred)
                 .map(|(t, p)| (t[k] - p[k]).powi(2))
                 .sum();
-            1.0 - res / tot.max(1e-300)
+            r2(res, tot)
         })
         .collect()
 }
@@ -436,7 +464,7 @@ fn cv_errors(
         let tf: Vec<Vec<f64>> = train.iter().map(|&i| features[i].clone()).collect();
         let tt: Vec<Vec<f64>> = train.iter().map(|&i| theta[i].clone()).collect();
         let proj = Projection::standardisation(&tf);
-        let x = proj.design(&tf);
+        let ne = NormalEquations::new(&proj.design(&tf), &tt);
         let test: Vec<usize> = (fold..n).step_by(k).collect();
         let xt = proj.design(
             &test
@@ -447,7 +475,7 @@ fn cv_errors(
         for (g, c) in grid.iter().enumerate() {
             // a penalty whose fit fails on some fold (collinear statistics at a small
             // penalty) is out of the choice: +∞, the other penalties still compete
-            let Ok(beta) = Projection::ridge(&x, &tt, &vec![*c; p]) else {
+            let Ok(beta) = Projection::ridge_solve(&ne, &vec![*c; p]) else {
                 sse[g].iter_mut().for_each(|e| *e = f64::INFINITY);
                 continue;
             };
@@ -485,7 +513,7 @@ fn heldout_r2(features: &[Vec<f64>], theta: &[Vec<f64>], k: usize, c: f64) -> Ve
             .iter()
             .zip(total_ss(theta))
             .map(|(e, t)| match e.is_finite() {
-                true => 1.0 - e / t.max(1e-300),
+                true => r2(*e, t),
                 false => f64::NAN,
             })
             .collect(),
@@ -516,7 +544,7 @@ fn choose_ridge(features: &[Vec<f64>], theta: &[Vec<f64>], ridge: Ridge) -> (Vec
                 }
             }
             match sse[best][k].is_finite() {
-                true => (grid[best], 1.0 - sse[best][k] / tot[k].max(1e-300)),
+                true => (grid[best], r2(sse[best][k], tot[k])),
                 // no penalty of the grid could be fitted on every fold
                 false => (FIXED_RIDGE, f64::NAN),
             }
@@ -813,24 +841,42 @@ mod tests {
             .collect())
     }
 
-    #[test]
-    fn recovers_a_toy_mean_and_is_deterministic() {
+    /// The toy parameters the toy runs observe.
+    const TOY_TRUTH: [f64; 2] = [0.5, -1.0];
+
+    /// APMC on the toy model (box prior [−2, 2]², [`TOY_TRUTH`] observed, seed 3, the
+    /// projected distance) with this budget, population, kept particles and ridge, on a
+    /// pool of `threads` threads.
+    fn toy_apmc(
+        (simulations, population, kept): (usize, usize, usize),
+        ridge: Ridge,
+        threads: usize,
+    ) -> Posterior {
         let prior = BoxPrior {
             lo: vec![-2.0, -2.0],
             hi: vec![2.0, 2.0],
         };
         let opts = AbcOptions {
-            simulations: 4000,
-            population: 400,
-            kept: 200,
+            simulations,
+            population,
+            kept,
             min_acceptance: 0.02,
             seed: 3,
             distance: DistanceKind::Projected,
-            ridge: Ridge::Fixed,
+            ridge,
         };
-        let obs = vec![0.5, -1.0];
-        let a = apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap();
-        for (k, want) in [0.5, -1.0].iter().enumerate() {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| apmc(&prior, &TOY_TRUTH, &opts, toy, &|_, _| {}).unwrap())
+    }
+
+    #[test]
+    fn recovers_a_toy_mean_and_is_deterministic() {
+        let budget = (4000, 400, 200);
+        let a = toy_apmc(budget, Ridge::Fixed, 2);
+        for (k, want) in TOY_TRUTH.iter().enumerate() {
             let x: Vec<f64> = a.adjusted.iter().map(|t| t[k]).collect();
             let m = weighted_quantile(&x, &a.weights, 0.5);
             assert!((m - want).abs() < 0.05, "{k}: {m}");
@@ -841,12 +887,7 @@ mod tests {
             // posterior sd 0.1/√20 ≈ 0.022: the 95 % interval ≈ ±0.044
             assert!(lo < *want && hi > *want && hi - lo < 0.3, "{lo} {hi}");
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let b = pool.install(|| apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap());
-        assert_eq!(a, b);
+        assert_eq!(a, toy_apmc(budget, Ridge::Fixed, 1));
     }
 
     /// The trace's R² is held out: on statistics of pure noise the ridge fit still explains
@@ -943,35 +984,15 @@ mod tests {
 
     #[test]
     fn cv_ridge_is_deterministic_in_apmc() {
-        let prior = BoxPrior {
-            lo: vec![-2.0, -2.0],
-            hi: vec![2.0, 2.0],
-        };
-        let opts = AbcOptions {
-            simulations: 1500,
-            population: 300,
-            kept: 150,
-            min_acceptance: 0.02,
-            seed: 3,
-            distance: DistanceKind::Projected,
-            ridge: Ridge::Cv,
-        };
-        let obs = vec![0.5, -1.0];
         // explicit 1- and 2-thread pools: the global pool may itself have one thread
-        let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| apmc(&prior, &obs, &opts, toy, &|_, _| {}).unwrap())
-        };
-        let a = run(2);
-        for (k, want) in [0.5, -1.0].iter().enumerate() {
+        let budget = (1500, 300, 150);
+        let a = toy_apmc(budget, Ridge::Cv, 2);
+        for (k, want) in TOY_TRUTH.iter().enumerate() {
             let x: Vec<f64> = a.adjusted.iter().map(|t| t[k]).collect();
             let m = weighted_quantile(&x, &a.weights, 0.5);
             assert!((m - want).abs() < 0.1, "{k}: {m}");
         }
-        assert_eq!(a, run(1));
+        assert_eq!(a, toy_apmc(budget, Ridge::Cv, 1));
     }
 
     #[test]
