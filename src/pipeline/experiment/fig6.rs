@@ -54,8 +54,8 @@ impl Lab<'_> {
         }
         let mut sweeps_note = None;
         for &n in sizes {
-            if let Err(e) = self.sweeps_data(n) {
-                sweeps_note = Some(e.to_string());
+            if let Some(why) = self.sweeps_failure(n) {
+                sweeps_note = Some(why);
             }
         }
         if sweeps_note.is_none() {

@@ -233,6 +233,8 @@ pub struct Lab<'a> {
     reference: ReferenceMap,
     synth_cache: HashMap<(usize, u64), PathBuf>,
     sweeps_cache: HashMap<usize, (PathBuf, PathBuf)>,
+    /// Why the sweeps at N could not be made ([`Lab::sweeps_failure`]): not tried again.
+    sweeps_failed: HashMap<usize, String>,
     map_cache: HashMap<String, MapReport>,
     progress: Progress<'a>,
 }
@@ -263,6 +265,7 @@ impl<'a> Lab<'a> {
             reference,
             synth_cache: HashMap::new(),
             sweeps_cache: HashMap::new(),
+            sweeps_failed: HashMap::new(),
             map_cache: HashMap::new(),
             progress,
         })
@@ -347,6 +350,18 @@ impl<'a> Lab<'a> {
         let r = simulate_sweeps(&self.inputs.campaign, &self.out, elements)?;
         self.sweeps_cache.insert(elements, r.clone());
         Ok(r)
+    }
+
+    /// Why the sweeps at N elements cannot be made (the error's text), None when they can
+    /// ([`Lab::sweeps_data`]); a failure is kept, so the experiments' planning
+    /// ([`Lab::prepare`]) and the experiment itself do not simulate it twice.
+    pub(super) fn sweeps_failure(&mut self, elements: usize) -> Option<String> {
+        if let Some(why) = self.sweeps_failed.get(&elements) {
+            return Some(why.clone());
+        }
+        let why = self.sweeps_data(elements).err()?.to_string();
+        self.sweeps_failed.insert(elements, why.clone());
+        Some(why)
     }
 
     /// Take sweeps at N elements made beforehand by [`simulate_sweeps`] (same campaign,
