@@ -47,13 +47,13 @@
 //!   detection instead of the occluder), `free_floor` (a lower clamp for the log-odds) and
 //!   `credit_depth_m` (a ring's occupancy credit only to the cells at most that deep
 //!   behind the polygon, not every visible one). `bound_silent` finds more of the walls
-//!   the echoes show (office N = 16 0.600 → 0.865) but marks more cells beyond the walls
-//!   (office N = 16 4.8 → 8.3 % with `nearer`); with `credit_depth_m` = 0.05 m as well
-//!   those fall (4.3 %) but the office's building wrong cells on the layout-only
-//!   reference rise above the all-free map; no option keeps every figure the default
-//!   meets, so the defaults stay. A ghost rule ([`crate::mapping::grid::ghost`], `none` by
-//!   default) may judge every pose's increments again against the final map and replay
-//!   them. The map the occluders are confirmed against is the belief the responsibilities use, a cell being a surface when
+//!   the echoes show but marks more cells beyond the walls; with `credit_depth_m` as well
+//!   those fall, but the office's building wrong cells on the layout-only reference rise
+//!   above the all-free map; no option keeps every figure the default meets, so the
+//!   defaults stay (figures in `docs/mapping.md`). A ghost rule
+//!   ([`crate::mapping::grid::ghost`], `none` by default) may judge every pose's
+//!   increments again against the final map and replay them. The map the occluders are
+//!   confirmed against is the belief the responsibilities use, a cell being a surface when
 //!   p > max(0.5, p0): the scan's snapshot, or the previous pass's map with `passes` ≥ 2;
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
 //!   boresight ray; a cell gets l_occ if any bin the ray spends in it is detected, l_free if
