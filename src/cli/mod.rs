@@ -321,17 +321,17 @@ pub struct MapArgs {
     /// polygon: not at all (`off`, alias `false`), at its first detection (`leak`, alias
     /// `true`; interpolated from its neighbours without one), or at the nearer of that and
     /// the range interpolated from its neighbours' occluders (`nearer`).
-    #[arg(long, value_enum, default_value = "off")]
+    #[arg(long, value_enum, default_value = "nearer")]
     pub og_bound_silent: pradar::mapping::grid::SilentBound,
     /// OG (`--method og`): lowest log-odds free evidence can bring a cell to (the clamp,
     /// −10, by default: no floor).
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
     pub og_free_floor: f64,
     /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
-    /// at most this far (m, >= 0) behind the visibility polygon (default: the occlusion
-    /// guard, every visible cell).
-    #[arg(long, value_parser = ranges::non_negative, allow_negative_numbers = true)]
-    pub og_credit_depth: Option<f64>,
+    /// at most this far (m, >= 0) behind the visibility polygon (half a 0.1 m cell by
+    /// default); `guard`: every visible cell, to the occlusion guard.
+    #[arg(long, default_value = "0.05", value_parser = ranges::credit_depth, allow_negative_numbers = true)]
+    pub og_credit_depth: f64,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
     /// judged again against the final map's surfaces), aspect (occupancy needs support from
     /// poses spanning a minimum aspect) or none.

@@ -148,7 +148,10 @@ impl MapArgs {
                     free_without_occluder: self.og_free_without_occluder,
                     bound_silent: self.og_bound_silent,
                     free_floor: self.og_free_floor,
-                    credit_depth_m: self.og_credit_depth,
+                    credit_depth_m: self
+                        .og_credit_depth
+                        .is_finite()
+                        .then_some(self.og_credit_depth),
                     ghost,
                     ..Default::default()
                 },

@@ -114,6 +114,19 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
     checked(s, |v| v.is_finite() && v >= 0.0, "finite and >= 0")
 }
 
+/// `--og-credit-depth`: finite and >= 0 m, or `guard` (every visible cell: infinity, read
+/// as no depth limit by the CLI).
+pub fn credit_depth(s: &str) -> Result<f64, String> {
+    if s.trim() == "guard" {
+        return Ok(f64::INFINITY);
+    }
+    checked(
+        s,
+        |v| v.is_finite() && v >= 0.0,
+        "finite and >= 0, or `guard`",
+    )
+}
+
 /// `--ghost-aspect-lobes`: in [0, 36] (`GhostParams` aspect_lobes).
 pub fn aspect_lobes(s: &str) -> Result<f64, String> {
     checked(
@@ -173,6 +186,10 @@ mod tests {
         assert!(positive("0").is_err() && positive("inf").is_err() && positive("1e-3").is_ok());
         assert!(non_negative("-1").is_err() && non_negative("0").is_ok());
         assert!(non_negative("NaN").is_err());
+        assert_eq!(credit_depth("guard"), Ok(f64::INFINITY));
+        assert_eq!(credit_depth("0.05"), Ok(0.05));
+        assert!(credit_depth("inf").is_err() && credit_depth("-0.1").is_err());
+        assert!(credit_depth("NaN").is_err() && credit_depth("guards").is_err());
         assert!(dynamic_range_db("0").is_err() && dynamic_range_db("inf").is_ok());
         assert!(dynamic_range_db("NaN").is_err());
         assert_eq!(

@@ -34,23 +34,24 @@
 //!   behind the surface) are withheld, counted in [`OgStats::withheld`]; bins after the
 //!   occluder without a detection give no evidence. With `hold_echoes` (off by default)
 //!   the bins within g of a main-lobe detection before the occluder give no free evidence
-//!   either. Five options, all off by default (issue 31 "Maps II", figures in
-//!   `docs/mapping.md`): `bound_silent` (a direction without an occluder bounds the
-//!   visibility polygon instead of lying at the maximum range: `leak` at its first
-//!   detection, or interpolated from its neighbours without one; `nearer` at the nearer of
-//!   that detection and the range interpolated from its neighbours' occluders;
-//!   [`crate::mapping::grid::SilentBound`]), `free_without_occluder` (weight in [0, 1] of
-//!   the free evidence of a beam with no occluder: indoors every bearing ends at a
-//!   surface, so a beam that detects none was most likely looking at a smooth wall at
-//!   oblique incidence, whose specular echo goes elsewhere, and its silence clears that
-//!   wall), `free_end` (free evidence ends at the first main-lobe echo or the first
-//!   detection instead of the occluder), `free_floor` (a lower clamp for the log-odds) and
-//!   `credit_depth_m` (a ring's occupancy credit only to the cells at most that deep
-//!   behind the polygon, not every visible one). `bound_silent` finds more of the walls
-//!   the echoes show but marks more cells beyond the walls; with `credit_depth_m` as well
-//!   those fall, but the office's building wrong cells on the layout-only reference rise
-//!   above the all-free map; no option keeps every figure the default meets, so the
-//!   defaults stay (figures in `docs/mapping.md`). A ghost rule
+//!   either. Two rules on by default and three options off (issue 31 "Maps II", figures in
+//!   `docs/mapping.md`). On: `bound_silent = nearer` (a direction without an occluder
+//!   bounds the visibility polygon at the nearer of its first detection and the range
+//!   interpolated from its neighbours' occluders, instead of lying at the maximum range:
+//!   indoors every bearing ends at a surface, and a beam that detects none was most likely
+//!   looking at a smooth wall at oblique incidence, whose specular echo goes elsewhere, so
+//!   its free evidence must not run through that wall; `off` and `leak`, at its first
+//!   detection, are the alternatives; [`crate::mapping::grid::SilentBound`]) and
+//!   `credit_depth_m = 0.05` (a ring's occupancy credit only to the cells whose centre lies
+//!   at most half a cell behind the polygon: a cell whose centre lies further beyond the
+//!   surface does not hold it, and without the limit the guard's two bins leave a rim of
+//!   credited cells beyond every wall the polygon now reaches). Together they find the
+//!   walls the silent beams cleared without that rim; the choice is measured against the
+//!   rules before, `off` and no depth limit (same maps byte for byte), in
+//!   `docs/mapping.md`. Off: `free_without_occluder` (weight in [0, 1] of the free evidence
+//!   of a beam with no occluder), `free_end` (free evidence ends at the first main-lobe echo
+//!   or the first detection instead of the occluder) and `free_floor` (a lower clamp for
+//!   the log-odds), each measured and not kept (figures in `docs/mapping.md`). A ghost rule
 //!   ([`crate::mapping::grid::ghost`], `none` by default) may judge every pose's
 //!   increments again against the final map and replay them. The map the occluders are
 //!   confirmed against is the belief the responsibilities use, a cell being a surface when

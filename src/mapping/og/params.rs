@@ -56,7 +56,8 @@ pub struct OgParams {
     /// explained by a side lobe), in [0, 1] (1: as any other beam's).
     pub free_without_occluder: f64,
     /// How a direction without an occluder bounds the visibility polygon
-    /// ([`SilentBound`]; `off`: at the maximum range).
+    /// ([`SilentBound`]; `nearer` by default, `off`: at the maximum range, the rule before
+    /// 5 Dec 2026).
     pub bound_silent: SilentBound,
     /// Where a beam's free evidence ends (the occluder).
     pub free_end: FreeEnd,
@@ -65,8 +66,8 @@ pub struct OgParams {
     /// evidence of the beams that see it.
     pub free_floor: f64,
     /// Deepest a cell's centre may lie behind the visibility polygon and still get
-    /// occupancy credit from a range ring, m (None: the occlusion guard g, every visible
-    /// cell). A cell whose centre lies more than half a cell beyond the surface along the
+    /// occupancy credit from a range ring, m (0.05, half a 0.1 m cell, by default; None:
+    /// the occlusion guard g, every visible cell, the rule before 5 Dec 2026). A cell whose centre lies more than half a cell beyond the surface along the
     /// ray does not hold it there; the guard's extra two bins (the window kernel's
     /// half-width) keep the cells behind the surface visible, and a wall found where it was
     /// missed comes with a rim of credited cells beyond it.
@@ -91,9 +92,9 @@ impl Default for OgParams {
             hold_echoes: false,
             free_end: FreeEnd::Occluder,
             free_without_occluder: 1.0,
-            bound_silent: SilentBound::Off,
+            bound_silent: SilentBound::Nearer,
             free_floor: -10.0,
-            credit_depth_m: None,
+            credit_depth_m: Some(0.05),
             ghost: GhostParams::default(),
         }
     }
