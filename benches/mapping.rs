@@ -168,15 +168,27 @@ fn run(
     det: &Detector,
     method: Method,
 ) -> (LogOddsMap, OgStats) {
-    og_map_stats(
-        model,
-        em,
-        &OgParams::default().check().unwrap(),
-        method,
-        det,
-        &|_, _| {},
-    )
-    .unwrap()
+    run_with(model, em, det, method, &OgParams::default())
+}
+
+/// The OG's rules before 5 Dec 2026 (no silent bound, credit to every visible cell): the
+/// baseline the default is timed against in the same run.
+fn before() -> OgParams {
+    OgParams {
+        bound_silent: pradar::mapping::grid::SilentBound::Off,
+        credit_depth_m: None,
+        ..Default::default()
+    }
+}
+
+fn run_with(
+    model: &ObservationModel,
+    em: &dyn pradar::energy::EnergySource,
+    det: &Detector,
+    method: Method,
+    params: &OgParams,
+) -> (LogOddsMap, OgStats) {
+    og_map_stats(model, em, &params.check().unwrap(), method, det, &|_, _| {}).unwrap()
 }
 
 fn main() {
@@ -224,6 +236,9 @@ fn corridor(dir: &Path, crit: &mut Criterion) {
             b.iter(|| run(&l.model, &l.energy, &l.detector, method))
         });
     }
+    crit.bench_function("map corridor og (rules before 5 Dec 2026)", |b| {
+        b.iter(|| run_with(&l.model, &l.energy, &l.detector, Method::Og, &before()))
+    });
     for threads in [1, 2] {
         let (_, st) = pool(threads).install(|| run(&l.model, &l.energy, &l.detector, Method::Og));
         println!(
@@ -287,6 +302,13 @@ fn floor(dir: &Path) {
             );
             maps.push(m);
         }
+    }
+    for threads in [1, 2] {
+        let (_, st) = pool(threads).install(|| run_with(&model, &em, &det, Method::Og, &before()));
+        println!(
+            "floor og (rules before 5 Dec 2026), {threads} thread(s): {:.2} s, {} increments",
+            st.seconds, st.cell_updates,
+        );
     }
     let same = |a: &LogOddsMap, b: &LogOddsMap| {
         a.logodds
