@@ -353,6 +353,10 @@ pub struct MapArgs {
     /// (1: one echo suffices; needs `--ekf-arc-explain` > 0).
     #[arg(long, default_value_t = pradar::mapping::EkfParams::default().explain_poses, value_parser = ranges::explain_poses)]
     pub ekf_explain_poses: u32,
+    /// EKF: how a direction without an occluder bounds the visibility polygon of the
+    /// filter's sight (as `--og-bound-silent`): `off`, `leak` or `nearer`.
+    #[arg(long, value_enum, default_value = "off")]
+    pub ekf_bound_silent: pradar::mapping::grid::SilentBound,
     /// Pose noise given to the mapper: position standard deviation per axis, m.
     #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub pose_noise_m: f64,

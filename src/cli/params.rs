@@ -166,6 +166,7 @@ impl MapArgs {
                     split: self.ekf_split,
                     arc_explain: self.ekf_arc_explain,
                     explain_poses: self.ekf_explain_poses,
+                    bound_silent: self.ekf_bound_silent,
                     ..Default::default()
                 },
                 pose_noise: pradar::mapping::job::PoseNoise {

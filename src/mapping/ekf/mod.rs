@@ -22,7 +22,9 @@
 //! side lobe: leakage of an echo at another bearing, withheld by the OG too; every
 //! detection of a beam without an occluder) are dropped, except the occluder's own; and only the cells visible
 //! from the pose (depth behind the visibility polygon ≤ g) enter H — a shadowed cell's
-//! coefficient is 0. The occluders are confirmed against the filter's own binary map
+//! coefficient is 0 (a direction without an occluder leaves the polygon at the maximum
+//! range unless `bound_silent` bounds it as the OG's option does; off, measured in
+//! `docs/mapping.md`). The occluders are confirmed against the filter's own binary map
 //! before the previous pose. The cost of removing shadowed cells (measured,
 //! `docs/mapping.md`): a wall's bin is explained by the in-room part of its range ring
 //! only, so more room cells rise above μ0 than when the cells behind share it; keeping them

@@ -74,6 +74,11 @@ pub struct EkfParams {
     /// Arc explanation: distinct poses whose echoes a cell must explain to be occupied
     /// ([`crate::mapping::ekf::EkfMap::explain`]; 1: one echo suffices; ≥ 1).
     pub explain_poses: u32,
+    /// How a direction without an occluder bounds the visibility polygon of the filter's
+    /// sight ([`crate::mapping::grid::SilentBound`], as the OG's `bound_silent`; `off`: at
+    /// the maximum range): the polygon limits which cells a beam's rows and free-space
+    /// evidence reach.
+    pub bound_silent: crate::mapping::grid::SilentBound,
     /// Implementation (scalable).
     pub variant: EkfVariant,
     /// Tile side of the scalable filter, cells (4).
@@ -115,6 +120,7 @@ impl Default for EkfParams {
             split: true,
             arc_explain: ARC_EXPLAIN,
             explain_poses: 1,
+            bound_silent: crate::mapping::grid::SilentBound::Off,
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,

@@ -82,7 +82,8 @@ pub struct Occlusion {
 
 /// How a direction without an occluder (no detection not explained by a side lobe: a
 /// *silent* direction) bounds the visibility polygon (module docs, "silent directions").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
 pub enum SilentBound {
     /// At the maximum range, as if the beam had seen through everything.
     #[value(name = "off", alias = "false")]

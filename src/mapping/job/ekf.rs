@@ -149,6 +149,7 @@ fn filter_runs(
                 &inp.occlusions[i],
                 Valid::new(params.ghost),
             )
+            .with_silent_bound(params.bound_silent)
         })
     };
     let mut judges: Vec<GhostJudge<'_>> = Vec::new();
