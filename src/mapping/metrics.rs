@@ -40,9 +40,14 @@
 //!   such a wall depending on which side of the line the room is (`docs/mapping.md`);
 //! * free cells marked occupied = |M ∩ F_room| / |F_room|; beyond the walls marked occupied
 //!   = |M ∩ F_beyond| / |F_beyond|;
-//! * objects found = objects with a cell of M in their zone, of the objects with a cell in R.
+//! * objects found = objects with a cell of M in their zone, of the objects with a cell in R;
+//! * ψ (three-class) = ψ of M against S on R \ Z: the object zones are left out of both
+//!   maps' classes, so a marked object is neither a false occupied cell nor a missing free
+//!   one (DESIGN §2: objects are not counted as wrong). The band stays in: ψ is a distance,
+//!   and a wall placed one cell off costs one cell per cell whichever side it is on.
 //!
-//! The all-free map (M = ∅) has wrong cells |S|, and 0 for the rest.
+//! The all-free map (M = ∅) has wrong cells |S|, and 0 for the rest (its ψ: the occupied
+//! term is the grid's diameter).
 
 use serde::Serialize;
 
@@ -288,6 +293,8 @@ pub struct ThreeClassMetrics {
     pub structure_cells: usize,
     /// Map occupied cells.
     pub map_occupied: usize,
+    /// ψ against the structure on the region less the object zones (module docs).
+    pub psi: f64,
 }
 
 /// Figures of `map` against the three-class reference on `region`: `reference` the layout's
@@ -394,6 +401,8 @@ pub fn evaluate_three_class(
     }
     let ratio = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { 0.0 };
     let (p, r) = (ratio(m_hit, m_n), ratio(s_found, s_n));
+    let outside_zones: Vec<bool> = region.iter().zip(&zone).map(|(&r, &z)| r && !z).collect();
+    let (psi3, _, _) = psi(map, &structure, &outside_zones, rows, cols);
     ThreeClassMetrics {
         walls_found_1: r,
         precision_1: p,
@@ -408,6 +417,7 @@ pub fn evaluate_three_class(
         objects: present,
         structure_cells: s_n,
         map_occupied: m_n,
+        psi: psi3,
     }
 }
 
@@ -486,6 +496,24 @@ mod tests {
         let t = evaluate_three_class(&map, &reference, &none, &objects, &top, rows, cols);
         assert_eq!((t.objects, t.objects_found), (0, 0));
         assert_eq!(t.wrong, 3);
+        // ψ: the walls marked exactly plus the object — zero with the object's zone left
+        // out (three-class), not zero when the object counts as a false occupied cell
+        let structure: Vec<bool> = reference
+            .iter()
+            .map(|c| *c == CellClass::Occupied)
+            .collect();
+        let mut exact = structure.clone();
+        exact[at(3, 4)] = true;
+        let e = evaluate_three_class(&exact, &reference, &none, &objects, &all, rows, cols);
+        assert_eq!(e.psi, 0.0);
+        let (layout_only, _, _) = psi(&exact, &structure, &all, rows, cols);
+        assert!(layout_only > 0.3, "{layout_only}");
+        // a false room cell raises the three-class ψ too; the all-free map's occupied term
+        // is the diameter
+        exact[at(2, 1)] = true;
+        let w = evaluate_three_class(&exact, &reference, &none, &objects, &all, rows, cols);
+        assert!(w.psi > 0.1, "{}", w.psi);
+        assert!(f.psi >= (rows + cols) as f64);
     }
 
     /// The boundary band: a 4 m × 2 m room whose walls lie on the grid lines of a 0.1 m grid.

@@ -273,8 +273,8 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
 /// to its `metrics.json` or `None`): ψ, F1, F1 within one cell and the wrong-cell rate on
 /// the observable region, ψ and the wrong-cell rate on the building, the per-class errors,
 /// ψ, F1 and the wrong-cell rate on the whole map, and (with a truth) the three-class
-/// wrong cells on the building beside the all-free map's, F1 within one cell and free cells
-/// marked occupied on the building, and the objects found.
+/// wrong cells on the building beside the all-free map's, ψ, F1 within one cell and free
+/// cells marked occupied on the building, and the objects found.
 pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
     let mut t = Table::new(vec![
         Column::new("map", "map"),
@@ -295,6 +295,7 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
             "3-class wrong building (all-free)",
             "three_class_wrong_building",
         ),
+        Column::new("3-class ψ building", "three_class_psi_building"),
         Column::new("3-class F1 (1 cell) building", "three_class_f1_1_building"),
         Column::new(
             "3-class free marked occ. building",
@@ -325,6 +326,10 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
                     t.building.wrong as f64,
                     format!("{} ({})", t.building.wrong, t.building_all_free.wrong),
                 ),
+                None => Cell::missing("—"),
+            },
+            match &m.three_class {
+                Some(t) => Cell::fixed(t.building.psi, 3),
                 None => Cell::missing("—"),
             },
             match &m.three_class {
