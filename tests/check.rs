@@ -262,4 +262,35 @@ fn check_command() {
     a.extend(["--draws".into(), "1".into()]);
     let o = common::pradar_quiet(&a.iter().map(String::as_str).collect::<Vec<_>>());
     common::assert_one_line_error(&o, "--draws");
+    // --posterior: each draw's rays per cluster from a particle; a good sample around the
+    // model's value passes as the model does, a bad file or a quantity the model file
+    // lacks is one line naming it
+    let r = m.rays_per_cluster.value;
+    let post = dir.path().join("cal_posterior.csv");
+    let with_post = |text: &str, out: &str| {
+        std::fs::write(&post, text).unwrap();
+        let mut a = args(&model, &dir.path().join(out));
+        a.extend(["--posterior".into(), common::path_str(&post).to_string()]);
+        common::pradar_quiet(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let good = format!(
+        "weight,distance,rays_per_cluster,rays_per_cluster_raw\n1,0.1,{},{}\n1,0.2,{},{}\n",
+        0.9 * r,
+        0.9 * r,
+        1.1 * r,
+        1.1 * r
+    );
+    let o = with_post(&good, "check_post");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.path().join("check_post/check.csv").is_file());
+    let o = with_post(
+        "weight,distance,rays_per_cluster,rays_per_cluster_raw\n1,0.1,2\n",
+        "p1",
+    );
+    common::assert_one_line_error(&o, "cal_posterior.csv");
+    let o = with_post(
+        "weight,distance,no_such_quantity,no_such_quantity_raw\n1,0.1,2,2\n",
+        "p2",
+    );
+    common::assert_one_line_error(&o, "no_such_quantity");
 }

@@ -12,6 +12,12 @@
 //!   stream keyed by (seed, "Check", r): never the data's own seed, so a model checked
 //!   against its own `synth` output at the campaign seed does not replay it. The draws
 //!   run in parallel and are collected in order (same bytes with any thread count).
+//!   With a posterior sample (`--posterior`, `calibrate`'s final population,
+//!   [`PosteriorSample`]) draw r's free quantities are those of particle j_r, drawn by
+//!   weight from a stream keyed by (seed, r): y_r ~ p(y | θ_j), θ_j ~ p(θ | data), the
+//!   posterior predictive (Gelman, Meng & Stern 1996). Without it every draw is the model
+//!   file's (a plug-in check: the posterior medians, no parameter uncertainty), whose draws
+//!   differ less from each other than data from a model known only to its posterior do.
 //! * **Distances**, per statistic s: the measured distances D_r = KS(s(y_obs), s(y_r))
 //!   and the reference distances d_ij = KS(s(y_i), s(y_j)), i < j (R(R−1)/2 of them;
 //!   the KS distance of [`stats::ks_distance`]). Under the model the measured table is
@@ -64,6 +70,10 @@ pub struct CheckParams {
     pub seed: Option<u64>,
     /// synth's ray cull (default 1e-3, as synth).
     pub cull: f64,
+    /// A posterior sample (`calibrate`'s final population): each draw's free quantities
+    /// come from a particle drawn by weight, the rest from the model file (None: every
+    /// draw is the model file's, the plug-in check).
+    pub posterior: Option<PosteriorSample>,
 }
 
 impl Default for CheckParams {
@@ -72,7 +82,125 @@ impl Default for CheckParams {
             draws: 20,
             seed: None,
             cull: 1e-3,
+            posterior: None,
         }
+    }
+}
+
+/// A weighted sample of models' free quantities: `calibrate`'s `<stem>_posterior.csv`
+/// (`weight, distance`, then per quantity its reported value and `<name>_raw`; the
+/// reported, regression-adjusted value is the one used).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PosteriorSample {
+    /// The quantities' names (model keys, e.g. `intra_cluster_rate`, `walls.specular_gamma`).
+    pub names: Vec<String>,
+    /// Normalised weights, one per particle.
+    pub weights: Vec<f64>,
+    /// Per particle, one value per name (schema units).
+    pub values: Vec<Vec<f64>>,
+}
+
+impl PosteriorSample {
+    /// Read a posterior CSV; one clear line naming the file and the field when it is not
+    /// one (no header, a non-numeric or non-finite value, a negative weight, no particle).
+    pub fn read(path: &Path) -> Result<PosteriorSample> {
+        let bad = |what: String| Error::input(path, what);
+        let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+        let head: Vec<&str> = lines
+            .next()
+            .ok_or_else(|| bad("empty file: a header `weight,distance,...` is needed".into()))?
+            .split(',')
+            .map(str::trim)
+            .collect();
+        if head.len() < 4 || head[0] != "weight" || head[1] != "distance" {
+            return Err(bad(
+                "header: `weight,distance,<quantity>,<quantity>_raw,...` expected".into(),
+            ));
+        }
+        let cols: Vec<(usize, String)> = head
+            .iter()
+            .enumerate()
+            .skip(2)
+            .filter(|(_, h)| !h.ends_with("_raw"))
+            .map(|(i, h)| (i, h.to_string()))
+            .collect();
+        let (mut weights, mut values) = (Vec::new(), Vec::new());
+        for (row, line) in lines.enumerate() {
+            let f: Vec<&str> = line.split(',').map(str::trim).collect();
+            if f.len() != head.len() {
+                return Err(bad(format!(
+                    "row {}: {} fields, the header has {}",
+                    row + 1,
+                    f.len(),
+                    head.len()
+                )));
+            }
+            let num = |i: usize| -> Result<f64> {
+                f[i].parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        bad(format!(
+                            "row {}, {}: `{}` is not a finite number",
+                            row + 1,
+                            head[i],
+                            f[i]
+                        ))
+                    })
+            };
+            let w = num(0)?;
+            if w < 0.0 {
+                return Err(bad(format!("row {}, weight: {w} is negative", row + 1)));
+            }
+            weights.push(w);
+            values.push(
+                cols.iter()
+                    .map(|(i, _)| num(*i))
+                    .collect::<Result<Vec<f64>>>()?,
+            );
+        }
+        let total: f64 = weights.iter().sum();
+        if weights.is_empty() || total <= 0.0 {
+            return Err(bad("no particle with a positive weight".into()));
+        }
+        weights.iter_mut().for_each(|w| *w /= total);
+        Ok(PosteriorSample {
+            names: cols.into_iter().map(|(_, n)| n).collect(),
+            weights,
+            values,
+        })
+    }
+
+    /// `model` with the free quantities of particle `i`; an error names a quantity the
+    /// model file does not have.
+    pub fn model(&self, model: &ModelConfig, i: usize) -> Result<ModelConfig> {
+        let mut m = model.clone();
+        for (name, v) in self.names.iter().zip(&self.values[i]) {
+            let q = m.quantity_mut(name).ok_or_else(|| {
+                Error::param(
+                    "--posterior",
+                    format!("quantity `{name}` is not in the model file"),
+                )
+            })?;
+            q.value = *v;
+        }
+        Ok(m)
+    }
+
+    /// The particle of draw `r` (by weight, from the draw's own seed stream).
+    fn particle(&self, seed: u64, r: usize) -> usize {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM ^ 0x5041_5254); // "PART"
+        rng.set_stream(r as u64 + 1);
+        let u = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let mut acc = 0.0;
+        for (i, w) in self.weights.iter().enumerate() {
+            acc += w;
+            if u < acc {
+                return i;
+            }
+        }
+        self.weights.len() - 1
     }
 }
 
@@ -301,7 +429,13 @@ pub fn check(
         let part: Vec<Statistics> = (start..(start + chunk).min(r))
             .into_par_iter()
             .map(|i| -> Result<Statistics> {
-                let mut e = sim.energies(model, draw_seed(seed, i))?;
+                let mut e = match &params.posterior {
+                    Some(post) => sim.energies(
+                        &post.model(model, post.particle(seed, i))?,
+                        draw_seed(seed, i),
+                    )?,
+                    None => sim.energies(model, draw_seed(seed, i))?,
+                };
                 // the measured campaign's missing sweeps are missing from the draws too
                 energy
                     .meta
@@ -351,6 +485,59 @@ pub fn check(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A posterior CSV as `calibrate` writes it is read (weights normalised, the `_raw`
+    /// columns skipped), particles are drawn by weight and deterministically, and a bad
+    /// file is one line naming the file and the field.
+    #[test]
+    fn posterior_sample_reads_draws_and_refuses() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("cal_posterior.csv");
+        std::fs::write(
+            &p,
+            "weight,distance,intra_cluster_rate,intra_cluster_rate_raw,walls.specular_gamma,walls.specular_gamma_raw\n\
+             3e0,1,0.5,0.6,0.2,0.3\n\
+             1e0,2,2.0,2.1,0.4,0.5\n\
+             0,3,9.0,9.0,0.9,0.9\n",
+        )
+        .unwrap();
+        let s = PosteriorSample::read(&p).unwrap();
+        assert_eq!(s.names, ["intra_cluster_rate", "walls.specular_gamma"]);
+        assert_eq!(s.weights, [0.75, 0.25, 0.0]);
+        assert_eq!(s.values[1], [2.0, 0.4]);
+        let picks: Vec<usize> = (0..4000).map(|r| s.particle(11, r)).collect();
+        assert_eq!(
+            picks,
+            (0..4000).map(|r| s.particle(11, r)).collect::<Vec<_>>()
+        );
+        assert!(!picks.contains(&2), "a zero weight is never drawn");
+        let share = picks.iter().filter(|&&i| i == 0).count() as f64 / 4000.0;
+        assert!((share - 0.75).abs() < 0.03, "{share}");
+        // a quantity the model file lacks (Table 1 has no [walls]) is named
+        let e = s.model(&ModelConfig::table1_defaults(), 1).unwrap_err();
+        assert!(e.to_string().contains("walls.specular_gamma"), "{e}");
+        let one = PosteriorSample {
+            names: vec!["intra_cluster_rate".into()],
+            weights: vec![1.0],
+            values: vec![vec![2.0]],
+        };
+        let m = one.model(&ModelConfig::table1_defaults(), 0).unwrap();
+        assert_eq!(m.intra_cluster_rate.value, 2.0);
+        for (text, field) in [
+            ("", "empty"),
+            ("w,d,a,a_raw\n1,1,1,1\n", "header"),
+            ("weight,distance,a,a_raw\n1,1,1\n", "row 1"),
+            ("weight,distance,a,a_raw\n1,1,x,1\n", "row 1, a"),
+            ("weight,distance,a,a_raw\n-1,1,1,1\n", "weight"),
+            ("weight,distance,a,a_raw\n0,1,1,1\n", "positive weight"),
+            ("weight,distance,a,a_raw\n1,1,NaN,1\n", "row 1, a"),
+        ] {
+            std::fs::write(&p, text).unwrap();
+            let e = PosteriorSample::read(&p).unwrap_err().to_string();
+            assert!(e.contains("cal_posterior.csv") && e.contains(field), "{e}");
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
+    }
 
     fn result(measured_ks: Vec<f64>, reference_ks: Vec<f64>) -> StatResult {
         StatResult {

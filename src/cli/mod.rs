@@ -194,8 +194,9 @@ pub struct CalibrateArgs {
     #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
     pub simulations: usize,
     /// Report folder: index.html with the marginal posteriors and their correlations, and
-    /// the predictive check (`pradar check`'s table and CDFs) of the calibrated model and
-    /// of the `--chain` model.
+    /// the predictive checks (`pradar check`'s table and CDFs) of the calibrated model
+    /// (plug-in, and posterior predictive as `check --posterior`) and of the `--chain`
+    /// model.
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// The cluster chain's model file (`fit --out`), shown beside the posterior in the
@@ -246,6 +247,10 @@ pub struct CheckArgs {
     /// Exit 1 when the Bonferroni-corrected p-value is below P or a KS ratio is over 1.5.
     #[arg(long, value_name = "P", value_parser = ranges::probability)]
     pub fail_below: Option<f64>,
+    /// `calibrate`'s posterior CSV (<stem>_posterior.csv): each draw's free quantities
+    /// from a particle drawn by weight (the posterior predictive), the rest from --model.
+    #[arg(long)]
+    pub posterior: Option<PathBuf>,
 }
 
 // `pradar map`
@@ -328,8 +333,8 @@ pub struct MapArgs {
     #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
     pub og_free_floor: f64,
     /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
-    /// at most this far (m, >= 0) behind the visibility polygon (half a 0.1 m cell by
-    /// default); `guard`: every visible cell, to the occlusion guard.
+    /// at most this far (m, >= 0) behind the visibility polygon (0.05 m: half a cell of
+    /// the default 0.1 m grid); `guard`: every visible cell, to the occlusion guard.
     #[arg(long, default_value = "0.05", value_parser = ranges::credit_depth, allow_negative_numbers = true)]
     pub og_credit_depth: f64,
     /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence

@@ -114,6 +114,7 @@ impl CheckArgs {
                 seed: self.seed,
                 ..Default::default()
             },
+            posterior: self.posterior,
         }
     }
 }
@@ -277,5 +278,58 @@ impl ExperimentArgs {
             params: ExperimentParams::default().seeds(self.seeds),
             out: self.out,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Cli, Cmd};
+    use clap::Parser;
+    use pradar::mapping::{EkfParams, GridParams, OgParams};
+
+    /// `map` without mapper flags gives the library's defaults: the CLI's hard-coded
+    /// defaults (`--og-bound-silent nearer`, `--og-credit-depth 0.05`, `--ekf-bound-silent
+    /// off`, …) cannot drift from `OgParams::default()` and `EkfParams::default()`.
+    #[test]
+    fn map_flags_default_to_the_library_defaults() {
+        let cli = Cli::try_parse_from([
+            "pradar",
+            "map",
+            "--method",
+            "og",
+            "--campaign",
+            "c.toml",
+            "--energy",
+            "e.parquet",
+            "--out",
+            "o",
+        ])
+        .unwrap();
+        let Cmd::Map(args) = cli.cmd else {
+            panic!("not map")
+        };
+        let o = args.into_command().options;
+        assert_eq!(o.og, OgParams::default());
+        assert_eq!(o.ekf, EkfParams::default());
+        assert_eq!(o.grid, GridParams::default());
+        let guard = Cli::try_parse_from([
+            "pradar",
+            "map",
+            "--method",
+            "og",
+            "--campaign",
+            "c.toml",
+            "--energy",
+            "e.parquet",
+            "--out",
+            "o",
+            "--og-credit-depth",
+            "guard",
+        ])
+        .unwrap();
+        let Cmd::Map(args) = guard.cmd else {
+            panic!("not map")
+        };
+        assert_eq!(args.into_command().options.og.credit_depth_m, None);
     }
 }

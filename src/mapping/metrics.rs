@@ -512,8 +512,14 @@ mod tests {
         // is the diameter
         exact[at(2, 1)] = true;
         let w = evaluate_three_class(&exact, &reference, &none, &objects, &all, rows, cols);
-        assert!(w.psi > 0.1, "{}", w.psi);
-        assert!(f.psi >= (rows + cols) as f64);
+        // occupied: 8 wall cells at 0 and the false cell 2 rows from the wall (the object's
+        // zone left out), 2/9; free: the false cell's own is 1 from the map's nearest free
+        // cell, over the 31 reference free cells outside the zone
+        assert!(
+            (w.psi - (2.0 / 9.0 + 1.0 / 31.0)).abs() < 1e-12,
+            "{}",
+            w.psi
+        );
     }
 
     /// The boundary band: a 4 m × 2 m room whose walls lie on the grid lines of a 0.1 m grid.

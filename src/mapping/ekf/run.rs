@@ -128,7 +128,7 @@ pub fn ekf_run_judged(
                 // on a copy: the beams' own occluders (free-space end, withheld rows) stay
                 // as they are, only the polygon is bounded (as the OG's scan)
                 let mut pe = echoes.clone();
-                let leak = echoes.first_detections(model.min_bin);
+                let leak = echoes.first_detections(s.occlusion.min_bin);
                 (pe.occluder, pe.missing) = s.occlusion.bound_silent(
                     model,
                     &echoes.occluder,

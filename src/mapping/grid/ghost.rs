@@ -47,15 +47,15 @@
 //!   supports.
 //!
 //! Default: `none` for both mappers (and `hold_echoes` off). Measured on the ghost scene
-//! and the four must-show scenes (`docs/mapping.md`, issue 31 item 4): `mirror` removes
-//! the ghost (OG with `hold_echoes` 13 → 2 of 90 cells, EKF 19 → 4) but on the corridor
-//! and the office it lowers walls found for both mappers in every scene (office N = 16,
-//! OG 0.549 → 0.464; corridor N = 100, EKF 0.582 → 0.459), raises the OG's wrong building
-//! cells in all four and lowers the EKF's in three: the final map's objects in front of a
-//! wall (clutter, the pillar) become occluders too, and the polygon interpolated between
-//! boresights 5° apart widens their shadow over wall cells; `aspect` removes the ghost
-//! too, but loses a third to two thirds of the walls found. Neither wins, so neither is
-//! on by default.
+//! and the four must-show scenes (`docs/mapping.md`, issue 31 item 4; with the OG rules and
+//! the EKF before 5 Dec 2026): `mirror` removes the ghost (OG with `hold_echoes` 13 → 2 of
+//! 90 cells, EKF 19 → 4) but on the corridor and the office it lowers walls found for both
+//! mappers in every scene (office N = 16, OG 0.549 → 0.464; corridor N = 100, EKF 0.582 →
+//! 0.459), raises the OG's wrong building cells in all four and lowers the EKF's in three:
+//! the final map's objects in front of a wall (clutter, the pillar) become occluders too,
+//! and the polygon interpolated between boresights 5° apart widens their shadow over wall
+//! cells; `aspect` removes the ghost too, but loses a third to two thirds of the walls
+//! found. Neither wins, so neither is on by default.
 //!
 //! Nothing here reads the reference or the simulator's truth. Cost: the OG keeps every
 //! increment of a run (12 bytes each: 105,000 on the corridor at N = 100), the EKF the

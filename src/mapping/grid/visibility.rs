@@ -39,7 +39,8 @@
 //!   cell it could be credited to is visible;
 //! * silent directions ([`SilentBound`], chosen by the mapper; the OG's `bound_silent`): a
 //!   direction with a sweep but no occluder (its detections, if any, all explained by side
-//!   lobes) is at the maximum range by default (`off`). Indoors every bearing ends at a
+//!   lobes) is at the maximum range with `off` (the EKF's default; the OG's is `nearer`,
+//!   `OgParams::bound_silent`). Indoors every bearing ends at a
 //!   surface, and a beam meeting a smooth wall obliquely sends its specular echo elsewhere,
 //!   so its silence does not mean the space beyond is open. `leak` bounds it at its first
 //!   detection (a leak says a surface lies at that range somewhere in the beam's lobes), or

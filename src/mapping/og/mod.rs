@@ -20,21 +20,21 @@
 //!   [`crate::mapping::grid::visibility`]: per direction its occluder (the strongest
 //!   detection not explained by a side lobe of another direction, or an earlier one that
 //!   lies on a surface of the current map) and per cell its depth δ behind the pose's
-//!   visibility polygon. Then: the cells with w ≥ `free_db` (−10 dB) of every bin before the
-//!   occluder and in front of the polygon (δ < −g) get Δl_i = l_free·s_{k,i}·w_i (a cell
-//!   wholly in front of it on boresight gets l_free once; weaker illumination, weaker free
-//!   evidence); every detection up to g beyond the occluder credits the visible cells
-//!   (δ ≤ g) of its range ring (main and side lobes down to −40 dB,
-//!   [`crate::mapping::grid::Beam`]) with Δl_i = l_occ·r_i,
+//!   visibility polygon. Then: the cells with w ≥ `free_db` (−10 dB) of every bin before
+//!   the occluder and in front of the polygon (δ < −g) get Δl_i = l_free·s_{k,i}·w_i (a
+//!   cell wholly in front of it on boresight gets l_free once; weaker illumination, weaker
+//!   free evidence); every detection up to g beyond the occluder credits the visible cells
+//!   of its range ring (δ ≤ `credit_depth_m`, 0.05 m by default; δ ≤ g with `guard`) (main
+//!   and side lobes down to −40 dB, [`crate::mapping::grid::Beam`]) with Δl_i = l_occ·r_i,
 //!   r_i = w_i·s_{k,i}·p_i / Σ_j w_j·s_{k,j}·p_j (two-way weight × the cell's share of the
 //!   bin × current belief: one cause per detection shared by responsibility, not a blur by
 //!   the pattern). Detections before the occluder (weaker, or explained by a side lobe:
-//!   leakage of an echo another direction credits, or a surface the main lobe just
-//!   cleared) and detections more than g beyond it (shadowed: multipath or echoes from
-//!   behind the surface) are withheld, counted in [`OgStats::withheld`]; bins after the
-//!   occluder without a detection give no evidence. With `hold_echoes` (off by default)
-//!   the bins within g of a main-lobe detection before the occluder give no free evidence
-//!   either. Two rules on by default and three options off (issue 31 "Maps II", figures in
+//!   leakage of an echo another direction credits, or a surface the main lobe just cleared)
+//!   and detections more than g beyond it (shadowed: multipath or echoes from behind the
+//!   surface) are withheld, counted in [`OgStats::withheld`]; bins after the occluder
+//!   without a detection give no evidence. With `hold_echoes` (off by default) the bins
+//!   within g of a main-lobe detection before the occluder give no free evidence either.
+//!   Two rules on by default and three options off (issue 31 "Maps II", figures in
 //!   `docs/mapping.md`). On: `bound_silent = nearer` (a direction without an occluder
 //!   bounds the visibility polygon at the nearer of its first detection and the range
 //!   interpolated from its neighbours' occluders, instead of lying at the maximum range:
@@ -43,19 +43,20 @@
 //!   its free evidence must not run through that wall; `off` and `leak`, at its first
 //!   detection, are the alternatives; [`crate::mapping::grid::SilentBound`]) and
 //!   `credit_depth_m = 0.05` (a ring's occupancy credit only to the cells whose centre lies
-//!   at most half a cell behind the polygon: a cell whose centre lies further beyond the
-//!   surface does not hold it, and without the limit the guard's two bins leave a rim of
-//!   credited cells beyond every wall the polygon now reaches). Together they find the
-//!   walls the silent beams cleared without that rim; the choice is measured against the
-//!   rules before, `off` and no depth limit (same maps byte for byte), in
-//!   `docs/mapping.md`. Off: `free_without_occluder` (weight in [0, 1] of the free evidence
-//!   of a beam with no occluder), `free_end` (free evidence ends at the first main-lobe echo
-//!   or the first detection instead of the occluder) and `free_floor` (a lower clamp for
-//!   the log-odds), each measured and not kept (figures in `docs/mapping.md`). A ghost rule
-//!   ([`crate::mapping::grid::ghost`], `none` by default) may judge every pose's
-//!   increments again against the final map and replay them. The map the occluders are
-//!   confirmed against is the belief the responsibilities use, a cell being a surface when
-//!   p > max(0.5, p0): the scan's snapshot, or the previous pass's map with `passes` ≥ 2;
+//!   at most 0.05 m, half a cell of the default 0.1 m grid, behind the polygon: a cell
+//!   whose centre lies further beyond the surface does not hold it, and without the limit
+//!   the guard's two bins leave a rim of credited cells beyond every wall the polygon now
+//!   reaches). Together they find the walls the silent beams cleared without that rim; the
+//!   choice is measured against the rules before, `off` and no depth limit (same maps byte
+//!   for byte), in `docs/mapping.md`. Off: `free_without_occluder` (weight in [0, 1] of the
+//!   free evidence of a beam with no occluder), `free_end` (free evidence ends at the first
+//!   main-lobe echo or the first detection instead of the occluder) and `free_floor` (a
+//!   lower clamp for the log-odds), each measured and not kept (figures in
+//!   `docs/mapping.md`). A ghost rule ([`crate::mapping::grid::ghost`], `none` by default)
+//!   may judge every pose's increments again against the final map and replay them. The map
+//!   the occluders are confirmed against is the belief the responsibilities use, a cell
+//!   being a surface when p > max(0.5, p0): the scan's snapshot, or the previous pass's map
+//!   with `passes` ≥ 2;
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
 //!   boresight ray; a cell gets l_occ if any bin the ray spends in it is detected, l_free if
 //!   the ray leaves it before the first detected bin;

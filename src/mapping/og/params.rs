@@ -66,9 +66,10 @@ pub struct OgParams {
     /// evidence of the beams that see it.
     pub free_floor: f64,
     /// Deepest a cell's centre may lie behind the visibility polygon and still get
-    /// occupancy credit from a range ring, m (0.05, half a 0.1 m cell, by default; None:
-    /// the occlusion guard g, every visible cell, the rule before 5 Dec 2026). A cell whose centre lies more than half a cell beyond the surface along the
-    /// ray does not hold it there; the guard's extra two bins (the window kernel's
+    /// occupancy credit from a range ring, m (0.05 m by default: half a cell of the
+    /// default 0.1 m grid; None: the occlusion guard g, every visible cell, the rule before
+    /// 5 Dec 2026). A cell whose centre lies more than half a cell beyond the surface along
+    /// the ray does not hold it there; the guard's extra two bins (the window kernel's
     /// half-width) keep the cells behind the surface visible, and a wall found where it was
     /// missed comes with a rim of credited cells beyond it.
     pub credit_depth_m: Option<f64>,

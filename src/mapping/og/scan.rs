@@ -70,7 +70,8 @@ fn scan_og(
             continue;
         }
         let rg = beam.bin_range(b);
-        // the ring's cells that may hold the echo (all visible ones by default)
+        // the ring's cells that may hold the echo (at most `credit_depth` behind the
+        // polygon; every visible one with `guard`, +∞)
         let holds = |c: u32| vis.depth[c as usize] <= k.credit_depth;
         let mut denom = 0.0f32;
         for j in rg.clone() {

@@ -31,7 +31,8 @@ pub struct Calibrate {
     /// Budget, population, seed.
     pub params: crate::calibrate::CalibrateParams,
     /// Report folder (`index.html` with the marginal posteriors and correlations, and the
-    /// predictive check of the calibrated model and of the chain's).
+    /// predictive checks of the calibrated model, plug-in and posterior predictive, and of
+    /// the chain's).
     pub report: Option<PathBuf>,
     /// The cluster chain's model file (`fit` output), shown beside the posterior in the
     /// report.
@@ -124,6 +125,7 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
         outputs.push((r.join("index.html"), "--report"));
         outputs.push((r.join("posterior.png"), "--report"));
         outputs.push((r.join("check_calibrated.png"), "--report"));
+        outputs.push((r.join("check_posterior.png"), "--report"));
         if cmd.chain.is_some() {
             outputs.push((r.join("check_chain.png"), "--report"));
         }
@@ -155,12 +157,33 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
         }
         .check()?;
         let energy_name = cmd.energy.display().to_string();
-        let mut models = vec![(
-            "Does the calibrated model reproduce the channel?",
-            format!("the calibrated model against {energy_name}"),
-            Ok(calibration.model.clone()),
-            "check_calibrated.png",
-        )];
+        // the posterior predictive: each draw's free quantities from a particle of the
+        // final population just written (`pradar check --posterior`)
+        let predictive = crate::check::CheckParams {
+            seed: cmd.params.seed,
+            posterior: Some(crate::check::PosteriorSample::read(&posterior)?),
+            ..Default::default()
+        }
+        .check()?;
+        let mut models = vec![
+            (
+                "Does the calibrated model reproduce the channel?",
+                format!("the calibrated model (posterior medians) against {energy_name}"),
+                Ok(calibration.model.clone()),
+                "check_calibrated.png",
+                &check_params,
+            ),
+            (
+                "Does the calibrated posterior reproduce the channel? (posterior predictive)",
+                format!(
+                    "draws from the calibrated posterior (each draw's free quantities from a particle of {}) against {energy_name}",
+                    posterior.display()
+                ),
+                Ok(calibration.model.clone()),
+                "check_posterior.png",
+                &predictive,
+            ),
+        ];
         if let (Some(m), Some(p)) = (&chain, &cmd.chain) {
             models.push((
                 "Does the cluster chain's model reproduce the channel?",
@@ -172,13 +195,13 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
                     .require_estimable(&Default::default())
                     .map_err(|e| crate::error::Error::input(p, e.to_string())),
                 "check_chain.png",
+                &check_params,
             ));
         }
-        for (title, what, model, png) in models {
+        for (title, what, model, png, params) in models {
             let run = || -> Result<crate::report::Section> {
                 let model = model?;
-                let res =
-                    crate::check::check(&c, &em, &cmd.energy, &model, &check_params, &|_, _| {})?;
+                let res = crate::check::check(&c, &em, &cmd.energy, &model, params, &|_, _| {})?;
                 crate::report::check::cdf_plot(&r.join(png), &res)?;
                 Ok(crate::report::check::section(title, &what, &res, png))
             };
@@ -213,6 +236,9 @@ pub struct Check {
     pub out: Option<PathBuf>,
     /// Draws, seed, cull.
     pub params: crate::check::CheckParams,
+    /// `calibrate`'s posterior CSV: each draw's free quantities from a particle
+    /// ([`crate::check::PosteriorSample`]); None: the model file's values in every draw.
+    pub posterior: Option<PathBuf>,
 }
 
 /// What `check` found.
@@ -260,6 +286,9 @@ pub fn check(cmd: &Check, progress: StepProgress) -> Result<CheckSummary> {
         let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
         inputs.push((cmd.model.clone(), "--model"));
         inputs.push((cmd.energy.clone(), "--energy"));
+        if let Some(p) = &cmd.posterior {
+            inputs.push((p.clone(), "--posterior"));
+        }
         let outputs: Vec<(PathBuf, &str)> =
             ["check.csv", "check.md", "check_cdfs.png", "index.html"]
                 .iter()
@@ -270,7 +299,14 @@ pub fn check(cmd: &Check, progress: StepProgress) -> Result<CheckSummary> {
     let model = ModelConfig::load(&cmd.model)?
         .require_estimable(&Default::default())
         .map_err(|e| crate::error::Error::input(&cmd.model, e.to_string()))?;
-    let params = cmd.params.check()?;
+    let mut params = cmd.params.clone();
+    if let Some(p) = &cmd.posterior {
+        let post = crate::check::PosteriorSample::read(p)?;
+        // every quantity of the sample must be in the model file (one line naming it)
+        post.model(&model, 0)?;
+        params.posterior = Some(post);
+    }
+    let params = params.check()?;
     let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
     let result = crate::check::check(&c, &em, &cmd.energy, &model, &params, progress)?;
     if let Some(o) = &cmd.out {
