@@ -50,6 +50,7 @@ use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use stats::{ks_distance, StatContext, Statistics, NAMES};
+use std::borrow::Cow;
 use std::path::Path;
 
 /// Key of the draws' seed stream (xor-ed into the seed): "Check\0\0\0".
@@ -188,11 +189,10 @@ impl PosteriorSample {
         Ok(m)
     }
 
-    /// The particle of draw `r` (by weight, from the draw's own seed stream).
+    /// The particle of draw `r` (by weight, from the draw's own seed stream: [`draw_seed`]
+    /// of the seed xor "PART").
     fn particle(&self, seed: u64, r: usize) -> usize {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM ^ 0x5041_5254); // "PART"
-        rng.set_stream(r as u64 + 1);
-        let u = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let u = (draw_seed(seed ^ 0x5041_5254, r) >> 11) as f64 / (1u64 << 53) as f64;
         let mut acc = 0.0;
         for (i, w) in self.weights.iter().enumerate() {
             acc += w;
@@ -429,13 +429,11 @@ pub fn check(
         let part: Vec<Statistics> = (start..(start + chunk).min(r))
             .into_par_iter()
             .map(|i| -> Result<Statistics> {
-                let mut e = match &params.posterior {
-                    Some(post) => sim.energies(
-                        &post.model(model, post.particle(seed, i))?,
-                        draw_seed(seed, i),
-                    )?,
-                    None => sim.energies(model, draw_seed(seed, i))?,
+                let drawn = match &params.posterior {
+                    Some(post) => Cow::Owned(post.model(model, post.particle(seed, i))?),
+                    None => Cow::Borrowed(model),
                 };
+                let mut e = sim.energies(&drawn, draw_seed(seed, i))?;
                 // the measured campaign's missing sweeps are missing from the draws too
                 energy
                     .meta

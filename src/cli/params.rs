@@ -292,44 +292,30 @@ mod tests {
     /// off`, …) cannot drift from `OgParams::default()` and `EkfParams::default()`.
     #[test]
     fn map_flags_default_to_the_library_defaults() {
-        let cli = Cli::try_parse_from([
-            "pradar",
-            "map",
-            "--method",
-            "og",
-            "--campaign",
-            "c.toml",
-            "--energy",
-            "e.parquet",
-            "--out",
-            "o",
-        ])
-        .unwrap();
-        let Cmd::Map(args) = cli.cmd else {
-            panic!("not map")
+        let options = |extra: &[&str]| {
+            let mut argv = vec![
+                "pradar",
+                "map",
+                "--method",
+                "og",
+                "--campaign",
+                "c.toml",
+                "--energy",
+                "e.parquet",
+                "--out",
+                "o",
+            ];
+            argv.extend_from_slice(extra);
+            let Cmd::Map(args) = Cli::try_parse_from(argv).unwrap().cmd else {
+                panic!("not map")
+            };
+            args.into_command().options
         };
-        let o = args.into_command().options;
+        let o = options(&[]);
         assert_eq!(o.og, OgParams::default());
         assert_eq!(o.ekf, EkfParams::default());
         assert_eq!(o.grid, GridParams::default());
-        let guard = Cli::try_parse_from([
-            "pradar",
-            "map",
-            "--method",
-            "og",
-            "--campaign",
-            "c.toml",
-            "--energy",
-            "e.parquet",
-            "--out",
-            "o",
-            "--og-credit-depth",
-            "guard",
-        ])
-        .unwrap();
-        let Cmd::Map(args) = guard.cmd else {
-            panic!("not map")
-        };
-        assert_eq!(args.into_command().options.og.credit_depth_m, None);
+        let guard = options(&["--og-credit-depth", "guard"]);
+        assert_eq!(guard.og.credit_depth_m, None);
     }
 }

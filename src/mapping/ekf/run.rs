@@ -19,9 +19,7 @@ use super::{
 };
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
-use crate::mapping::grid::{
-    GhostJudge, GhostRule, ObservationModel, Occlusion, ScanEchoes, SilentBound,
-};
+use crate::mapping::grid::{GhostJudge, GhostRule, ObservationModel, Occlusion, ScanEchoes};
 use crate::mapping::og::Detector;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -124,22 +122,9 @@ pub fn ekf_run_judged(
             let echoes = s
                 .occlusion
                 .echoes(model, energy, p, dets, occupied.as_deref());
-            let vis = if params.bound_silent != SilentBound::Off {
-                // on a copy: the beams' own occluders (free-space end, withheld rows) stay
-                // as they are, only the polygon is bounded (as the OG's scan)
-                let mut pe = echoes.clone();
-                let leak = echoes.first_detections(s.occlusion.min_bin);
-                (pe.occluder, pe.missing) = s.occlusion.bound_silent(
-                    model,
-                    &echoes.occluder,
-                    &leak,
-                    &echoes.missing,
-                    params.bound_silent,
-                );
-                s.occlusion.visibility(model, &geom, &pe)
-            } else {
-                s.occlusion.visibility(model, &geom, &echoes)
-            };
+            let vis = s
+                .occlusion
+                .visibility_bounded(model, &geom, &echoes, params.bound_silent);
             (echoes, vis, s.occlusion.guard_bins())
         });
         type Dir = (Observation, Option<FreeSpace>, u64, Vec<Vec<(u32, f32)>>);

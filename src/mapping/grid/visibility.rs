@@ -386,6 +386,27 @@ impl Occlusion {
         r - lim
     }
 
+    /// [`Occlusion::visibility`] with the scan's silent directions bounded by `mode`
+    /// ([`Occlusion::bound_silent`], the leaks being `echoes`' first detections at or after
+    /// `min_bin`), on a copy: the scan's own occluders (a beam's free end, its withheld
+    /// detections) stay as they are, only the polygon is bounded. `off`: the plain polygon.
+    pub fn visibility_bounded(
+        &self,
+        model: &ObservationModel,
+        geom: &PoseGeometry,
+        echoes: &ScanEchoes,
+        mode: SilentBound,
+    ) -> Visibility {
+        if mode == SilentBound::Off {
+            return self.visibility(model, geom, echoes);
+        }
+        let mut pe = echoes.clone();
+        let leak = echoes.first_detections(self.min_bin);
+        (pe.occluder, pe.missing) =
+            self.bound_silent(model, &echoes.occluder, &leak, &echoes.missing, mode);
+        self.visibility(model, geom, &pe)
+    }
+
     /// The visibility of every cell of a pose's geometry from its echoes (module docs).
     pub fn visibility(
         &self,

@@ -339,22 +339,14 @@ impl<'a> ScanContext<'a> {
                 let echoes = self
                     .occlusion
                     .echoes(self.model, em, p, dets, Some(&occupied));
-                let vis = if self.inc.bound_silent != SilentBound::Off {
-                    // on a copy: the scan's own occluders (free end, withheld detections)
-                    // stay as they are, only the polygon is bounded
-                    let mut pe = echoes.clone();
-                    let leak = echoes.first_detections(self.inc.min_bin);
-                    (pe.occluder, pe.missing) = self.occlusion.bound_silent(
-                        self.model,
-                        &echoes.occluder,
-                        &leak,
-                        &echoes.missing,
-                        self.inc.bound_silent,
-                    );
-                    self.occlusion.visibility(self.model, g, &pe)
-                } else {
-                    self.occlusion.visibility(self.model, g, &echoes)
-                };
+                // (the occlusion's min_bin is the scan's, `inc.min_bin`: both are the
+                // model's and the detector's larger)
+                let vis = self.occlusion.visibility_bounded(
+                    self.model,
+                    g,
+                    &echoes,
+                    self.inc.bound_silent,
+                );
                 let scans = (0..nd)
                     .into_par_iter()
                     .map(|d| {
