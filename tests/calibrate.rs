@@ -224,8 +224,6 @@ struct Scored {
     hilo: Vec<f64>,
     /// `pradar check` of the calibrated model against the environment: pass, largest ratio.
     check: (bool, f64),
-    /// The same with `--posterior` (the posterior predictive check).
-    predictive: (bool, f64),
 }
 
 /// `synth` of `truth` on `cpath` at `synth_seed` into `dir`, calibrated (`sims`, `pop`,
@@ -258,19 +256,16 @@ fn environment(
         hilo.push(hi / lo);
     }
     // `PRADAR_COVERAGE_NO_CHECK=1` (measurements of widths only): no `pradar check`
-    let (check, predictive) = if no_check() {
-        ((false, f64::NAN), (false, f64::NAN))
+    let check = if no_check() {
+        (false, f64::NAN)
     } else {
-        let post = pradar::pipeline::commands::posterior_csv(&out);
-        let (p, r, _) = check_verdict_with(&out, cpath, &e, &["--posterior", &s(&post)]);
-        (check(&out, cpath, &e), (p, r))
+        check(&out, cpath, &e)
     };
     Scored {
         covered,
         err,
         hilo,
         check,
-        predictive,
     }
 }
 
@@ -608,6 +603,7 @@ fn coverage(distance: &str) {
     let t = Instant::now();
     let mut all = Vec::new();
     let mut truth_pass = 0;
+    let mut predictive = Vec::new();
     for r in 0..reps {
         let dir = tmp.path().join(format!("r{r}"));
         let sc = environment(
@@ -620,18 +616,22 @@ fn coverage(distance: &str) {
             r as u64,
             Some(distance),
         );
-        let (tp, tr) = if no_check() {
-            (false, f64::NAN)
+        let ((tp, tr), pp) = if no_check() {
+            ((false, f64::NAN), (false, f64::NAN))
         } else {
-            check(&dir.join("model.toml"), &cpath, &dir.join("e.parquet"))
+            // the calibrated model's posterior predictive check (`--posterior`)
+            let (cal, e) = (dir.join("cal.toml"), dir.join("e.parquet"));
+            let post = pradar::pipeline::commands::posterior_csv(&cal);
+            let (p, ratio, _) = check_verdict_with(&cal, &cpath, &e, &["--posterior", &s(&post)]);
+            (check(&dir.join("model.toml"), &cpath, &e), (p, ratio))
         };
         truth_pass += usize::from(tp);
+        predictive.push(pp);
         eprintln!(
-            "ENV {distance} {r}: covered {}/8, hi/lo {:.1?}, check {:?}, posterior predictive {:?}, truth's check ({tp}, {tr:.2})",
+            "ENV {distance} {r}: covered {}/8, hi/lo {:.1?}, check {:?}, posterior predictive {pp:?}, truth's check ({tp}, {tr:.2})",
             sc.covered.iter().filter(|c| **c).count(),
             sc.hilo,
             sc.check,
-            sc.predictive
         );
         all.push(sc);
     }
@@ -659,7 +659,7 @@ fn coverage(distance: &str) {
         );
     }
     let passes = all.iter().filter(|a| a.check.0).count();
-    let predictive = all.iter().filter(|a| a.predictive.0).count();
+    let predictive = predictive.iter().filter(|p| p.0).count();
     eprintln!(
         "SUMMARY {distance} | check of the calibrated model passes {passes}/{reps} (posterior predictive {predictive}/{reps}); of the model itself {truth_pass}/{reps}"
     );
