@@ -589,7 +589,8 @@ fn hall_sets() {
 /// reference. Prints per environment and per quantity: coverage, median |error| of the
 /// median, median and largest interval hi/lo; and the check's pass count. Measurement
 /// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy),
-/// `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_TEST_RIDGE=cv` adds `--ridge
+/// `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_COVERAGE_SIMS` and
+/// `PRADAR_COVERAGE_POP` another budget and population (600 and 200), `PRADAR_TEST_RIDGE=cv` adds `--ridge
 /// cv`, `PRADAR_ABC_TRACE=1` passes the sampler's trace through.
 fn coverage(distance: &str) {
     let tmp = tempfile::tempdir().unwrap();
@@ -600,6 +601,18 @@ fn coverage(distance: &str) {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(20);
+    // `PRADAR_COVERAGE_SIMS=3000 PRADAR_COVERAGE_POP=400`: another budget (measurements of
+    // whether the widths are set by the sampler's budget or by the data)
+    let budget = |k: &str, d: usize| -> usize {
+        std::env::var(k)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(d)
+    };
+    let (sims, pop) = (
+        budget("PRADAR_COVERAGE_SIMS", 600),
+        budget("PRADAR_COVERAGE_POP", 200),
+    );
     let t = Instant::now();
     let mut all = Vec::new();
     let mut truth_pass = 0;
@@ -611,8 +624,8 @@ fn coverage(distance: &str) {
             &cpath,
             &truth,
             1000 + r as u64,
-            600,
-            200,
+            sims,
+            pop,
             r as u64,
             Some(distance),
         );
@@ -702,6 +715,14 @@ fn corridor_coverage_pooled() {
 #[ignore = "about 15 min on 2 shared cores"]
 fn corridor_coverage_mmd() {
     coverage("mmd");
+}
+
+/// [`coverage`] with `--distance summaries-chain` (issue 30: the cluster chain's
+/// estimates appended), the same environments and budget. Figures in `docs/calibrate.md`.
+#[test]
+#[ignore = "about 40 min on 2 idle cores"]
+fn corridor_coverage_chain() {
+    coverage("summaries-chain");
 }
 
 /// The calibration's in-memory simulator gives exactly the energies `synth` writes for the

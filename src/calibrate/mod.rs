@@ -90,6 +90,7 @@
 //! distance), [`abc`] (the sampler).
 
 pub mod abc;
+pub mod chain;
 pub mod mmd;
 pub mod params;
 pub mod summaries;
@@ -373,7 +374,13 @@ pub fn calibrate(
     };
     let stat_ctx = crate::check::context(energy);
     // issue 30: the check statistics' quantiles appended to the pooled summaries
-    let quant = params.distance == Distance::SummariesQuantiles;
+    let chain_mode = params.distance == Distance::SummariesChain;
+    let quant = params.distance == Distance::SummariesQuantiles || chain_mode;
+    let chain_ctx = if chain_mode {
+        Some(chain::ChainContext::new(c, energy)?)
+    } else {
+        None
+    };
     let (observed, reference) = if mmd_mode {
         let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
         (vec![0.0], Some(r))
@@ -381,6 +388,9 @@ pub fn calibrate(
         let mut f = summaries::summaries(&ctx, &energy.data);
         if quant {
             f.extend(summaries::quantile_summaries(&stat_ctx, &energy.data));
+        }
+        if let Some(k) = &chain_ctx {
+            f.extend(k.summaries(&energy.data));
         }
         (f, None)
     };
@@ -397,6 +407,9 @@ pub fn calibrate(
                 let mut f = summaries::summaries(&ctx, &e);
                 if quant {
                     f.extend(summaries::quantile_summaries(&stat_ctx, &e));
+                }
+                if let Some(k) = &chain_ctx {
+                    f.extend(k.summaries(&e));
                 }
                 f
             }
@@ -439,7 +452,9 @@ pub fn calibrate(
         } else {
             format!(
                 "abc-smc (APMC, semi-automatic summaries{}{}{})",
-                if quant {
+                if chain_mode {
+                    " with the check statistics' quantiles and the cluster chain's estimates"
+                } else if quant {
                     " with the check statistics' quantiles"
                 } else {
                     ""
