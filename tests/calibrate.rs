@@ -590,11 +590,35 @@ fn hall_sets() {
 /// median, median and largest interval hi/lo; and the check's pass count. Measurement
 /// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy),
 /// `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_COVERAGE_SIMS` and
-/// `PRADAR_COVERAGE_POP` another budget and population (600 and 200), `PRADAR_TEST_RIDGE=cv` adds `--ridge
+/// `PRADAR_COVERAGE_POP` another budget and population (600 and 200),
+/// `PRADAR_COVERAGE_POSES=24` the corridor's poses continued along it, `PRADAR_TEST_RIDGE=cv` adds `--ridge
 /// cv`, `PRADAR_ABC_TRACE=1` passes the sampler's trace through.
 fn coverage(distance: &str) {
     let tmp = tempfile::tempdir().unwrap();
-    let cpath = corridor(&tmp.path().join("in"));
+    // `PRADAR_COVERAGE_POSES=24`: the corridor's poses continued along it at the same
+    // 0.405 m spacing (x = 0.5 + 0.405·i, up to 24 within its 11 m; measurements of the
+    // widths' contraction with the campaign)
+    let cpath = match std::env::var("PRADAR_COVERAGE_POSES")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        Some(n) => {
+            assert!((1..=24).contains(&n), "PRADAR_COVERAGE_POSES in 1..=24");
+            let mut t = common::corridor();
+            let poses: Vec<toml::Value> = (0..n)
+                .map(|i| {
+                    let mut p = toml::Table::new();
+                    p.insert("x_m".into(), (0.5 + 0.405 * i as f64).into());
+                    p.insert("y_m".into(), (-0.3).into());
+                    p.insert("heading_deg".into(), 0.0.into());
+                    toml::Value::Table(p)
+                })
+                .collect();
+            t.insert("poses".into(), toml::Value::Array(poses));
+            common::write_campaign(&tmp.path().join("in"), &t)
+        }
+        None => corridor(&tmp.path().join("in")),
+    };
     let truth = ModelConfig::table1_defaults();
     // `PRADAR_COVERAGE_ENVS=5`: the five-environment proxy (synth seeds 1000-1004)
     let reps: usize = std::env::var("PRADAR_COVERAGE_ENVS")
@@ -715,14 +739,6 @@ fn corridor_coverage_pooled() {
 #[ignore = "about 15 min on 2 shared cores"]
 fn corridor_coverage_mmd() {
     coverage("mmd");
-}
-
-/// [`coverage`] with `--distance summaries-chain` (issue 30: the cluster chain's
-/// estimates appended), the same environments and budget. Figures in `docs/calibrate.md`.
-#[test]
-#[ignore = "about 40 min on 2 idle cores"]
-fn corridor_coverage_chain() {
-    coverage("summaries-chain");
 }
 
 /// The calibration's in-memory simulator gives exactly the energies `synth` writes for the
@@ -1129,5 +1145,18 @@ fn hall_contraction() {
 #[test]
 #[ignore = "about 30 min on 2 shared cores; figures in docs/calibrate.md"]
 fn hall_contraction_reduced() {
-    contraction(&[0], &[32, 240], 400, 200);
+    // `PRADAR_CONTRACTION_SIMS=1200 PRADAR_CONTRACTION_POP=300`: set 1 at another budget
+    // (1200, 300: the must-show's)
+    let env = |k: &str, d: usize| -> usize {
+        std::env::var(k)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(d)
+    };
+    contraction(
+        &[0],
+        &[32, 240],
+        env("PRADAR_CONTRACTION_SIMS", 400),
+        env("PRADAR_CONTRACTION_POP", 200),
+    );
 }

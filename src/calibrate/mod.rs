@@ -90,7 +90,6 @@
 //! distance), [`abc`] (the sampler).
 
 pub mod abc;
-pub mod chain;
 pub mod mmd;
 pub mod params;
 pub mod summaries;
@@ -374,13 +373,7 @@ pub fn calibrate(
     };
     let stat_ctx = crate::check::context(energy);
     // issue 30: the check statistics' quantiles appended to the pooled summaries
-    let chain_mode = params.distance == Distance::SummariesChain;
-    let quant = params.distance == Distance::SummariesQuantiles || chain_mode;
-    let chain_ctx = if chain_mode {
-        Some(chain::ChainContext::new(c, energy)?)
-    } else {
-        None
-    };
+    let quant = params.distance == Distance::SummariesQuantiles;
     let (observed, reference) = if mmd_mode {
         let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
         (vec![0.0], Some(r))
@@ -388,9 +381,6 @@ pub fn calibrate(
         let mut f = summaries::summaries(&ctx, &energy.data);
         if quant {
             f.extend(summaries::quantile_summaries(&stat_ctx, &energy.data));
-        }
-        if let Some(k) = &chain_ctx {
-            f.extend(k.summaries(&energy.data));
         }
         (f, None)
     };
@@ -407,9 +397,6 @@ pub fn calibrate(
                 let mut f = summaries::summaries(&ctx, &e);
                 if quant {
                     f.extend(summaries::quantile_summaries(&stat_ctx, &e));
-                }
-                if let Some(k) = &chain_ctx {
-                    f.extend(k.summaries(&e));
                 }
                 f
             }
@@ -452,9 +439,7 @@ pub fn calibrate(
         } else {
             format!(
                 "abc-smc (APMC, semi-automatic summaries{}{}{})",
-                if chain_mode {
-                    " with the check statistics' quantiles and the cluster chain's estimates"
-                } else if quant {
+                if quant {
                     " with the check statistics' quantiles"
                 } else {
                     ""

@@ -39,11 +39,6 @@ pub enum Distance {
     /// ([`quantile_summaries`](super::summaries::quantile_summaries), issue 30).
     #[value(name = "summaries-quantiles", help = None::<&str>)]
     SummariesQuantiles,
-    /// The summaries-quantiles' raw statistics with the cluster chain's estimates
-    /// appended (indirect inference, [`chain`](super::chain)): CLEAN, K-means and the
-    /// Table-1 estimators run on every simulation.
-    #[value(name = "summaries-chain", help = None::<&str>)]
-    SummariesChain,
     /// The MMD between the per-profile and per-position statistics' distributions
     /// ([`mmd`](super::mmd), issue 30).
     #[value(name = "mmd", help = None::<&str>)]

@@ -135,30 +135,6 @@ pub fn fit_channel(clusters: &Path, c: &Campaign, p: &FitValid) -> Result<Channe
     Ok(f)
 }
 
-/// The Table-1 estimators on a clustering held in memory (the discrete MPCs by their
-/// campaign-wide cluster id; diffuse ones left out, as [`fit_channel`] reads them), without
-/// the dense component's fit: the cluster chain as `pradar calibrate --distance
-/// summaries-chain` runs it on every simulation. Errors name `<in-memory clustering>`.
-pub fn fit_clustering(
-    cl: &crate::cluster::Clustering,
-    c: &Campaign,
-    p: &FitValid,
-) -> Result<ChannelFit> {
-    let rays: Vec<Ray> = (cl.mpcs.iter().zip(&cl.cluster_id))
-        .filter(|(m, _)| m.component != crate::mpc::Component::Diffuse)
-        .filter_map(|(m, id)| {
-            id.map(|cluster| Ray {
-                position: m.position,
-                cluster,
-                delay_ns: m.delay_ns,
-                angle_rel_deg: m.angle_rel_deg,
-                power_db: m.power_db,
-            })
-        })
-        .collect();
-    fit_rays(Path::new("<in-memory clustering>"), rays, c, p)
-}
-
 /// The same estimators applied to the simulator's true clusters (`truth_dir/rays.parquet`
 /// grouped by `truth_cluster`, defined in `docs/campaign.md`, "True clusters of a
 /// simulated scene"; the diffuse rows, −1, are dropped), seen from each position in the half-plane
