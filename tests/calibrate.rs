@@ -1128,8 +1128,9 @@ fn hall_contraction() {
 /// 6 m), 32 and 240 poses, 400 simulations (population 200, the smallest population at
 /// which the regression adjustment still applies: 10 kept particles per coefficient).
 /// Prints the table of [`contraction`]; asserts nothing (the budget is a third of the
-/// must-show's). `cargo test --release --test tests --
-/// calibrate::hall_contraction_reduced --ignored --nocapture`.
+/// must-show's; `PRADAR_CONTRACTION_SIMS` and `PRADAR_CONTRACTION_POP` set another).
+/// `cargo test --release --test tests -- calibrate::hall_contraction_reduced --ignored
+/// --nocapture`.
 ///
 /// Measured (issue 30, 2 threads at load 6–8; 1671 s in all: 205 s at 32 poses, 1464 s
 /// at 240): medians at 32 → 240 poses λ +38 → +24 %, AoA +23 → +30 %, d_c +2 → +28 %,
