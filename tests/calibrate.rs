@@ -209,6 +209,15 @@ fn corridor(dir: &Path) -> PathBuf {
 /// The prior's hi/lo per quantity of [`QUANTITIES`] (the default prior's ranges).
 const PRIOR_HILO: [f64; 8] = [60.0, 30.0, 20.0 / 0.3, 30.0, 30.0, 40.0, 1e4, 20.0];
 
+/// A measurement switch: the environment variable `k` as a count, `d` when unset or not a
+/// count.
+fn env_usize(k: &str, d: usize) -> usize {
+    std::env::var(k)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(d)
+}
+
 /// Whether `PRADAR_COVERAGE_NO_CHECK=1` asks [`coverage`] to skip `pradar check`.
 fn no_check() -> bool {
     std::env::var("PRADAR_COVERAGE_NO_CHECK").is_ok_and(|v| v == "1")
@@ -598,12 +607,10 @@ fn coverage(distance: &str) {
     // `PRADAR_COVERAGE_POSES=24`: the corridor's poses continued along it at the same
     // 0.405 m spacing (x = 0.5 + 0.405·i, up to 24 within its 11 m; measurements of the
     // widths' contraction with the campaign)
-    let cpath = match std::env::var("PRADAR_COVERAGE_POSES")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-    {
-        Some(n) => {
-            assert!((1..=24).contains(&n), "PRADAR_COVERAGE_POSES in 1..=24");
+    let cpath = match env_usize("PRADAR_COVERAGE_POSES", 0) {
+        0 => corridor(&tmp.path().join("in")),
+        n => {
+            assert!(n <= 24, "PRADAR_COVERAGE_POSES in 1..=24");
             let mut t = common::corridor();
             let poses: Vec<toml::Value> = (0..n)
                 .map(|i| {
@@ -617,25 +624,15 @@ fn coverage(distance: &str) {
             t.insert("poses".into(), toml::Value::Array(poses));
             common::write_campaign(&tmp.path().join("in"), &t)
         }
-        None => corridor(&tmp.path().join("in")),
     };
     let truth = ModelConfig::table1_defaults();
     // `PRADAR_COVERAGE_ENVS=5`: the five-environment proxy (synth seeds 1000-1004)
-    let reps: usize = std::env::var("PRADAR_COVERAGE_ENVS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(20);
+    let reps = env_usize("PRADAR_COVERAGE_ENVS", 20);
     // `PRADAR_COVERAGE_SIMS=3000 PRADAR_COVERAGE_POP=400`: another budget (measurements of
     // whether the widths are set by the sampler's budget or by the data)
-    let budget = |k: &str, d: usize| -> usize {
-        std::env::var(k)
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(d)
-    };
     let (sims, pop) = (
-        budget("PRADAR_COVERAGE_SIMS", 600),
-        budget("PRADAR_COVERAGE_POP", 200),
+        env_usize("PRADAR_COVERAGE_SIMS", 600),
+        env_usize("PRADAR_COVERAGE_POP", 200),
     );
     let t = Instant::now();
     let mut all = Vec::new();
@@ -1091,7 +1088,8 @@ fn contraction(sets: &[usize], poses: &[usize], sims: usize, pop: usize) -> Vec<
 /// calibration, as [`hall_sets`].
 ///
 /// Not run in full: 8 calibrations, a 240-pose one 7.1× dearer than a 32-pose one
-/// (measured at 400 simulations: 1464 s vs 205 s on the 2 shared cores), about 5–6 h.
+/// (measured at 400 simulations: 1464 s vs 205 s on the 2 shared cores; at 1200, set 1:
+/// 1742 s vs 136 s), about 2 h.
 /// The reduced measurement [`hall_contraction_reduced`] (set 1, a third of the budget)
 /// does not meet it: at 240 poses λ +24 %, AoA +30 %, d_c +28 %, Γ +28 %, width ratios
 /// 0.98/1.06/1.31/1.41 against 2.74. Set 1 alone at this test's 1200 simulations (the
@@ -1100,7 +1098,7 @@ fn contraction(sets: &[usize], poses: &[usize], sims: usize, pop: usize) -> Vec<
 /// against ≥ 1.83, so unmet. `cargo test --release --test tests --
 /// calibrate::hall_contraction --exact --ignored --nocapture`.
 #[test]
-#[ignore = "about 2-5 h on 2 cores (not run in full); set 1 at its budget unmet: AoA +20 % at 240 poses, width ratios 1.04-1.47 vs 1.83"]
+#[ignore = "about 2 h on 2 cores (not run in full); set 1 at its budget unmet: AoA +20 % at 240 poses, width ratios 1.04-1.47 vs 1.83"]
 fn hall_contraction() {
     let all = contraction(&[0, 1, 2, 3], &[32, 240], 1200, 300);
     let sqrt = (240.0f64 / 32.0).sqrt();
@@ -1151,16 +1149,10 @@ fn hall_contraction() {
 fn hall_contraction_reduced() {
     // `PRADAR_CONTRACTION_SIMS=1200 PRADAR_CONTRACTION_POP=300`: set 1 at another budget
     // (1200, 300: the must-show's)
-    let env = |k: &str, d: usize| -> usize {
-        std::env::var(k)
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(d)
-    };
     contraction(
         &[0],
         &[32, 240],
-        env("PRADAR_CONTRACTION_SIMS", 400),
-        env("PRADAR_CONTRACTION_POP", 200),
+        env_usize("PRADAR_CONTRACTION_SIMS", 400),
+        env_usize("PRADAR_CONTRACTION_POP", 200),
     );
 }
