@@ -306,6 +306,21 @@ impl Calibration {
         correlations(self.particles(), &self.posterior.weights)
     }
 
+    /// The final population as the posterior predictive check takes it
+    /// ([`crate::check::PosteriorSample`]: the free quantities' reported values, schema
+    /// units, and the normalised weights) — what [`Calibration::write_posterior_csv`]
+    /// writes and `check --posterior` reads back, without the file.
+    pub fn posterior_sample(&self) -> crate::check::PosteriorSample {
+        let total: f64 = self.posterior.weights.iter().sum();
+        crate::check::PosteriorSample {
+            names: self.free.clone(),
+            weights: self.posterior.weights.iter().map(|w| w / total).collect(),
+            values: (self.particles().iter())
+                .map(|x| x.iter().map(|v| v.exp()).collect())
+                .collect(),
+        }
+    }
+
     /// Write the final population as CSV: `weight, distance`, then per free quantity its
     /// reported value (schema units) and raw value.
     pub fn write_posterior_csv(&self, path: &Path) -> Result<()> {
@@ -539,6 +554,47 @@ mod tests {
         m.walls.as_mut().unwrap().specular_gamma.interval = Some([0.3, 0.3]);
         let p = Prior::from_template(m, Path::new("p.toml")).unwrap();
         assert_eq!(p.free.len(), 9);
+    }
+
+    /// The in-memory posterior sample is exactly what `check --posterior` reads back from
+    /// the posterior CSV (the report's posterior predictive check uses the former).
+    #[test]
+    fn posterior_sample_is_the_csv_read_back() {
+        let mut model = ModelConfig::table1_defaults();
+        model.calibration = Some(CalibrationMeta {
+            method: "abc-smc (APMC, regression-adjusted)".into(),
+            simulations: 10,
+            particles: 3,
+            generations: 2,
+            epsilon: 0.5,
+            seed: 1,
+            free: vec!["ray_decay".into(), "cluster_rrcs".into()],
+        });
+        let cal = Calibration {
+            model,
+            posterior: Posterior {
+                theta: vec![vec![0.1, -3.0], vec![1.0 / 3.0, -4.7], vec![2.2, -1e-3]],
+                adjusted: vec![vec![0.2, -2.9], vec![0.7 / 3.0, -4.1], vec![2.5, -7.3]],
+                regression_adjusted: true,
+                weights: vec![0.3, 1.0 / 7.0, 2.9],
+                distances: vec![0.1, 0.2, 0.3],
+                epsilon: 0.3,
+                generations: 2,
+                simulations: 10,
+                acceptance: 0.5,
+                heldout_r2: Vec::new(),
+            },
+            free: vec!["ray_decay".into(), "cluster_rrcs".into()],
+            wall_s: 1.0,
+            prior_lo: vec![0.5, 1e-4],
+            prior_hi: vec![20.0, 1.0],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("cal_posterior.csv");
+        cal.write_posterior_csv(&p).unwrap();
+        let read = crate::check::PosteriorSample::read(&p).unwrap();
+        assert_eq!(cal.posterior_sample(), read);
+        assert_eq!(read.values[1][0], (0.7f64 / 3.0).exp());
     }
 
     #[test]

@@ -158,10 +158,10 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
         .check()?;
         let energy_name = cmd.energy.display().to_string();
         // the posterior predictive: each draw's free quantities from a particle of the
-        // final population just written (`pradar check --posterior`)
+        // final population (`pradar check --posterior` on the CSV just written)
         let predictive = crate::check::CheckParams {
             seed: cmd.params.seed,
-            posterior: Some(crate::check::PosteriorSample::read(&posterior)?),
+            posterior: Some(calibration.posterior_sample()),
             ..Default::default()
         }
         .check()?;
