@@ -599,8 +599,8 @@ fn hall_sets() {
 /// (`pradar check`, 20 draws); the model itself checked against each environment as the
 /// reference. Prints per environment and per quantity: coverage, median |error| of the
 /// median, median and largest interval hi/lo; and the check's pass count. Measurement
-/// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy),
-/// `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_COVERAGE_SIMS` and
+/// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy;
+/// 0 stops the test with a message), `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_COVERAGE_SIMS` and
 /// `PRADAR_COVERAGE_POP` another budget and population (default 600 and 200),
 /// `PRADAR_COVERAGE_POSES=n` (1–24; unset or 0: the corridor's own 12) the first n of
 /// the corridor's poses continued along it, `PRADAR_TEST_RIDGE=fixed|cv` adds `--ridge`,
@@ -631,6 +631,7 @@ fn coverage(distance: &str) {
     let truth = ModelConfig::table1_defaults();
     // `PRADAR_COVERAGE_ENVS=5`: the five-environment proxy (synth seeds 1000-1004)
     let reps = env_usize("PRADAR_COVERAGE_ENVS", 20);
+    assert!(reps > 0, "PRADAR_COVERAGE_ENVS=0: no environment to cover");
     // `PRADAR_COVERAGE_SIMS=3000 PRADAR_COVERAGE_POP=400`: another budget (measurements of
     // whether the widths are set by the sampler's budget or by the data)
     let (sims, pop) = (

@@ -120,12 +120,22 @@ pub struct GridSpec {
 }
 
 impl GridSpec {
-    /// Grid over `rect` plus `margin_m` on every side.
+    /// Grid over `rect` plus `margin_m` on every side. Cells are half-open, so the
+    /// rectangle's upper edges must lie strictly inside the grid: with a margin below one
+    /// cell a wall on the bounding box's right or top edge would otherwise fall just
+    /// outside it (a column or row is added where needed).
     pub fn covering(rect: Rect<f64>, cell_m: f64, margin_m: f64) -> GridSpec {
         let x0 = rect.min().x - margin_m;
         let y0 = rect.min().y - margin_m;
-        let cols = ((rect.width() + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
-        let rows = ((rect.height() + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
+        let count = |extent: f64, lo: f64, hi: f64| {
+            let mut n = ((extent + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
+            while lo + n as f64 * cell_m <= hi {
+                n += 1;
+            }
+            n
+        };
+        let cols = count(rect.width(), x0, rect.max().x);
+        let rows = count(rect.height(), y0, rect.max().y);
         GridSpec {
             x0_m: x0,
             y0_m: y0,
@@ -865,6 +875,34 @@ mod tests {
         assert_eq!(at(2.0, 1.0), CellClass::Occupied);
         assert_eq!(at(0.05, 1.0), CellClass::Occupied);
         assert_eq!(at(-0.2, 1.0), CellClass::Outside);
+    }
+
+    /// Without a margin the walls on the bounding box's right and top edges are still
+    /// rasterised: the same wall cells as with a margin (which only adds outside cells).
+    #[test]
+    fn a_grid_without_margin_keeps_the_outer_walls() {
+        let l = Layout::from_geojson(SQUARE, Path::new("t.geojson")).unwrap();
+        let walls = |m: &ReferenceMap| {
+            let mut v: Vec<(i64, i64)> = (0..m.spec.len())
+                .filter(|&i| m.cells[i] == CellClass::Occupied)
+                .map(|i| {
+                    let c = m.spec.center(i / m.spec.cols, i % m.spec.cols);
+                    ((c.x * 1e3).round() as i64, (c.y * 1e3).round() as i64)
+                })
+                .collect();
+            v.sort();
+            v
+        };
+        let (bare, wide) = (l.rasterize(0.1, 0.0), l.rasterize(0.1, 0.3));
+        let b = l.bbox();
+        assert!(
+            bare.spec.cell_of(b.max()).is_some(),
+            "top-right corner off the grid"
+        );
+        assert_eq!(walls(&bare), walls(&wide));
+        // the margin of the other tests is unchanged: 4 m + 2 × 0.3 m in 0.1 m cells
+        assert_eq!(wide.spec.cols, 46);
+        assert_eq!(bare.spec.cols, 41);
     }
 
     #[test]

@@ -14,6 +14,7 @@ use crate::params::{ParamGuard, Valid};
 
 /// Which implementation of the EKF.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
 pub enum EkfVariant {
     /// Exact dense covariance ([`crate::mapping::ekf::DenseEkf`]).
     #[value(name = "dense", help = None::<&str>)]

@@ -69,6 +69,7 @@ use crate::units::wrap_rad;
 
 /// Which ghost rule (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
 pub enum GhostRule {
     /// No rule: the online map as it is.
     #[value(name = "none", help = None::<&str>)]
@@ -373,5 +374,23 @@ mod tests {
         let e = bad.check().unwrap_err().to_string();
         assert!(e.contains("`aspect_lobes`") && e.contains("must be"), "{e}");
         assert_eq!(GhostRule::Mirror.name(), "mirror");
+    }
+
+    /// metrics.json names each mapping choice as its command-line value, so a user's
+    /// script can pass a run's parameters back as flags (`"rule": "mirror"`, not `"Mirror"`).
+    #[test]
+    fn mapping_choices_serialise_as_their_flag_values() {
+        use crate::mapping::ekf::EkfVariant;
+        use clap::ValueEnum;
+        fn same<T: ValueEnum + serde::Serialize>() {
+            for v in T::value_variants() {
+                let flag = v.to_possible_value().unwrap().get_name().to_string();
+                assert_eq!(serde_json::to_string(v).unwrap(), format!("\"{flag}\""));
+            }
+        }
+        same::<GhostRule>();
+        same::<EkfVariant>();
+        same::<SilentBound>();
+        assert_eq!(GhostRule::None.name(), "none");
     }
 }
