@@ -270,7 +270,16 @@ fn floor(dir: &Path) {
         ..Default::default()
     };
     let layout = pradar::campaign::layout::Layout::load(&fc.layout_path()).unwrap();
-    let spec = pradar::campaign::layout::GridSpec::covering(layout.bbox(), 0.1, 0.0);
+    // exactly 200 x 200 cells over the 20 m box (`GridSpec::covering` would add a column
+    // and a row for the walls on its upper edges; the floor's timings are per 40,000 cells)
+    let bbox = layout.bbox();
+    let spec = pradar::campaign::layout::GridSpec {
+        x0_m: bbox.min().x,
+        y0_m: bbox.min().y,
+        cell_m: 0.1,
+        cols: 200,
+        rows: 200,
+    };
     let model = ObservationModel::new(
         spec,
         &grid.check().unwrap(),

@@ -599,9 +599,10 @@ fn hall_sets() {
 /// (`pradar check`, 20 draws); the model itself checked against each environment as the
 /// reference. Prints per environment and per quantity: coverage, median |error| of the
 /// median, median and largest interval hi/lo; and the check's pass count. Measurement
-/// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the proxy;
-/// 0 stops the test with a message), `PRADAR_COVERAGE_NO_CHECK=1` no `pradar check`, `PRADAR_COVERAGE_SIMS` and
-/// `PRADAR_COVERAGE_POP` another budget and population (default 600 and 200),
+/// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the
+/// proxy; 0 stops the test with a message), `PRADAR_COVERAGE_NO_CHECK=1` no `pradar
+/// check`, `PRADAR_COVERAGE_SIMS` and `PRADAR_COVERAGE_POP` another budget and population
+/// (default 600 and 200),
 /// `PRADAR_COVERAGE_POSES=n` (1–24; unset or 0: the corridor's own 12) the first n of
 /// the corridor's poses continued along it, `PRADAR_TEST_RIDGE=fixed|cv` adds `--ridge`,
 /// `PRADAR_ABC_TRACE=1` passes the sampler's trace through.

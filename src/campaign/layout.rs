@@ -121,18 +121,17 @@ pub struct GridSpec {
 
 impl GridSpec {
     /// Grid over `rect` plus `margin_m` on every side. Cells are half-open, so the
-    /// rectangle's upper edges must lie strictly inside the grid: with a margin below one
-    /// cell a wall on the bounding box's right or top edge would otherwise fall just
-    /// outside it (a column or row is added where needed).
+    /// rectangle's upper edges must lie strictly inside the grid: with no margin a wall on
+    /// the bounding box's right or top edge would otherwise fall just outside it (one
+    /// column or row is added there; any margin above 1e-9 of a cell leaves the grid as
+    /// it was).
     pub fn covering(rect: Rect<f64>, cell_m: f64, margin_m: f64) -> GridSpec {
         let x0 = rect.min().x - margin_m;
         let y0 = rect.min().y - margin_m;
+        // n·cell ≥ extent + 2·margin − 1e-9·cell, so one added cell is always enough
         let count = |extent: f64, lo: f64, hi: f64| {
-            let mut n = ((extent + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
-            while lo + n as f64 * cell_m <= hi {
-                n += 1;
-            }
-            n
+            let n = ((extent + 2.0 * margin_m) / cell_m - 1e-9).ceil() as usize;
+            n.saturating_add(usize::from(lo + n as f64 * cell_m <= hi))
         };
         let cols = count(rect.width(), x0, rect.max().x);
         let rows = count(rect.height(), y0, rect.max().y);
