@@ -611,24 +611,22 @@ fn coverage(distance: &str) {
     // `PRADAR_COVERAGE_POSES=24`: the corridor's poses continued along it at the same
     // 0.405 m spacing (x = 0.5 + 0.405·i m, the fixture's values for i < 12; 24 fit inside
     // its end wall at x = 10 m; measurements of the widths' contraction with the campaign)
-    let cpath = match env_usize("PRADAR_COVERAGE_POSES", 0) {
-        0 => corridor(&tmp.path().join("in")),
-        n => {
-            assert!(n <= 24, "PRADAR_COVERAGE_POSES in 1..=24");
-            let mut t = common::corridor();
-            let poses: Vec<toml::Value> = (0..n)
-                .map(|i| {
-                    let mut p = toml::Table::new();
-                    p.insert("x_m".into(), ((500 + 405 * i) as f64 / 1000.0).into());
-                    p.insert("y_m".into(), (-0.3).into());
-                    p.insert("heading_deg".into(), 0.0.into());
-                    toml::Value::Table(p)
-                })
-                .collect();
-            t.insert("poses".into(), toml::Value::Array(poses));
-            common::write_campaign(&tmp.path().join("in"), &t)
-        }
-    };
+    let mut t = common::corridor();
+    let n = env_usize("PRADAR_COVERAGE_POSES", 0);
+    if n > 0 {
+        assert!(n <= 24, "PRADAR_COVERAGE_POSES in 1..=24");
+        let poses: Vec<toml::Value> = (0..n)
+            .map(|i| {
+                let mut p = toml::Table::new();
+                p.insert("x_m".into(), ((500 + 405 * i) as f64 / 1000.0).into());
+                p.insert("y_m".into(), (-0.3).into());
+                p.insert("heading_deg".into(), 0.0.into());
+                toml::Value::Table(p)
+            })
+            .collect();
+        t.insert("poses".into(), toml::Value::Array(poses));
+    }
+    let cpath = common::write_campaign(&tmp.path().join("in"), &t);
     let truth = ModelConfig::table1_defaults();
     // `PRADAR_COVERAGE_ENVS=5`: the five-environment proxy (synth seeds 1000-1004)
     let reps = env_usize("PRADAR_COVERAGE_ENVS", 20);

@@ -311,14 +311,13 @@ impl Calibration {
     /// units, and the normalised weights) — what [`Calibration::write_posterior_csv`]
     /// writes and `check --posterior` reads back, without the file.
     pub fn posterior_sample(&self) -> crate::check::PosteriorSample {
-        let total: f64 = self.posterior.weights.iter().sum();
-        crate::check::PosteriorSample {
-            names: self.free.clone(),
-            weights: self.posterior.weights.iter().map(|w| w / total).collect(),
-            values: (self.particles().iter())
+        crate::check::PosteriorSample::normalised(
+            self.free.clone(),
+            self.posterior.weights.clone(),
+            (self.particles().iter())
                 .map(|x| x.iter().map(|v| v.exp()).collect())
                 .collect(),
-        }
+        )
     }
 
     /// Write the final population as CSV: `weight, distance`, then per free quantity its

@@ -161,16 +161,26 @@ impl PosteriorSample {
                     .collect::<Result<Vec<f64>>>()?,
             );
         }
-        let total: f64 = weights.iter().sum();
-        if weights.is_empty() || total <= 0.0 {
+        if weights.is_empty() || weights.iter().sum::<f64>() <= 0.0 {
             return Err(bad("no particle with a positive weight".into()));
         }
-        weights.iter_mut().for_each(|w| *w /= total);
-        Ok(PosteriorSample {
-            names: cols.into_iter().map(|(_, n)| n).collect(),
+        Ok(PosteriorSample::normalised(
+            cols.into_iter().map(|(_, n)| n).collect(),
             weights,
             values,
-        })
+        ))
+    }
+
+    /// A sample from its quantities' names, the particles' weights (any positive total:
+    /// they are normalised here) and values (schema units).
+    pub fn normalised(names: Vec<String>, mut weights: Vec<f64>, values: Vec<Vec<f64>>) -> Self {
+        let total: f64 = weights.iter().sum();
+        weights.iter_mut().for_each(|w| *w /= total);
+        PosteriorSample {
+            names,
+            weights,
+            values,
+        }
     }
 
     /// `model` with the free quantities of particle `i`; an error names a quantity the
