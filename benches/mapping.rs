@@ -206,7 +206,7 @@ fn corridor(dir: &Path, crit: &mut Criterion) {
     let m = pradar::pipeline::write_builtin_corridor(&dir.join("in")).unwrap();
     let c = Campaign::load(&m).unwrap();
     let t = Instant::now();
-    let sim = pradar::campaign::simulate::simulate(
+    let sim = pradar::simulate::simulate(
         &c,
         &dir.join("sim"),
         SweepFormat::Parquet,

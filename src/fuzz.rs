@@ -256,7 +256,7 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
         }
         Target::Model => {
             let p = scratch.dir.join("model.toml");
-            crate::campaign::modelfile::ModelConfig::from_str(&text(), &p).map(|_| ())
+            crate::model::file::ModelConfig::from_str(&text(), &p).map(|_| ())
         }
         Target::Poses => {
             let p = scratch.dir.join("poses.csv");

@@ -1,7 +1,7 @@
 //! pradar — millimetre-wave personal radar campaigns: simulate or ingest backscatter sweeps,
 //! compute energy matrices, characterise the channel and map.
 //!
-//! Data flows one way: [`campaign`] (manifest, formats, simulator) → [`energy`] →
+//! Data flows one way: [`campaign`] (manifest, formats) and [`simulate`] (the physics simulator) → [`energy`] →
 //! [`mpc`] → [`cluster`] → [`fit`] → [`model`] → [`check`] → [`mapping`] → [`report`].
 #![deny(missing_docs)]
 
@@ -21,6 +21,7 @@ pub mod mpc;
 pub mod params;
 pub mod pipeline;
 pub mod report;
+pub mod simulate;
 pub mod table;
 pub mod units;
 

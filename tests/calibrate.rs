@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use pradar::campaign::modelfile::ModelConfig;
+use pradar::model::file::ModelConfig;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -442,7 +442,7 @@ fn report_has_the_check() {
     assert!(rep.join("check_chain.png").is_file());
     // a chain model with a quantity marked not estimable: not checked, the run succeeds
     let mut bad = truth.clone();
-    bad.ray_decay = pradar::campaign::modelfile::Quantity::not_estimable(
+    bad.ray_decay = pradar::model::file::Quantity::not_estimable(
         &bad.ray_decay.unit,
         &bad.ray_decay.family,
         "too few rays",
@@ -746,7 +746,7 @@ fn corridor_coverage_mmd() {
 #[test]
 fn in_memory_simulator_is_synth() {
     use pradar::campaign::manifest::Campaign;
-    use pradar::campaign::modelfile::{DiffuseModel, Quantity};
+    use pradar::model::file::{DiffuseModel, Quantity};
     use pradar::model::{EnergySimulator, SynthParams};
     use pradar::params::ParamGuard;
     let tmp = tempfile::tempdir().unwrap();

@@ -11,7 +11,7 @@
 
 use crate::common;
 use pradar::campaign::manifest::SweepFormat;
-use pradar::campaign::modelfile::ModelConfig;
+use pradar::model::file::ModelConfig;
 use pradar::campaign::Campaign;
 use pradar::check::{check, CheckParams, CheckResult};
 use pradar::energy::EnergyMatrix;

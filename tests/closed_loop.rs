@@ -58,7 +58,7 @@
 use crate::common;
 
 use pradar::campaign::manifest::Campaign;
-use pradar::campaign::modelfile::{DiffuseModel, ModelConfig, Quantity};
+use pradar::model::file::{DiffuseModel, ModelConfig, Quantity};
 use pradar::cluster::{likelihood_criterion, ClusterParams, Criterion};
 use pradar::fit::channel::{fit_truth, FitParams};
 use pradar::params::ParamGuard;

@@ -272,7 +272,7 @@ fn corridor_fit_against_the_per_path_truth() {
     .unwrap();
     let got = fit_channel(&path, &c, &fp).unwrap().model;
     let truth = fit_truth(&dir.join("truth"), &c, &fp).unwrap().model;
-    type Pick = fn(&pradar::campaign::modelfile::ModelConfig) -> f64;
+    type Pick = fn(&pradar::model::file::ModelConfig) -> f64;
     let picks: [(&str, Pick, f64); 7] = [
         ("Λ (1/ns)", |m| m.inter_cluster_rate.value, 0.15),
         ("λ (1/ns)", |m| m.intra_cluster_rate.value, 0.15),

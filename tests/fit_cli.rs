@@ -97,7 +97,7 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
     );
     // read back and written unchanged
     let m0 = tmp.path().join("model0.toml");
-    let model = pradar::campaign::modelfile::ModelConfig::load(&m0).unwrap();
+    let model = pradar::model::file::ModelConfig::load(&m0).unwrap();
     let again = tmp.path().join("again.toml");
     model.save(&again).unwrap();
     assert_eq!(std::fs::read(&m0).unwrap(), std::fs::read(&again).unwrap());
@@ -124,12 +124,12 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
 #[test]
 fn bad_model_files_and_too_few_clusters_give_clear_errors() {
     let tmp = tempfile::tempdir().unwrap();
-    let mut m = pradar::campaign::modelfile::ModelConfig::table1_defaults();
+    let mut m = pradar::model::file::ModelConfig::table1_defaults();
     m.intra_cluster_aoa.unit = "rad".into();
     let text = toml::to_string(&m).unwrap();
     let p = tmp.path().join("bad.toml");
     std::fs::write(&p, text).unwrap();
-    let e = pradar::campaign::modelfile::ModelConfig::load(&p)
+    let e = pradar::model::file::ModelConfig::load(&p)
         .unwrap_err()
         .to_string();
     assert!(
@@ -141,7 +141,7 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         "schema_version = 1\n[inter_cluster_rate]\nvalue = 0.2\n",
     )
     .unwrap();
-    let e = pradar::campaign::modelfile::ModelConfig::load(&p)
+    let e = pradar::model::file::ModelConfig::load(&p)
         .unwrap_err()
         .to_string();
     assert!(e.contains("bad.toml") && e.contains("unit"), "{e}");
@@ -203,7 +203,7 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         "{text}"
     );
     assert!(!text.to_lowercase().contains("nan"), "{text}");
-    let m = pradar::campaign::modelfile::ModelConfig::load(&model).unwrap();
+    let m = pradar::model::file::ModelConfig::load(&model).unwrap();
     assert!(!m.inter_cluster_rate.is_estimable());
     for q in [&m.intra_cluster_rate, &m.intra_cluster_aoa, &m.ray_decay] {
         assert!(q.is_estimable() && q.value > 0.0, "{q:?}");

@@ -10,7 +10,7 @@
 use crate::common;
 
 use pradar::campaign::manifest::Campaign;
-use pradar::campaign::modelfile::{ModelConfig, Quantity};
+use pradar::model::file::{ModelConfig, Quantity};
 use pradar::fit::channel::{fit_truth, FitParams};
 use pradar::model::{synth, SynthParams};
 use pradar::params::ParamGuard;

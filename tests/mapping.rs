@@ -6,7 +6,7 @@ use crate::common;
 
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat};
-use pradar::campaign::simulate::simulate;
+use pradar::simulate::simulate;
 use pradar::energy;
 use pradar::mapping::job::{load_run, observable_region, score, LoadedRun, MapRun};
 use pradar::mapping::metrics::{evaluate, psi};

@@ -23,7 +23,7 @@ fn measured_corridor(dir: &Path) -> PathBuf {
     t.insert("poses".into(), poses.into());
     let m = write_campaign(&dir.join("in"), &t);
     let c = pradar::campaign::Campaign::load(&m).unwrap();
-    let sim = pradar::campaign::simulate::simulate(
+    let sim = pradar::simulate::simulate(
         &c,
         &dir.join("sim"),
         pradar::campaign::manifest::SweepFormat::Touchstone,

@@ -6,7 +6,7 @@ use crate::common;
 use common::{fixture, set, write_campaign};
 use geo::Coord;
 use pradar::campaign::manifest::SweepFormat;
-use pradar::campaign::modelfile::ModelConfig;
+use pradar::model::file::ModelConfig;
 use pradar::campaign::Campaign;
 use pradar::energy::EnergyMatrix;
 use pradar::model::{
@@ -387,7 +387,7 @@ fn synth_without_diffuse_is_unchanged() {
 
 /// A model with `[diffuse]` (σ' m²/m, Lambert exponent n) and almost no clusters.
 fn diffuse_model(per_m: f64, n: f64) -> ModelConfig {
-    use pradar::campaign::modelfile::{DiffuseModel, Quantity};
+    use pradar::model::file::{DiffuseModel, Quantity};
     let mut m = ModelConfig::table1_defaults();
     m.perimeter_spacing.value = 200.0; // at most one cluster along the room
     m.cluster_rrcs.value = 1e-12; // and far below the walls
@@ -570,7 +570,7 @@ fn synth_diffuse_walls_follow_the_radar_equation() {
 
 #[test]
 fn synth_cli_refuses_a_not_estimable_quantity_unless_set() {
-    use pradar::campaign::modelfile::Quantity;
+    use pradar::model::file::Quantity;
     let tmp = tempfile::tempdir().unwrap();
     let root = common::root();
     let campaign = root.join("data/corridor/campaign.toml");

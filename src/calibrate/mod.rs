@@ -98,7 +98,7 @@ pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior, Ridge};
 pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
-use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
+use crate::model::file::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::model::EnergySimulator;
@@ -154,7 +154,7 @@ impl Prior {
     /// `[walls]` section (|Γ| of every material, corner σ and edge σ free), each at its
     /// [`DEFAULT_PRIOR`] range: 13 free quantities.
     pub fn default_with_walls() -> Prior {
-        use crate::campaign::modelfile::{DiffuseModel, WallModel};
+        use crate::model::file::{DiffuseModel, WallModel};
         let mut m = ModelConfig::table1_defaults();
         m.diffuse = Some(DiffuseModel {
             wall_rcs_per_m: Quantity::new(0.02, "m2/m", "exponential"),
@@ -528,7 +528,7 @@ mod tests {
 
     #[test]
     fn walls_are_free_when_the_prior_has_them() {
-        use crate::campaign::modelfile::WallModel;
+        use crate::model::file::WallModel;
         let mut m = ModelConfig::table1_defaults();
         m.walls = Some(WallModel {
             specular_gamma: Quantity::new(0.3, "1", "constant"),

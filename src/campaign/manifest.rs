@@ -3,7 +3,7 @@
 //!
 //! The analysis view [`Manifest`] deliberately has no field for the simulator-only sections
 //! `[scene]` and `[clutter]` (the ground truth): serde skips them, so no analysis command can
-//! read them. The simulator reads them separately ([`crate::campaign::simulate::SceneConfig`]).
+//! read them. The simulator reads them separately ([`crate::simulate::SceneConfig`]).
 //!
 //! Every validation error names the manifest file and the dotted field.
 //!

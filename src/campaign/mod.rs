@@ -1,13 +1,11 @@
-//! Campaign stage: manifest, layout, array patterns, sweep formats (Touchstone, Parquet),
-//! model-file schema, the physics-based simulator and `import` (a manifest from a folder of
-//! measured sweeps).
+//! Campaign formats: the manifest, the layout geometry, array patterns and the sweep formats
+//! (Touchstone, Parquet). The physics simulator is [`crate::simulate`], the model file's schema
+//! [`crate::model::file`].
 
 pub mod import;
 pub mod layout;
 pub mod manifest;
-pub mod modelfile;
 pub mod pattern;
-pub mod simulate;
 pub mod sweeps;
 pub mod touchstone;
 

@@ -40,7 +40,7 @@
 pub mod stats;
 
 use crate::campaign::manifest::Campaign;
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::export::{Cell, Column, Table};

@@ -65,7 +65,7 @@
 
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, Manifest, C0};
-use crate::campaign::modelfile::{BinSettings, ModelConfig};
+use crate::model::file::{BinSettings, ModelConfig};
 use crate::campaign::pattern::ArrayPattern;
 use crate::error::{Error, Result};
 use crate::fit::estimators::{fit, Family};

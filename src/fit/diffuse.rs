@@ -22,7 +22,7 @@
 //! of the cells, so σ′ reads the peaks' level, above the mean cell; `docs/fit.md` has the
 //! measured ratio against the simulator's wall backscatter.
 
-use crate::campaign::modelfile::{DiffuseModel, Quantity};
+use crate::model::file::{DiffuseModel, Quantity};
 use crate::error::Result;
 use crate::fit::estimators::bootstrap_groups;
 use crate::fit::quantities::ls_line;

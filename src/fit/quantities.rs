@@ -20,7 +20,7 @@
 //! the others are fitted as usual. Bad input is refused before the samples are gathered
 //! ([`channel`](super::channel)).
 
-use crate::campaign::modelfile::Quantity;
+use crate::model::file::Quantity;
 use crate::error::Error;
 use crate::fit::estimators::{bootstrap_groups, fit, ks_bootstrap, Family, Fitted};
 

@@ -24,9 +24,9 @@
 //!   cell (and "—" for its interval and KS p); its CSV value, lo, hi and ks_p are empty.
 //!   The same holds for the truth column.
 //!
-//! [`ModelConfig::table1_defaults`]: crate::campaign::modelfile::ModelConfig::table1_defaults
+//! [`ModelConfig::table1_defaults`]: crate::model::file::ModelConfig::table1_defaults
 
-use crate::campaign::modelfile::Quantity;
+use crate::model::file::Quantity;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;

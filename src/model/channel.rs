@@ -19,7 +19,7 @@
 //!
 //! ```
 //! use pradar::campaign::layout::Layout;
-//! use pradar::campaign::modelfile::ModelConfig;
+//! use pradar::model::file::ModelConfig;
 //! use pradar::model::ChannelModel;
 //! use geo::Coord;
 //! # fn main() -> pradar::error::Result<()> {
@@ -34,8 +34,8 @@
 //! ```
 
 use crate::campaign::layout::Layout;
-use crate::campaign::modelfile::ModelConfig;
-use crate::campaign::simulate::{draw_rays, draw_shadowed, laplace, perimeter_walk};
+use crate::model::file::ModelConfig;
+use crate::simulate::{draw_rays, draw_shadowed, laplace, perimeter_walk};
 use crate::error::{Error, Result};
 use crate::units::wrap_rad;
 use geo::Coord;

@@ -33,7 +33,7 @@
 
 use super::channel::{RaySource, SeenRay};
 use crate::campaign::layout::Layout;
-use crate::campaign::modelfile::DiffuseModel;
+use crate::model::file::DiffuseModel;
 use crate::error::{Error, Result};
 use crate::units::C0;
 use geo::Coord;
@@ -220,7 +220,7 @@ impl DiffuseWalls {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::modelfile::{ModelConfig, Quantity};
+    use crate::model::file::{ModelConfig, Quantity};
 
     fn model(per_m: f64, n: f64) -> DiffuseModel {
         DiffuseModel {

@@ -69,7 +69,7 @@ use super::synth::LayoutRays;
 use super::walls::{specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
 use crate::campaign::manifest::Campaign;
-use crate::campaign::modelfile::{ModelConfig, Quantity};
+use crate::model::file::{ModelConfig, Quantity};
 use crate::energy::EnergyMatrix;
 use crate::error::Result;
 use crate::params::ParamGuard;

@@ -1,7 +1,7 @@
 //! The statistical backscatter channel model (DESIGN §2 "Statistical channel model"):
 //! `pradar synth`.
 //!
-//! Takes a model file ([`ModelConfig`](crate::campaign::modelfile::ModelConfig), fitted by `fit` or written by hand), a campaign (layout,
+//! Takes a model file ([`ModelConfig`](crate::model::file::ModelConfig), fitted by `fit` or written by hand), a campaign (layout,
 //! trajectory, directions, band, array, noise, processing; no `[sweeps]` needed) and a seed;
 //! gives an energy table in the energy-matrix schema (the same columns and metadata as
 //! `pradar energy`, plus `source = synth`) and its ground truth (`rays.parquet`,
@@ -9,7 +9,7 @@
 //! read, written back unchanged).
 //!
 //! The model, drawn once per run from the seed (so every pose sees the same clusters):
-//! * **clusters along the perimeter** ([`perimeter_walk`](crate::campaign::simulate::perimeter_walk), shared with the simulator's
+//! * **clusters along the perimeter** ([`perimeter_walk`](crate::simulate::perimeter_walk), shared with the simulator's
 //!   clutter): arc-length spacings ~ `perimeter_spacing` (d_c, its family), centroid offsets
 //!   ~ `perimeter_offset` (d_p) into the room, capped at 1.5 m as the simulator's clutter
 //!   (an exponential 0.4 m keeps a mean of 0.4·(1 − e^{−3.75}) = 0.391 m); Λ is not drawn
@@ -64,6 +64,7 @@
 
 pub mod channel;
 pub mod diffuse;
+pub mod file;
 pub mod levels;
 pub mod params;
 pub mod response;

@@ -18,9 +18,9 @@ use super::params::{SynthParams, SynthValid};
 use super::response::{BandPattern, Kernel, KERNEL_BINS};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, CouplingRemoval, Steering};
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use crate::campaign::pattern::ArrayPattern;
-use crate::campaign::simulate::{truth_rays_frame, write_truth_clusters, TruthCluster, TruthRay};
+use crate::simulate::{truth_rays_frame, write_truth_clusters, TruthCluster, TruthRay};
 use crate::energy::{self, EnergyProcessor};
 use crate::error::{Error, Result};
 use crate::params::ParamGuard;
@@ -69,7 +69,7 @@ pub fn default_truth_dir(out: &Path) -> PathBuf {
 ///
 /// ```no_run
 /// use pradar::campaign::manifest::Campaign;
-/// use pradar::campaign::modelfile::ModelConfig;
+/// use pradar::model::file::ModelConfig;
 /// use pradar::model::{synth, SynthParams};
 /// use pradar::params::ParamGuard;
 /// use std::path::Path;

@@ -29,7 +29,7 @@ use crate::campaign::layout::Layout;
 use geo::Coord;
 use std::f64::consts::PI;
 
-pub use crate::campaign::modelfile::WallModel;
+pub use crate::model::file::WallModel;
 
 pub use crate::campaign::layout::Foot;
 
@@ -193,7 +193,7 @@ mod tests {
         let south = f.iter().find(|f| (f.d_m - 0.7).abs() < 1e-9).unwrap();
         assert!((south.bearing + PI / 2.0).abs() < 1e-9);
         let w = WallModel {
-            specular_gamma: crate::campaign::modelfile::Quantity::new(0.5, "1", "constant"),
+            specular_gamma: crate::model::file::Quantity::new(0.5, "1", "constant"),
             material_gamma: Default::default(),
             corner_rcs: None,
             edge_rcs: None,

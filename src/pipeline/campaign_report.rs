@@ -36,7 +36,7 @@ use super::geometry::geometry_only_table;
 use super::kmax::k_max_sensitivity;
 use super::{analyse, table1_html_rows, Analysis, Progress};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::campaign::simulate::{has_scene, simulate, SimReport};
+use crate::simulate::{has_scene, simulate, SimReport};
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
 use crate::fit::channel::ChannelFit;
@@ -477,7 +477,7 @@ fn check_section(job: &Job, s: &Data, a: &Analysis, progress: Progress) -> Secti
     let run = || -> Result<Section> {
         let (model, what) = match job.model {
             Some(m) => (
-                crate::campaign::modelfile::ModelConfig::load(m)?,
+                crate::model::file::ModelConfig::load(m)?,
                 format!(
                     "the model {} against the energy table of {name}",
                     m.display()

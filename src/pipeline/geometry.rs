@@ -8,7 +8,7 @@
 
 use super::{analyse, table1_html_rows, Progress};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::campaign::simulate::simulate;
+use crate::simulate::simulate;
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
 use crate::report;

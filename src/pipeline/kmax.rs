@@ -9,7 +9,7 @@
 //! positions whose K changed against the default is its own column).
 
 use crate::campaign::manifest::Campaign;
-use crate::campaign::modelfile::{ModelConfig, Quantity};
+use crate::model::file::{ModelConfig, Quantity};
 use crate::cluster;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};

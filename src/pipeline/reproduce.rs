@@ -12,7 +12,7 @@ use super::campaign_report::{run_inner, Job, OutGuard, Source};
 use super::experiment::ExperimentValid;
 use super::{write_builtin_corridor, Progress};
 use crate::campaign::manifest::Campaign;
-use crate::campaign::simulate::has_scene;
+use crate::simulate::has_scene;
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 use std::path::{Path, PathBuf};

@@ -6,7 +6,7 @@
 
 use super::{html_escape, plot_err, register_font, Section};
 use crate::calibrate::{weighted_quantile, Calibration};
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use crate::error::Result;
 use plotters::prelude::*;
 use std::path::Path;

@@ -89,7 +89,7 @@ pub fn chain(
     let m = write_campaign(&dir.join("in"), t);
     let c = Campaign::load(&m).unwrap();
     let sim =
-        pradar::campaign::simulate::simulate(&c, &dir.join("sim"), format, &|_, _| {}).unwrap();
+        pradar::simulate::simulate(&c, &dir.join("sim"), format, &|_, _| {}).unwrap();
     let sc = Campaign::load(&sim.manifest).unwrap();
     let e = dir.join("energy.parquet");
     pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
@@ -154,8 +154,8 @@ pub fn hall_model(
     lambda: f64,
     aoa_deg: f64,
     dc_m: f64,
-) -> pradar::campaign::modelfile::ModelConfig {
-    use pradar::campaign::modelfile::{ModelConfig, Quantity};
+) -> pradar::model::file::ModelConfig {
+    use pradar::model::file::{ModelConfig, Quantity};
     let mut m = ModelConfig::table1_defaults();
     m.intra_cluster_rate = Quantity::new(lambda, "1/ns", "exponential");
     m.intra_cluster_aoa = Quantity::new(aoa_deg, "deg", "laplacian");

@@ -7,8 +7,8 @@
 use super::{campaign_inputs, load_campaign, refuse, StepProgress};
 use crate::campaign::import::{ImportOutcome, ImportParams};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::campaign::modelfile::ModelConfig;
-use crate::campaign::simulate::SimReport;
+use crate::model::file::ModelConfig;
+use crate::simulate::SimReport;
 use crate::energy::EnergyReport;
 use crate::error::Result;
 use crate::model::{SynthParams, SynthReport};
@@ -54,7 +54,7 @@ impl fmt::Display for SimulateSummary {
     }
 }
 
-/// Run `pradar simulate` ([`crate::campaign::simulate::simulate`]).
+/// Run `pradar simulate` ([`crate::simulate::simulate`]).
 pub fn simulate(cmd: &Simulate, progress: StepProgress) -> Result<SimulateSummary> {
     let c = load_campaign(&cmd.campaign, cmd.elements)?;
     let truth = cmd.out.join("truth");
@@ -70,7 +70,7 @@ pub fn simulate(cmd: &Simulate, progress: StepProgress) -> Result<SimulateSummar
     .map(|p| (p, "--out"))
     .collect();
     refuse(&outputs, &campaign_inputs(&c))?;
-    let r = crate::campaign::simulate::simulate(&c, &cmd.out, cmd.format, progress)?;
+    let r = crate::simulate::simulate(&c, &cmd.out, cmd.format, progress)?;
     Ok(SimulateSummary(r))
 }
 

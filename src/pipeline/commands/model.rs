@@ -6,7 +6,7 @@
 
 use super::{campaign_inputs, refuse, StepProgress};
 use crate::campaign::manifest::Campaign;
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use crate::error::Result;
 use crate::params::ParamGuard;
 use std::fmt;

@@ -8,8 +8,8 @@
 
 use super::super::{analyse, write_builtin_corridor, Progress};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::campaign::modelfile::ModelConfig;
-use crate::campaign::simulate::simulate;
+use crate::model::file::ModelConfig;
+use crate::simulate::simulate;
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};

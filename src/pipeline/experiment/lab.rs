@@ -22,8 +22,8 @@ use super::super::Progress;
 use super::{Experiment, ExperimentInputs, ExperimentValid};
 use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::campaign::modelfile::ModelConfig;
-use crate::campaign::simulate::simulate;
+use crate::model::file::ModelConfig;
+use crate::simulate::simulate;
 use crate::energy;
 use crate::error::{Error, Result};
 use crate::export::LineChart;
@@ -254,7 +254,7 @@ impl<'a> Lab<'a> {
         std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
         Ok(Lab {
             campaign_elements: c.manifest.array.elements,
-            sweeps_word: match crate::campaign::simulate::has_scene(&c)? {
+            sweeps_word: match crate::simulate::has_scene(&c)? {
                 true => "simulated sweeps",
                 false => "measured sweeps",
             },

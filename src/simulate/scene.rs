@@ -18,7 +18,7 @@
 use super::draws::{cgauss, draw_rays, draw_shadowed, laplace, perimeter_walk};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::C0;
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 use geo::Coord;

@@ -429,8 +429,8 @@ mod tests {
     use super::*;
     use crate::campaign::manifest::{ArrayConfig, Band, Steering, C0};
     use crate::campaign::pattern::{ArrayPattern, TABLE_STEP_DEG};
-    use crate::campaign::simulate::scene::ScattererKind;
-    use crate::campaign::simulate::synth::synth_sweep;
+    use crate::simulate::scene::ScattererKind;
+    use crate::simulate::synth::synth_sweep;
     use geo::Coord;
     use rand::{Rng, SeedableRng};
 

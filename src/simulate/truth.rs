@@ -317,7 +317,7 @@ mod tests {
     use super::*;
     use crate::campaign::layout::Layout;
     use crate::campaign::manifest::Campaign;
-    use crate::campaign::simulate::scene::{PointTarget, SceneConfig};
+    use crate::simulate::scene::{PointTarget, SceneConfig};
     use crate::params::ParamGuard;
     use std::collections::{BTreeMap, BTreeSet};
 

@@ -7,7 +7,7 @@
 //! contract (changing it changes every simulated byte).
 
 use crate::campaign::layout::Layout;
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use geo::Coord;
 use num_complex::Complex64;
 use rand::Rng;

@@ -62,7 +62,7 @@ pub use truth::{truth_rays_frame, write_truth_clusters, write_truth_scatterers, 
 
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{one_line, Campaign, SweepFormat, C0};
-use crate::campaign::modelfile::ModelConfig;
+use crate::model::file::ModelConfig;
 use crate::campaign::pattern::ArrayPattern;
 use crate::campaign::sweeps::PositionSweeps;
 use crate::error::{Error, Result};
@@ -124,7 +124,7 @@ pub fn scene_sections(c: &Campaign) -> Result<(SceneValid, Option<ModelConfig>)>
 ///
 /// ```no_run
 /// use pradar::campaign::manifest::SweepFormat;
-/// use pradar::campaign::simulate::simulate;
+/// use pradar::simulate::simulate;
 /// use pradar::campaign::Campaign;
 /// use std::path::Path;
 ///
