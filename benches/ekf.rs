@@ -12,7 +12,6 @@
 //!                                 update dumped to DIR as .npy and timed (best of 3)
 //! `scripts/bench-ekf` runs them all.
 
-use pradar::campaign::layout::GridSpec;
 use pradar::campaign::manifest::Campaign;
 use pradar::energy::{EnergyMatrix, EnergyMeta, EnergyProcessor};
 use pradar::mapping::ekf::{
@@ -20,6 +19,7 @@ use pradar::mapping::ekf::{
     RrcsFilter, TiledEkf,
 };
 use pradar::mapping::grid::{GridParams, ObservationModel, PoseGeometry};
+use pradar::mapping::reference::GridSpec;
 use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Gamma};

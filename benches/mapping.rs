@@ -206,13 +206,8 @@ fn corridor(dir: &Path, crit: &mut Criterion) {
     let m = pradar::pipeline::write_builtin_corridor(&dir.join("in")).unwrap();
     let c = Campaign::load(&m).unwrap();
     let t = Instant::now();
-    let sim = pradar::simulate::simulate(
-        &c,
-        &dir.join("sim"),
-        SweepFormat::Parquet,
-        &|_, _| {},
-    )
-    .unwrap();
+    let sim =
+        pradar::simulate::simulate(&c, &dir.join("sim"), SweepFormat::Parquet, &|_, _| {}).unwrap();
     let sc = Campaign::load(&sim.manifest).unwrap();
     let e = dir.join("energy.parquet");
     pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
@@ -273,7 +268,7 @@ fn floor(dir: &Path) {
     // exactly 200 x 200 cells over the 20 m box (`GridSpec::covering` would add a column
     // and a row for the walls on its upper edges; the floor's timings are per 40,000 cells)
     let bbox = layout.bbox();
-    let spec = pradar::campaign::layout::GridSpec {
+    let spec = pradar::mapping::reference::GridSpec {
         x0_m: bbox.min().x,
         y0_m: bbox.min().y,
         cell_m: 0.1,

@@ -514,8 +514,8 @@ pub struct MapTile {
 /// Colour of a binary map cell scored against the reference: occupied in both black, free in
 /// both white, false occupied red, missed occupied blue, outside the perimeter (predicted
 /// free) light grey.
-pub fn scored_colour(map: bool, reference: crate::campaign::layout::CellClass) -> RGBColor {
-    use crate::campaign::layout::CellClass;
+pub fn scored_colour(map: bool, reference: crate::mapping::reference::CellClass) -> RGBColor {
+    use crate::mapping::reference::CellClass;
     match (map, reference) {
         (true, CellClass::Occupied) => RGBColor(0, 0, 0),
         (false, CellClass::Occupied) => RGBColor(40, 90, 230),

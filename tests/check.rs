@@ -11,10 +11,10 @@
 
 use crate::common;
 use pradar::campaign::manifest::SweepFormat;
-use pradar::model::file::ModelConfig;
 use pradar::campaign::Campaign;
 use pradar::check::{check, CheckParams, CheckResult};
 use pradar::energy::EnergyMatrix;
+use pradar::model::file::ModelConfig;
 use pradar::params::ParamGuard;
 use std::path::Path;
 

@@ -58,9 +58,9 @@
 use crate::common;
 
 use pradar::campaign::manifest::Campaign;
-use pradar::model::file::{DiffuseModel, ModelConfig, Quantity};
 use pradar::cluster::{likelihood_criterion, ClusterParams, Criterion};
 use pradar::fit::channel::{fit_truth, FitParams};
+use pradar::model::file::{DiffuseModel, ModelConfig, Quantity};
 use pradar::params::ParamGuard;
 use pradar::table;
 use rand::{Rng, SeedableRng};

@@ -8,7 +8,6 @@
 use crate::common;
 
 use common::*;
-use pradar::campaign::layout::{CellClass, GridSpec};
 use pradar::campaign::manifest::SweepFormat;
 use pradar::energy::EnergySource;
 use pradar::mapping::ekf::{
@@ -18,6 +17,7 @@ use pradar::mapping::ekf::{
 use pradar::mapping::grid::{GridParams, ObservationModel};
 use pradar::mapping::job::{load_run, observable_region, score_binary, window_kernel, MapRun};
 use pradar::mapping::metrics::evaluate;
+use pradar::mapping::reference::{CellClass, GridSpec};
 use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};

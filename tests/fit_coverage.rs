@@ -10,8 +10,8 @@
 use crate::common;
 
 use pradar::campaign::manifest::Campaign;
-use pradar::model::file::{ModelConfig, Quantity};
 use pradar::fit::channel::{fit_truth, FitParams};
+use pradar::model::file::{ModelConfig, Quantity};
 use pradar::model::{synth, SynthParams};
 use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};

@@ -6,13 +6,13 @@ use crate::common;
 
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat};
-use pradar::simulate::simulate;
 use pradar::energy;
 use pradar::mapping::job::{load_run, observable_region, score, LoadedRun, MapRun};
 use pradar::mapping::metrics::{evaluate, psi};
 use pradar::mapping::og::{fuse, og_map, sigmoid, LogOddsMap, Method, OgParams};
 use pradar::mapping::output::{soft_grey, write_map_files};
 use pradar::params::ParamGuard;
+use pradar::simulate::simulate;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
@@ -231,7 +231,7 @@ fn yaml_field<'a>(text: &'a str, key: &str) -> &'a str {
 #[test]
 fn pgm_and_yaml_read_back_match_the_map() {
     let tmp = tempfile::tempdir().unwrap();
-    let spec = pradar::campaign::layout::GridSpec {
+    let spec = pradar::mapping::reference::GridSpec {
         x0_m: -1.25,
         y0_m: 2.5,
         cell_m: 0.1,

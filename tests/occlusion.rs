@@ -7,8 +7,9 @@
 use crate::common;
 
 use common::*;
-use pradar::campaign::layout::{CellClass, Layout};
+use pradar::campaign::layout::Layout;
 use pradar::campaign::manifest::SweepFormat;
+use pradar::mapping::reference::CellClass;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

@@ -6,9 +6,9 @@ use crate::common;
 use common::{fixture, set, write_campaign};
 use geo::Coord;
 use pradar::campaign::manifest::SweepFormat;
-use pradar::model::file::ModelConfig;
 use pradar::campaign::Campaign;
 use pradar::energy::EnergyMatrix;
+use pradar::model::file::ModelConfig;
 use pradar::model::{
     synth, synth_channel, ChannelModel, ModelCluster, ModelRay, SynthParams, SynthValid,
 };

@@ -98,9 +98,9 @@ pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior, Ridge};
 pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
-use crate::model::file::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
+use crate::model::file::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
 use crate::model::EnergySimulator;
 use std::path::Path;
 use summaries::SummaryContext;

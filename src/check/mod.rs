@@ -40,10 +40,10 @@
 pub mod stats;
 
 use crate::campaign::manifest::Campaign;
-use crate::model::file::ModelConfig;
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::export::{Cell, Column, Table};
+use crate::model::file::ModelConfig;
 use crate::model::EnergySimulator;
 use crate::params::{ParamGuard, Valid};
 use rand::{RngCore, SeedableRng};

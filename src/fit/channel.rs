@@ -65,7 +65,6 @@
 
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, Manifest, C0};
-use crate::model::file::{BinSettings, ModelConfig};
 use crate::campaign::pattern::ArrayPattern;
 use crate::error::{Error, Result};
 use crate::fit::estimators::{fit, Family};
@@ -77,6 +76,7 @@ use crate::fit::quantities::{
     decay, decay_lad0, decay_quantity, fit_arrivals, fit_offset, fit_spacing, mean_quantity,
     Groups, PairGroups, Resampling,
 };
+use crate::model::file::{BinSettings, ModelConfig};
 use crate::table;
 use crate::units::range_m;
 use std::collections::BTreeMap;

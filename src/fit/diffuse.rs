@@ -22,10 +22,10 @@
 //! of the cells, so σ′ reads the peaks' level, above the mean cell; `docs/fit.md` has the
 //! measured ratio against the simulator's wall backscatter.
 
-use crate::model::file::{DiffuseModel, Quantity};
 use crate::error::Result;
 use crate::fit::estimators::bootstrap_groups;
 use crate::fit::quantities::ls_line;
+use crate::model::file::{DiffuseModel, Quantity};
 use crate::mpc::{Component, Mpc};
 use std::path::Path;
 

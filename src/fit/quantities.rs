@@ -20,9 +20,9 @@
 //! the others are fitted as usual. Bad input is refused before the samples are gathered
 //! ([`channel`](super::channel)).
 
-use crate::model::file::Quantity;
 use crate::error::Error;
 use crate::fit::estimators::{bootstrap_groups, fit, ks_bootstrap, Family, Fitted};
+use crate::model::file::Quantity;
 
 /// A fitted quantity with its diagnostics.
 #[derive(Debug, Clone)]

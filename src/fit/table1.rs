@@ -26,10 +26,10 @@
 //!
 //! [`ModelConfig::table1_defaults`]: crate::model::file::ModelConfig::table1_defaults
 
-use crate::model::file::Quantity;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
+use crate::model::file::Quantity;
 use crate::units::C0;
 use std::path::Path;
 

@@ -303,14 +303,14 @@ pub struct ThreeClassMetrics {
 /// each object's cells (module docs).
 pub fn evaluate_three_class(
     map: &[bool],
-    reference: &[crate::campaign::layout::CellClass],
+    reference: &[crate::mapping::reference::CellClass],
     band: &[bool],
     objects: &[Vec<usize>],
     region: &[bool],
     rows: usize,
     cols: usize,
 ) -> ThreeClassMetrics {
-    use crate::campaign::layout::CellClass;
+    use crate::mapping::reference::CellClass;
     let n = map.len();
     debug_assert_eq!(band.len(), n, "the boundary band is on the map's grid");
     let structure: Vec<bool> = reference
@@ -445,7 +445,7 @@ mod tests {
     /// cell far from both, one cell beyond the walls and the object's zone corner.
     #[test]
     fn three_class_counts_a_hand_made_grid() {
-        use crate::campaign::layout::CellClass;
+        use crate::mapping::reference::CellClass;
         let (rows, cols) = (6, 8);
         let mut reference = vec![CellClass::Free; rows * cols];
         for c in 0..cols {
@@ -533,7 +533,8 @@ mod tests {
     /// 122 wrong cells of 120.
     #[test]
     fn a_wall_on_a_grid_line_is_found_by_either_cell_beside_it() {
-        use crate::campaign::layout::{CellClass, Layout};
+        use crate::campaign::layout::Layout;
+        use crate::mapping::reference::CellClass;
         let room = r#"{"type":"FeatureCollection","features":[
           {"type":"Feature","properties":{"role":"perimeter","material":"concrete"},
            "geometry":{"type":"Polygon","coordinates":[[[0,0],[4,0],[4,2],[0,2],[0,0]]]}}]}"#;

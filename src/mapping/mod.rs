@@ -29,6 +29,7 @@ mod memo;
 pub mod metrics;
 pub mod og;
 pub mod output;
+pub mod reference;
 
 pub use ekf::{EkfParams, EkfValid, EkfVariant};
 pub use grid::{Beam, GridParams, GridValid, ObservationModel};

@@ -13,8 +13,8 @@
 //! Grey coding: soft maps v = round(255·(1 − p)) (p = 1 black); binary maps occupied 0,
 //! free 254; the reference map occupied 0, free 254, outside 205 (map_server's "unknown").
 
-use crate::campaign::layout::GridSpec;
 use crate::error::{Error, Result};
+use crate::mapping::reference::GridSpec;
 use plotters::prelude::*;
 use std::io::Write;
 use std::path::Path;

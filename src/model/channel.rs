@@ -34,9 +34,9 @@
 //! ```
 
 use crate::campaign::layout::Layout;
+use crate::error::{Error, Result};
 use crate::model::file::ModelConfig;
 use crate::simulate::{draw_rays, draw_shadowed, laplace, perimeter_walk};
-use crate::error::{Error, Result};
 use crate::units::wrap_rad;
 use geo::Coord;
 use rand::SeedableRng;

@@ -33,8 +33,8 @@
 
 use super::channel::{RaySource, SeenRay};
 use crate::campaign::layout::Layout;
-use crate::model::file::DiffuseModel;
 use crate::error::{Error, Result};
+use crate::model::file::DiffuseModel;
 use crate::units::C0;
 use geo::Coord;
 use rand::{Rng, SeedableRng};

@@ -8,10 +8,10 @@
 
 use super::{analyse, table1_html_rows, Progress};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::simulate::simulate;
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
 use crate::report;
+use crate::simulate::simulate;
 use std::path::{Path, PathBuf};
 
 /// Simulate the campaign `c` with its `[clutter]` section removed into `dir`, run energy →

@@ -9,11 +9,11 @@
 //! positions whose K changed against the default is its own column).
 
 use crate::campaign::manifest::Campaign;
-use crate::model::file::{ModelConfig, Quantity};
 use crate::cluster;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
+use crate::model::file::{ModelConfig, Quantity};
 use crate::params::ParamGuard;
 use std::path::Path;
 

@@ -12,9 +12,9 @@ use super::campaign_report::{run_inner, Job, OutGuard, Source};
 use super::experiment::ExperimentValid;
 use super::{write_builtin_corridor, Progress};
 use crate::campaign::manifest::Campaign;
-use crate::simulate::has_scene;
 use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
+use crate::simulate::has_scene;
 use std::path::{Path, PathBuf};
 
 /// Options of `reproduce` (checked by [`ParamGuard::check`] into a [`ReproduceValid`]).

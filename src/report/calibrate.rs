@@ -6,8 +6,8 @@
 
 use super::{html_escape, plot_err, register_font, Section};
 use crate::calibrate::{weighted_quantile, Calibration};
-use crate::model::file::ModelConfig;
 use crate::error::Result;
+use crate::model::file::ModelConfig;
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -62,10 +62,10 @@ pub use truth::{truth_rays_frame, write_truth_clusters, write_truth_scatterers, 
 
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{one_line, Campaign, SweepFormat, C0};
-use crate::model::file::ModelConfig;
 use crate::campaign::pattern::ArrayPattern;
 use crate::campaign::sweeps::PositionSweeps;
 use crate::error::{Error, Result};
+use crate::model::file::ModelConfig;
 use crate::params::ParamGuard;
 use crate::table;
 use geo::Coord;

@@ -18,8 +18,8 @@
 use super::draws::{cgauss, draw_rays, draw_shadowed, laplace, perimeter_walk};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::C0;
-use crate::model::file::ModelConfig;
 use crate::error::{Error, Result};
+use crate::model::file::ModelConfig;
 use crate::params::{ParamGuard, Valid};
 use geo::Coord;
 use num_complex::Complex64;

@@ -317,8 +317,8 @@ mod tests {
     use super::*;
     use crate::campaign::layout::Layout;
     use crate::campaign::manifest::Campaign;
-    use crate::simulate::scene::{PointTarget, SceneConfig};
     use crate::params::ParamGuard;
+    use crate::simulate::scene::{PointTarget, SceneConfig};
     use std::collections::{BTreeMap, BTreeSet};
 
     /// A 5 m × 3 m room with a box obstacle, specular walls, one target and the corridor's

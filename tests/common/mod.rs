@@ -88,8 +88,7 @@ pub fn chain(
     use pradar::campaign::Campaign;
     let m = write_campaign(&dir.join("in"), t);
     let c = Campaign::load(&m).unwrap();
-    let sim =
-        pradar::simulate::simulate(&c, &dir.join("sim"), format, &|_, _| {}).unwrap();
+    let sim = pradar::simulate::simulate(&c, &dir.join("sim"), format, &|_, _| {}).unwrap();
     let sc = Campaign::load(&sim.manifest).unwrap();
     let e = dir.join("energy.parquet");
     pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
@@ -150,11 +149,7 @@ noise_from_ns = 100.0
 
 /// The closed-loop model sets of issue 4: Table 1 defaults with λ (1/ns), AoA std (deg) and
 /// d_c (m) given, d_p 0.4 m, Γ 15 ns, γ 4 ns and 5 rays per cluster.
-pub fn hall_model(
-    lambda: f64,
-    aoa_deg: f64,
-    dc_m: f64,
-) -> pradar::model::file::ModelConfig {
+pub fn hall_model(lambda: f64, aoa_deg: f64, dc_m: f64) -> pradar::model::file::ModelConfig {
     use pradar::model::file::{ModelConfig, Quantity};
     let mut m = ModelConfig::table1_defaults();
     m.intra_cluster_rate = Quantity::new(lambda, "1/ns", "exponential");

@@ -34,9 +34,9 @@
 //! on demand per pose and reused for every bin and every pass of a mapper;
 //! [`ObservationModel::beams`] builds one pose's beams in parallel.
 
-use crate::campaign::layout::GridSpec;
 use crate::campaign::manifest::{Manifest, Pose};
 use crate::error::{Error, Result};
+use crate::mapping::reference::GridSpec;
 use crate::params::{ParamGuard, Valid};
 use crate::units::{wrap_rad, C0};
 use rayon::prelude::*;

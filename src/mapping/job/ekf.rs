@@ -15,7 +15,6 @@ use super::{
     load_runs, runs_regions, score_binary, write_metrics_json, write_reference, FusionRow,
     LoadedRun, MapReport, MapValid, MetricsPair, Regions, RunSummary,
 };
-use crate::campaign::layout::{GridSpec, ReferenceMap};
 use crate::energy::EnergySource;
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{
@@ -24,6 +23,7 @@ use crate::mapping::ekf::{
 };
 use crate::mapping::grid::{GhostJudge, GhostRule, Occlusion};
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
+use crate::mapping::reference::{GridSpec, ReferenceMap};
 use crate::params::Valid;
 use std::path::Path;
 

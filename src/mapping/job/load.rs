@@ -8,13 +8,14 @@
 //! bin-averaged energy of a unit point echo computed by the run's own `energy` processing.
 
 use super::{MapRun, MapValid};
-use crate::campaign::layout::{GridSpec, Layout, ReferenceMap};
+use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, Pose};
 use crate::energy::{EnergyMatrix, EnergySource, EnergyTable};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
 use crate::mapping::memo::Memo;
 use crate::mapping::og::{detection_threshold, Detector, OgValid};
+use crate::mapping::reference::{GridSpec, ReferenceMap};
 use std::path::PathBuf;
 
 /// A loaded, checked run ready to map.

@@ -66,13 +66,13 @@ pub use score::{
     ClassFigures, MetricsPair, Regions, ThreeClassFigures,
 };
 
-use crate::campaign::layout::{CellClass, ReferenceMap};
 use crate::campaign::manifest::Pose;
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{EkfParams, EkfReport, EkfValid};
 use crate::mapping::grid::{GridParams, GridValid};
 use crate::mapping::og::{fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats, OgValid};
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
+use crate::mapping::reference::{CellClass, ReferenceMap};
 use crate::params::{ParamGuard, Valid};
 use serde::Serialize;
 use std::path::{Path, PathBuf};

@@ -17,8 +17,9 @@
 //!   Synth's rays are drawn per pose around the centroid (excess delays, AoA offsets), so
 //!   they are not points in the room; the centroid is the cluster's one fixed place.
 
-use crate::campaign::layout::{GridSpec, Layout};
+use crate::campaign::layout::Layout;
 use crate::error::{Error, Result};
+use crate::mapping::reference::GridSpec;
 use geo::Coord;
 use std::path::{Path, PathBuf};
 

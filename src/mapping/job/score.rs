@@ -27,13 +27,14 @@
 
 use super::objects::{find_truth, load_objects, Objects};
 use super::LoadedRun;
-use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
+use crate::campaign::layout::Layout;
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::mapping::grid::ObservationModel;
 use crate::mapping::memo::Memo;
 use crate::mapping::metrics::{evaluate, evaluate_three_class, MapMetrics, ThreeClassMetrics};
 use crate::mapping::og::LogOddsMap;
+use crate::mapping::reference::{CellClass, ReferenceMap};
 use rayon::prelude::*;
 use serde::Serialize;
 

@@ -7,12 +7,12 @@
 use super::{campaign_inputs, load_campaign, refuse, StepProgress};
 use crate::campaign::import::{ImportOutcome, ImportParams};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::model::file::ModelConfig;
-use crate::simulate::SimReport;
 use crate::energy::EnergyReport;
 use crate::error::Result;
+use crate::model::file::ModelConfig;
 use crate::model::{SynthParams, SynthReport};
 use crate::params::ParamGuard;
+use crate::simulate::SimReport;
 use std::fmt;
 use std::path::PathBuf;
 

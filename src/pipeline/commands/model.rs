@@ -6,8 +6,8 @@
 
 use super::{campaign_inputs, refuse, StepProgress};
 use crate::campaign::manifest::Campaign;
-use crate::model::file::ModelConfig;
 use crate::error::Result;
+use crate::model::file::ModelConfig;
 use crate::params::ParamGuard;
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -8,10 +8,10 @@
 
 use super::super::{analyse, write_builtin_corridor, Progress};
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::model::file::ModelConfig;
-use crate::simulate::simulate;
 use crate::energy::{self, EnergyMatrix};
 use crate::error::{Error, Result};
+use crate::model::file::ModelConfig;
+use crate::simulate::simulate;
 use std::path::{Path, PathBuf};
 
 /// Where the experiments' inputs come from (all optional).

@@ -20,18 +20,19 @@
 
 use super::super::Progress;
 use super::{Experiment, ExperimentInputs, ExperimentValid};
-use crate::campaign::layout::{CellClass, Layout, ReferenceMap};
+use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, SweepFormat};
-use crate::model::file::ModelConfig;
-use crate::simulate::simulate;
 use crate::energy;
 use crate::error::{Error, Result};
 use crate::export::LineChart;
 use crate::export::{Cell, Column, Table};
 use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
+use crate::mapping::reference::{CellClass, ReferenceMap};
 use crate::mapping::{EkfParams, Method, OgParams};
+use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
+use crate::simulate::simulate;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
