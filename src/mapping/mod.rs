@@ -23,6 +23,7 @@
 //! page of the maps is `report::maps`. Measurements: `docs/mapping.md`.
 
 pub mod ekf;
+pub mod experiment;
 pub mod grid;
 pub mod job;
 mod memo;

@@ -1,5 +1,5 @@
 //! The mapping experiments' images and HTML, drawn from their results
-//! ([`crate::pipeline::experiment::ExperimentResult`]; the experiments never call this
+//! ([`crate::mapping::experiment::ExperimentResult`]; the experiments never call this
 //! module): each experiment's panel `NAME/NAME.png` and curves `NAME/NAME_plot.png`, its
 //! report section (caption, panel, plots, findings, the "every map" table, file links) and
 //! the `pradar experiment` index page.
@@ -11,8 +11,7 @@
 use super::{html_escape, html_table, kv_table, write_index as write_page, MapTile, Section};
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
-use crate::pipeline::experiment::lab::score_columns;
-use crate::pipeline::experiment::{CaseFigures, ExperimentResult, Figure};
+use crate::mapping::experiment::{score_columns, CaseFigures, ExperimentResult, Figure};
 use std::path::Path;
 
 /// The section body of one experiment: caption, panel, figures (may use `{P}`), findings,

@@ -1,4 +1,4 @@
-//! HTML of the `reproduce` report ([`crate::pipeline::reproduce`]): the Table 1 sections
+//! HTML of the `reproduce` report (made by `pradar reproduce` and `pradar report`): the Table 1 sections
 //! (with the fit plots, the K note and the K_max table), the MPC and cluster section, the
 //! stage timings, and the page that gathers them ([`write_index`]).
 

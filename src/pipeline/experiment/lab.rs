@@ -1,16 +1,9 @@
-//! What the experiments share: the cases ([`Case`], one map each), their scoring
-//! ([`CaseFigures`]), the result of one experiment ([`ExperimentResult`]: figures, findings,
-//! and what its page shows — caption, [`Panel`], curves, [`Figure`]s — as data) with its case
-//! table, and the [`Lab`] that makes model data and sweeps, maps every case once per
-//! process and writes each experiment's data files (`NAME.md|.csv|.json`). The images and
-//! the HTML are drawn from a result by [`crate::report::experiments`]; nothing here calls
-//! the report.
-//!
-//! Scoring: ψ, F1 and the wrong-cell count of a map on three regions (module docs of
-//! [`super`]): the whole map and the observable region come from the map's own metrics
-//! (`metrics.json`), and so does the interior (the map's building region: inside the
-//! perimeter or on a wall). A wrong-cell count is the metric's rate times the region's
-//! cells, rounded.
+//! What the experiments share: the [`Lab`] that makes model data and sweeps, maps every
+//! case once per process, scores it ([`CaseFigures`], defined with the other result types in
+//! [`crate::mapping::experiment`]: three regions, module docs of [`super`]) and writes each
+//! experiment's data files (`NAME.md|.csv|.json`) with its case table. The images and the
+//! HTML are drawn from a result by [`crate::report::experiments`]; nothing here calls the
+//! report.
 //!
 //! Parallelism: [`Lab::prepare`] gathers the cases of every experiment asked for, makes
 //! their model data in parallel (sweeps at another N in case order), then runs every map
@@ -26,6 +19,10 @@ use crate::energy;
 use crate::error::{Error, Result};
 use crate::export::LineChart;
 use crate::export::{Cell, Column, Table};
+pub use crate::mapping::experiment::score_columns;
+pub use crate::mapping::experiment::{
+    Case, CaseFigures, DataSource, ExperimentResult, Figure, Panel, PanelTile,
+};
 use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::mapping::reference::{CellClass, ReferenceMap};
 use crate::mapping::{EkfParams, Method, OgParams};
@@ -34,35 +31,8 @@ use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
 use crate::simulate::simulate;
 use rayon::prelude::*;
-use serde::Serialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-
-/// Where a map's data come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum DataSource {
-    /// The campaign's sweeps (simulated or measured).
-    Sweeps,
-    /// `synth` with the model file, this seed.
-    Model(u64),
-}
-
-/// One map of an experiment.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Case {
-    /// Data.
-    pub source: DataSource,
-    /// Array elements.
-    pub elements: usize,
-    /// Mapper (`og` or `ekf`).
-    pub method: &'static str,
-    /// OG prior p0.
-    pub og_prior: f64,
-    /// EKF prior mean μ0, m.
-    pub mu0: f64,
-    /// Pose noise given to the mapper.
-    pub pose_noise: PoseNoise,
-}
 
 impl Case {
     /// Folder name under `maps/`: data, N, mapper, and whatever differs from the base.
@@ -85,52 +55,6 @@ impl Case {
         }
         k
     }
-}
-
-/// Figures of one map (see the module docs for the three regions).
-#[derive(Debug, Clone, Serialize)]
-pub struct CaseFigures {
-    /// Folder under `maps/`.
-    pub key: String,
-    /// The case.
-    pub case: Case,
-    /// ψ on the whole map, cells.
-    pub psi_whole: f64,
-    /// ψ on the observable region, cells.
-    pub psi_observable: f64,
-    /// Occupied F1 on the whole map.
-    pub f1_whole: f64,
-    /// Occupied F1 on the observable region.
-    pub f1_observable: f64,
-    /// Wrong cells on the whole map.
-    pub wrong_whole: usize,
-    /// Wrong cells on the observable region.
-    pub wrong_observable: usize,
-    /// Cells of the observable region.
-    pub observable_cells: usize,
-    /// Occupied cells of the map (whole).
-    pub map_occupied: usize,
-    /// ψ of the all-free map, whole.
-    pub all_free_psi_whole: f64,
-    /// ψ of the all-free map, observable region.
-    pub all_free_psi_observable: f64,
-    /// Wrong cells of the all-free map, whole.
-    pub all_free_wrong_whole: usize,
-    /// ψ on the interior (the building: inside the perimeter or on a wall).
-    pub psi_interior: f64,
-    /// Wrong cells on the interior.
-    pub wrong_interior: usize,
-    /// Occupied F1 on the interior.
-    pub f1_interior: f64,
-    /// Cells of the interior.
-    pub interior_cells: usize,
-    /// Wrong cells of the all-free map on the interior.
-    pub all_free_wrong_interior: usize,
-    /// The map's errors per reference class.
-    pub classes: crate::mapping::job::ClassFigures,
-    /// The map against the three-class reference (structure, the data's truth objects,
-    /// free), when the data have a truth (simulated sweeps, model data).
-    pub three_class: Option<crate::mapping::job::ThreeClassFigures>,
 }
 
 fn count(rate: f64, cells: usize) -> usize {
@@ -164,59 +88,6 @@ impl CaseFigures {
             three_class: m.three_class,
         }
     }
-}
-
-/// What one experiment measured and wrote.
-#[derive(Debug, Clone, Serialize)]
-pub struct ExperimentResult {
-    /// Experiment name.
-    pub name: String,
-    /// Every map, with its figures.
-    pub cases: Vec<CaseFigures>,
-    /// Derived statements (e.g. fig6's N = 16 vs N = 100 check, relative ψ changes).
-    pub findings: Vec<(String, String)>,
-    /// What the experiment shows, in one paragraph (the report's caption).
-    #[serde(skip)]
-    pub caption: String,
-    /// The maps shown side by side (`NAME.png`, drawn by the report).
-    #[serde(skip)]
-    pub panel: Panel,
-    /// Curves (`NAME_plot.png` when not empty, drawn by the report).
-    #[serde(skip)]
-    pub charts: Vec<LineChart>,
-    /// Other figures the report shows.
-    #[serde(skip)]
-    pub figures: Vec<Figure>,
-}
-
-/// One map of an experiment's panel: its title and its binary map (row-major, row 0 = lowest
-/// y, as the map files).
-#[derive(Debug, Clone)]
-pub struct PanelTile {
-    /// Title drawn above the map.
-    pub title: String,
-    /// Occupied cells.
-    pub occupied: Vec<bool>,
-}
-
-/// The maps an experiment shows side by side, each to be scored against `reference`.
-#[derive(Debug, Clone)]
-pub struct Panel {
-    /// The reference map the tiles are coloured against.
-    pub reference: ReferenceMap,
-    /// The maps, in reading order.
-    pub tiles: Vec<PanelTile>,
-    /// Tiles per row.
-    pub columns: usize,
-}
-
-/// A figure of a result beside its panel and table.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Figure {
-    /// The EKF mean RRCS images (`maps/<key>/ekf_mean.png`) of these maps.
-    EkfMeans(Vec<String>),
-    /// The experiment's curve plot (`NAME/NAME_plot.png`), with its alternative text.
-    Plot(String),
 }
 
 /// A mapped case: its figures and its binary map (for the panels).
@@ -635,43 +506,6 @@ pub fn case_table(cases: &[CaseFigures]) -> Table {
         t.push(row);
     }
     t
-}
-
-/// The score columns every experiment table shows: ψ, wrong cells and F1 on the whole map,
-/// the observable region (with its size) and the interior.
-pub fn score_columns() -> Vec<Column> {
-    let col = Column::new;
-    vec![
-        col("ψ whole", "psi_whole"),
-        col("wrong whole", "wrong_whole"),
-        col("F1 whole", "f1_whole"),
-        col("ψ obs.", "psi_observable"),
-        col("wrong obs.", "wrong_observable"),
-        col("F1 obs.", "f1_observable"),
-        col("obs. cells", "observable_cells"),
-        col("ψ interior", "psi_interior"),
-        col("wrong interior", "wrong_interior"),
-        col("F1 interior", "f1_interior"),
-    ]
-}
-
-impl CaseFigures {
-    /// This map's cells under [`score_columns`] (ψ and F1 shown with 3 decimals).
-    pub fn score_cells(&self) -> Vec<Cell> {
-        let c = self;
-        vec![
-            Cell::fixed(c.psi_whole, 3),
-            Cell::count(c.wrong_whole),
-            Cell::fixed(c.f1_whole, 3),
-            Cell::fixed(c.psi_observable, 3),
-            Cell::count(c.wrong_observable),
-            Cell::fixed(c.f1_observable, 3),
-            Cell::count(c.observable_cells),
-            Cell::fixed(c.psi_interior, 3),
-            Cell::count(c.wrong_interior),
-            Cell::fixed(c.f1_interior, 3),
-        ]
-    }
 }
 
 /// Assemble a result.
