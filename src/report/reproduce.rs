@@ -145,7 +145,7 @@ pub fn experiments_not_run_partial(not_estimable: &[(String, String)]) -> Sectio
 /// 2 samples.
 pub type FitPlot = (String, Option<String>);
 
-/// The fitted Table 1 after its table (`rows_html`, as `pipeline::table1_html_rows` gives
+/// The fitted Table 1 after its table (`rows_html`, as the pipeline gives
 /// it, already closed): the closing note with links and the fit plots. The extra
 /// `</table>` it writes first is a stray tag of the original page, kept so the page stays
 /// byte-identical; drop it with the next change that alters the page.
@@ -192,7 +192,7 @@ pub fn k_cap_note(c: &Clustering, k_max: usize) -> String {
     h
 }
 
-/// The geometry-only Table 1: its rows (`rows_html`, as `pipeline::table1_html_rows`
+/// The geometry-only Table 1: its rows (`rows_html`, as the pipeline
 /// gives), what was simulated and found, and the K note.
 pub fn geometry_html(
     rows_html: &str,
