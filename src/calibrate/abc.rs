@@ -21,7 +21,7 @@
 //! then).
 //!
 //! The projection's ridge penalty ([`Ridge`]): `Fixed` is λ = 1e-3·n on every slope
-//! (issue 19's, only there to keep collinear statistics solvable). `Cv` chooses it per
+//! (the original choice, only there to keep collinear statistics solvable). `Cv` chooses it per
 //! parameter from the data at every refit: λ_k = c_k·n_train with c_k the entry of
 //! [`RIDGE_GRID`] (1e-3 … 1e3, half decades) minimising the same 5-fold held-out squared
 //! error Σ_i (x_ik − x̂_ik^(−fold(i)))², ties to the smaller penalty. Why: with 87 raw
@@ -109,11 +109,11 @@ pub struct AbcOptions {
 /// The ridge penalty of the semi-automatic projection (`--ridge`; no effect with the MMD).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Ridge {
-    /// λ = 1e-3·n for every parameter (issue 19).
+    /// λ = 1e-3·n for every parameter.
     #[value(name = "fixed", help = None::<&str>)]
     Fixed,
     /// λ_k = c_k·n per parameter, c_k from [`RIDGE_GRID`] by 5-fold cross-validation on
-    /// the particles the projection is fitted on (issue 30).
+    /// the particles the projection is fitted on.
     #[value(name = "cv", help = None::<&str>)]
     Cv,
     /// As [`Ridge::Cv`], and a parameter whose projection's held-out R² is ≤ 0 (it
@@ -296,7 +296,7 @@ impl Projection {
         Ok(proj)
     }
 
-    /// The projection with the fixed penalty 1e-3·n (issue 19).
+    /// The projection with the fixed penalty 1e-3·n.
     #[cfg(test)]
     fn fit(features: &[Vec<f64>], theta: &[Vec<f64>]) -> Result<Projection> {
         Projection::fit_with(features, theta, &vec![FIXED_RIDGE; theta[0].len()])
@@ -972,7 +972,7 @@ mod tests {
         eprintln!("mixed: ridge c {}, held-out R² {r2:.3?}", fmt_c(&c));
         assert!(c[0] < c[1] && c[1] >= 1.0, "c {c:?}");
         assert!(r2[0] > 0.9 && r2[1] > -0.1, "{r2:?}");
-        // the fixed choice is issue 19's penalty with its held-out R²
+        // the fixed choice is the 1e-3·n penalty with its held-out R²
         let (c, r2) = choose_ridge(&mixed, &theta, Ridge::Fixed);
         assert_eq!(c, vec![FIXED_RIDGE; 2]);
         assert_eq!(r2, heldout_r2(&mixed, &theta, FOLDS, FIXED_RIDGE));

@@ -1,4 +1,4 @@
-//! The MMD distance of `calibrate --distance mmd` (issue 30): the maximum mean discrepancy
+//! The MMD distance of `calibrate --distance mmd`: the maximum mean discrepancy
 //! between the empirical distribution of the measured table's per-profile (and
 //! per-position) statistics and a simulated table's (Bharti, Briol & Pedersen, "A general
 //! method for calibrating stochastic radio channel models with kernels", IEEE TAP 70(6),

@@ -18,7 +18,7 @@
 //!   (`--distance summaries` only: the MMD has no summaries to regress on);
 //! * `distance` — [`Distance::SummariesQuantiles`] (default), [`Distance::Summaries`]
 //!   or [`Distance::Mmd`];
-//! * `ridge` — the projection's ridge penalty, [`Ridge::Cv`] (default: issue 19's fixed
+//! * `ridge` — the projection's ridge penalty, [`Ridge::Cv`] (default: the fixed
 //!   penalty, [`Ridge::Fixed`], gives 95 % intervals that cover d_c and the rays per
 //!   cluster in only 16 of 20 environments, `docs/calibrate.md`) or [`Ridge::CvDrop`]
 //!   (no effect with the MMD).
@@ -31,16 +31,16 @@ use crate::params::{ParamGuard, Valid};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Distance {
     /// Semi-automatic summaries: 42 pooled statistics of the matrix regressed onto the
-    /// parameters ([`summaries`](super::summaries), issue 19).
+    /// parameters ([`summaries`](super::summaries)).
     #[value(name = "summaries", help = None::<&str>)]
     Summaries,
     /// The semi-automatic summaries with 45 more raw statistics: the quantiles 10, 25,
     /// 50, 75, 90 % of the predictive check's per-profile and per-position statistics
-    /// ([`quantile_summaries`](super::summaries::quantile_summaries), issue 30).
+    /// ([`quantile_summaries`](super::summaries::quantile_summaries)).
     #[value(name = "summaries-quantiles", help = None::<&str>)]
     SummariesQuantiles,
     /// The MMD between the per-profile and per-position statistics' distributions
-    /// ([`mmd`](super::mmd), issue 30).
+    /// ([`mmd`](super::mmd)).
     #[value(name = "mmd", help = None::<&str>)]
     Mmd,
 }

@@ -34,7 +34,7 @@
 //! A summary that cannot be formed (no peak, no pair) takes a fixed fallback value, so
 //! every vector is finite.
 //!
-//! [`quantile_summaries`] (issue 30; the default distance appends them to the 42): the
+//! [`quantile_summaries`] (the default distance appends them to the 42): the
 //! quantiles 10, 25, 50, 75, 90 % (the value at rank round(q·(n − 1)) of the sorted
 //! sample) of each component of the predictive check's per-profile set (signal energy,
 //! mean delay, RMS delay spread, signal bins, first arrival, peaks, angular power profile;

@@ -1,5 +1,5 @@
 //! `pradar check`: the posterior-predictive check of a channel model against a measured
-//! energy table, cluster-free (DESIGN §2 "Model check", issue 29).
+//! energy table, cluster-free (DESIGN §2 "Model check").
 //!
 //! Takes a model file (fitted, calibrated or hand-made), the campaign (poses, directions,
 //! band, array, noise, processing, layout — never its `[scene]`/`[clutter]` truth) and

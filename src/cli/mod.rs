@@ -210,13 +210,13 @@ pub struct CalibrateArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// The ABC distance: `summaries-quantiles` (semi-automatic summaries of the 42 pooled
-    /// statistics and the check statistics' quantiles, issue 30), `summaries` (the 42
-    /// pooled statistics only, issue 19) or `mmd` (the MMD between the per-profile and
-    /// per-position statistics' distributions, issue 30).
+    /// statistics and the check statistics' quantiles), `summaries` (the 42
+    /// pooled statistics only) or `mmd` (the MMD between the per-profile and
+    /// per-position statistics' distributions).
     #[arg(long, value_enum, default_value = "summaries-quantiles")]
     pub distance: pradar::calibrate::Distance,
     /// The summaries' projection's ridge penalty: `cv` (per parameter by 5-fold
-    /// cross-validation over 1e-3·n … 1e3·n at every refit), `fixed` (1e-3·n, issue 19)
+    /// cross-validation over 1e-3·n … 1e3·n at every refit), `fixed` (1e-3·n)
     /// or `cv-drop` (as `cv`, parameters whose held-out R² is ≤ 0 left out of the
     /// distance).
     #[arg(long, value_enum, default_value = "cv")]

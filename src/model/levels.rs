@@ -1,6 +1,6 @@
 //! The model's levels read from the measured energy table through the model's own forward
 //! response: the walls' specular |Γ|, the walls' diffuse σ′ and the clusters' σ
-//! ([`fit_levels`], issue 29).
+//! ([`fit_levels`]).
 //!
 //! Takes a model whose structure is fitted (the cluster chain's: rates, AoA, perimeter,
 //! decays, rays per cluster, the Lambert exponent), the campaign (poses, layout, array,

@@ -259,7 +259,7 @@ mod tests {
         });
         write_mpcs(&p, &[m.clone(), one_mpc()], vec![]).unwrap();
         assert_eq!(read_mpcs(&p).unwrap(), vec![m, one_mpc()]);
-        // a table of the ten columns before issue 16: discrete, no wall
+        // a table of the original ten columns: discrete, no wall
         let mut df = mpc_frame(&p, &[one_mpc()]).unwrap();
         for c in ["component", "wall_unit_db", "incidence_deg"] {
             df = df.drop(c).unwrap();

@@ -1,4 +1,4 @@
-//! The calibration's report section (issue 19): the marginal posteriors of the free
+//! The calibration's report section: the marginal posteriors of the free
 //! quantities (weighted histograms in ln scale, one panel each, with the median, the 95 %
 //! credible interval and, when given, the cluster chain's value), their posterior
 //! correlations (in ln units), and the cluster-based fit beside the posterior, each

@@ -1,4 +1,4 @@
-//! The predictive check's outputs (issue 29): the table ([`CheckResult::table`]) as
+//! The predictive check's outputs: the table ([`CheckResult::table`]) as
 //! CSV/Markdown/HTML, and one CDF panel per statistic — the measured statistic's CDF
 //! (black) inside the draws' band (the pointwise 5–95 % range of the draws' CDFs, shaded;
 //! their pointwise median, blue), on 200 points spanning every draw's and the measured

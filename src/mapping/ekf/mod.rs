@@ -96,7 +96,7 @@
 //! order; the dense products split P in fixed blocks, so maps are identical for any number
 //! of threads.
 //!
-//! Free-space evidence (issue 31, `free_space`, on by default). The energy observation
+//! Free-space evidence (`free_space`, on by default). The energy observation
 //! h = Σ c̃ x² + N0·TW says little about a cell near x = 0 (its Jacobian 2 c̃ x vanishes
 //! there), so a bin with only noise barely lowers the cells in front of an echo, while the
 //! echo's bin raises every cell of its range ring in the main lobe: the ring. The bins
@@ -109,7 +109,7 @@
 //! [−x_max, x_max] has that variance (the sign symmetry below). The pseudo-measurement comes
 //! from the same bins as the energy rows, which stay in the update, so it is not independent
 //! evidence: it is the EKF's counterpart of the occupancy grid's free-space update. Measured
-//! (`docs/mapping.md`, issue 31): it cuts the room cells marked occupied on the corridor at
+//! (`docs/mapping.md`): it cuts the room cells marked occupied on the corridor at
 //! N = 100 from 18.3 % to 10.1 %.
 //!
 //! Binary map: occupied when x̂_i − κ·σ̂_i > μ0 (the data raised the cell above the prior
@@ -121,7 +121,7 @@
 //! posterior only, never the reference map; cells never illuminated stay at the prior and
 //! read as free.
 //!
-//! Arc explanation (issue 31, `arc_explain` = γ, [`params::ARC_EXPLAIN`] by default; 0 =
+//! Arc explanation (`arc_explain` = γ, [`params::ARC_EXPLAIN`] by default; 0 =
 //! off). Once the runs are filtered, each detected echo's range ring (the cells with a
 //! coefficient in the bin of a kept row that holds a detection, main and side lobes:
 //! [`EchoArcs`], recorded by [`ekf_run_judged`]) is explained by its cells in proportion to
@@ -132,7 +132,7 @@
 //! apart is which cells the echo needs. γ = −26.5 dB is the two-way peak side-lobe level of
 //! the (uniform) array: a cell as strong as the ring's strongest at a first side-lobe peak
 //! still explains it. A cell on no detected ring (raised only by bins without a
-//! detection) explains no echo and is not occupied. Measured (`docs/mapping.md`, issue 31,
+//! detection) explains no echo and is not occupied. Measured (`docs/mapping.md`,
 //! "Item 2 (continued)"): in all four scenes of `tests/occlusion.rs` building wrong cells
 //! −9 to −18 %, room cells marked occupied 6.0–8.5 % → 3.4–4.4 %, cells beyond the walls
 //! ≤ 4.3 %, F1 within one cell up, walls found −0.005 to −0.038; the variants not kept (the

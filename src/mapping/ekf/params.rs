@@ -66,7 +66,7 @@ pub struct EkfParams {
     pub reflect: bool,
     /// Scalable filter: split each bin's information over the tiles it touches
     /// ([`crate::mapping::ekf::tiled`] module docs); false: the plain tiled update (the
-    /// filter before issue 31), which is overconfident.
+    /// earlier filter), which is overconfident.
     pub split: bool,
     /// Arc explanation γ ([`crate::mapping::ekf`] module docs): a cell is occupied only if
     /// on some detected echo's range ring its share c̃·x̂² is at least γ times the ring's

@@ -9,7 +9,7 @@
 //! diagonal). Per bin k, for every tile T it touches: g_T = P_T·H_{k,T}ᵀ and
 //! a_T = H_{k,T}·g_T (the tile's share of H·P·Hᵀ); s = Σ_T a_T + R_k.
 //!
-//! **Plain update** (`split` = false, the filter before issue 31): x_T += g_T·ν'/s,
+//! **Plain update** (`split` = false, the earlier filter): x_T += g_T·ν'/s,
 //! P_T −= g_T·g_Tᵀ/s, the cross-tile terms −g_T·g_Uᵀ/s dropped. From a block-diagonal
 //! prior this is the exact marginal of one bin's update; but the next bin of the same ring
 //! (the kernel's neighbouring bins, the neighbouring directions' side lobes) meets tiles

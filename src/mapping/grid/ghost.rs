@@ -1,5 +1,5 @@
 //! Ghosts across poses: evidence a pose could not have had, judged again once the map is
-//! built (issue 31, item 4), shared by both mappers.
+//! built, shared by both mappers.
 //!
 //! Takes, per pose of a run, its echoes ([`ScanEchoes`]: the detections not explained by a
 //! side lobe, the missing directions) and the occupancy evidence the mapper took from it
@@ -47,8 +47,8 @@
 //!   supports.
 //!
 //! Default: `none` for both mappers (and `hold_echoes` off). Measured on the ghost scene
-//! and the four must-show scenes (`docs/mapping.md`, issue 31 item 4; with the OG rules and
-//! the EKF before 5 Dec 2026): `mirror` removes the ghost (OG with `hold_echoes` 13 → 2 of
+//! and the four must-show scenes (`docs/mapping.md`, "Item 4"; with the earlier OG rules and
+//! EKF): `mirror` removes the ghost (OG with `hold_echoes` 13 → 2 of
 //! 90 cells, EKF 19 → 4) but on the corridor and the office it lowers walls found for both
 //! mappers in every scene (office N = 16, OG 0.549 → 0.464; corridor N = 100, EKF 0.582 →
 //! 0.459), raises the OG's wrong building cells in all four and lowers the EKF's in three:

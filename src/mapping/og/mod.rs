@@ -34,7 +34,7 @@
 //!   surface) are withheld, counted in [`OgStats::withheld`]; bins after the occluder
 //!   without a detection give no evidence. With `hold_echoes` (off by default) the bins
 //!   within g of a main-lobe detection before the occluder give no free evidence either.
-//!   Two rules on by default and three options off (issue 31 "Maps II", figures in
+//!   Two rules on by default and three options off (figures in
 //!   `docs/mapping.md`). On: `bound_silent = nearer` (a direction without an occluder
 //!   bounds the visibility polygon at the nearer of its first detection and the range
 //!   interpolated from its neighbours' occluders, instead of lying at the maximum range:

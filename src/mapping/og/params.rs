@@ -56,8 +56,8 @@ pub struct OgParams {
     /// explained by a side lobe), in [0, 1] (1: as any other beam's).
     pub free_without_occluder: f64,
     /// How a direction without an occluder bounds the visibility polygon
-    /// ([`SilentBound`]; `nearer` by default, `off`: at the maximum range, the rule before
-    /// 5 Dec 2026).
+    /// ([`SilentBound`]; `nearer` by default, `off`: at the maximum range, the earlier
+    /// rule).
     pub bound_silent: SilentBound,
     /// Where a beam's free evidence ends (the occluder).
     pub free_end: FreeEnd,
@@ -67,8 +67,8 @@ pub struct OgParams {
     pub free_floor: f64,
     /// Deepest a cell's centre may lie behind the visibility polygon and still get
     /// occupancy credit from a range ring, m (0.05 m by default: half a cell of the
-    /// default 0.1 m grid; None: the occlusion guard g, every visible cell, the rule before
-    /// 5 Dec 2026). A cell whose centre lies more than half a cell beyond the surface along
+    /// default 0.1 m grid; None: the occlusion guard g, every visible cell, the earlier
+    /// rule). A cell whose centre lies more than half a cell beyond the surface along
     /// the ray does not hold it there; the guard's extra two bins (the window kernel's
     /// half-width) keep the cells behind the surface visible, and a wall found where it was
     /// missed comes with a rim of credited cells beyond it.
