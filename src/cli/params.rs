@@ -9,9 +9,10 @@ use super::{
 };
 use anyhow::Result;
 use pradar::campaign::import::{ImportParams, SweepFiles};
-use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, OgParams};
+use pradar::mapping::{EkfParams, GridParams, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
+use pradar::pipeline::commands::map::{MapOptions, MapRun, PoseNoise};
 use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
 
@@ -170,7 +171,7 @@ impl MapArgs {
                     bound_silent: self.ekf_bound_silent,
                     ..Default::default()
                 },
-                pose_noise: pradar::mapping::job::PoseNoise {
+                pose_noise: PoseNoise {
                     position_m: self.pose_noise_m,
                     heading_deg: self.pose_noise_deg,
                     seed: self.pose_seed,

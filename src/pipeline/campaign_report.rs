@@ -376,7 +376,8 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
     timings.time("report plots", || write_plots(&s, &a, out, progress))?;
     let maps = timings.time("maps (OG, OG boresight, EKF)", || {
         Ok(
-            crate::report::maps::report_section(&s.campaign.path, &s.energy_path, out, "maps")
+            super::commands::map::report_maps(&s.campaign.path, &s.energy_path, &out.join("maps"))
+                .map(|maps| crate::report::maps::report_section(&maps, "maps"))
                 .unwrap_or_else(|e| Section {
                     title: "Maps".into(),
                     html: page::failed("mapping", &e),

@@ -28,10 +28,10 @@ use crate::energy;
 use crate::error::{Error, Result};
 use crate::export::LineChart;
 use crate::export::{Cell, Column, Table};
-use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
+use crate::pipeline::commands::map::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -126,10 +126,10 @@ pub struct CaseFigures {
     /// Wrong cells of the all-free map on the interior.
     pub all_free_wrong_interior: usize,
     /// The map's errors per reference class.
-    pub classes: crate::mapping::job::ClassFigures,
+    pub classes: crate::mapping::score::ClassFigures,
     /// The map against the three-class reference (structure, the data's truth objects,
     /// free), when the data have a truth (simulated sweeps, model data).
-    pub three_class: Option<crate::mapping::job::ThreeClassFigures>,
+    pub three_class: Option<crate::mapping::score::ThreeClassFigures>,
 }
 
 fn count(rate: f64, cells: usize) -> usize {

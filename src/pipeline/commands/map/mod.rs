@@ -1,7 +1,8 @@
-//! The `pradar map` job: one or several runs (campaign + energy table) → one occupancy map,
-//! its files and its metrics against the reference map.
+//! The `pradar map` command: one or several runs (campaign + energy table) → one map, its
+//! files and its metrics against the reference map. The experiments and the report's maps
+//! run the same job ([`run_map`]).
 //!
-//! Takes [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
+//! Takes [`Map`] (the CLI's [`MapOptions`] and `--run` values) or [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
 //! gives in the output folder, for method `<m>` (`og` or `og-boresight`):
 //! * `<m>.png/.pgm/.yaml` — the soft map (grey = 1 − p), YAML `occupied_thresh` = η = 0.5,
 //!   `free_thresh` = 0.45 (cells left at the prior read as unknown in map_server);
@@ -9,13 +10,13 @@
 //! * `reference.png/.pgm/.yaml` — the reference map rasterised from the layout on the same
 //!   grid (occupied 0, free 254, outside 205);
 //! * `metrics.json` — figures on the observable region, the building and the whole map, each
-//!   beside the all-free map's, and the per-class figures ([`score`](mod@score)); with several runs also every single run's figures and the fused map's
+//!   beside the all-free map's, and the per-class figures ([`crate::mapping::score`]); with several runs also every single run's figures and the fused map's
 //!   figures for the first n runs, n = 1..R (metrics vs number of runs).
 //!
 //! Choices:
 //! * the grid is the reference raster's ([`Layout::rasterize`](crate::campaign::layout::Layout::rasterize): cell 0.1 m, margin 0.5 m);
 //!   fused runs must share the layout's grid;
-//! * regions ([`score`](mod@score)): observable = cells in line of sight of a pose through
+//! * regions ([`crate::mapping::score`]): observable = cells in line of sight of a pose through
 //!   the layout's walls, inside the −3 dB main lobe of one of its directions, within the
 //!   usable bins (coupling gate to the last bin); building = inside the perimeter or on a
 //!   wall; whole map = every cell, `Outside` reference cells counted as free. None comes
@@ -30,13 +31,14 @@
 
 //!
 //! Layout: [`load`] (runs → [`LoadedRun`]s on one grid, the first usable bin, the window
-//! kernel), [`score`](mod@score) (metrics against the reference, observable region, the metrics
-//! table), [`ekf`] (the `--method ekf` job); this file holds the options, the occupancy-grid
-//! job and the report written to `metrics.json`. The report page is assembled by
-//! `report::maps`.
+//! kernel, the runs' scoring regions), [`ekf`] (the `--method ekf` job); the scoring
+//! against the reference is [`crate::mapping::score`]. This file holds the command, the
+//! options, the occupancy-grid job and the report written to `metrics.json`. The report
+//! page is rendered by `report::maps` from [`report_maps`].
 //!
 //! ```no_run
-//! use pradar::mapping::{run_map, MapOptions, MapRun, Method};
+//! use pradar::mapping::Method;
+//! use pradar::pipeline::commands::map::{run_map, MapOptions, MapRun};
 //! use pradar::params::ParamGuard;
 //! let opts = MapOptions {
 //!     method: Method::Og,
@@ -55,16 +57,11 @@
 
 pub mod ekf;
 pub mod load;
-pub mod objects;
-pub mod score;
 
 pub use ekf::run_map_ekf;
-pub use load::{load_run, load_runs, min_bin, window_kernel, LoadedRun};
-pub use objects::{find_truth, load_objects, Objects};
-pub use score::{
-    building_region, metrics_table, observable_region, runs_regions, score, score_binary,
-    ClassFigures, MetricsPair, Regions, ThreeClassFigures,
-};
+pub use load::{load_run, load_runs, min_bin, runs_regions, window_kernel, LoadedRun};
+
+use crate::mapping::score::{score, MetricsPair};
 
 use crate::campaign::layout::{CellClass, ReferenceMap};
 use crate::campaign::manifest::Pose;
@@ -76,6 +73,56 @@ use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNK
 use crate::params::{ParamGuard, Valid};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+
+/// `pradar map`: the map options plus the `--run` specifications still to parse.
+#[derive(Debug, Clone)]
+pub struct Map {
+    /// Everything but the `--run` runs (`options.runs` holds the `--campaign` +
+    /// `--energy` run, if given).
+    pub options: MapOptions,
+    /// `--run campaign.toml=energy.parquet` values, appended after `options.runs`.
+    pub run_specs: Vec<String>,
+}
+
+/// What `map` wrote.
+#[derive(Debug, Clone)]
+pub struct MapSummary {
+    /// The stage's report.
+    pub report: MapReport,
+    /// The output folder.
+    pub out: PathBuf,
+}
+
+impl std::fmt::Display for MapSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = &self.report;
+        let m = &r.metrics.observable;
+        write!(
+            f,
+            "{} map {}x{} -> {} (observable: psi {:.3}, F1 {:.3}; all-free psi {:.3})",
+            r.method,
+            r.rows,
+            r.cols,
+            self.out.display(),
+            m.psi,
+            m.f1,
+            r.metrics.observable_all_free.psi
+        )
+    }
+}
+
+/// Run `pradar map` ([`run_map`]); `progress` counts poses over all runs.
+pub fn map(cmd: &Map, progress: super::StepProgress) -> Result<MapSummary> {
+    let mut opts = cmd.options.clone();
+    for r in &cmd.run_specs {
+        opts.runs.push(MapRun::parse(r)?);
+    }
+    let report = run_map(&opts.check()?, progress)?;
+    Ok(MapSummary {
+        report,
+        out: opts.out,
+    })
+}
 
 /// One run: a campaign manifest and its energy table.
 #[derive(Debug, Clone, PartialEq)]
@@ -231,6 +278,36 @@ impl PoseNoise {
             })
             .collect()
     }
+}
+
+/// The maps of the report: one run mapped with every method (`og`, `og-boresight`, `ekf`;
+/// default parameters) into `dir/<method>/`; gives each method's name and figures, in
+/// that order.
+pub fn report_maps(
+    campaign: &Path,
+    energy: &Path,
+    dir: &Path,
+) -> Result<Vec<(&'static str, MetricsPair)>> {
+    let mut maps = Vec::new();
+    for method in [Method::Og, Method::OgBoresight, Method::Ekf] {
+        let name = method.name();
+        let opts = MapOptions {
+            method,
+            runs: vec![MapRun {
+                campaign: campaign.to_path_buf(),
+                energy: energy.to_path_buf(),
+            }],
+            out: dir.join(name),
+            elements: None,
+            grid: GridParams::default(),
+            og: OgParams::default(),
+            ekf: EkfParams::default(),
+            pose_noise: PoseNoise::default(),
+        };
+        let r = run_map(&opts.check()?, &|_, _| {})?;
+        maps.push((name, r.metrics));
+    }
+    Ok(maps)
 }
 
 /// One row of the fusion table.
