@@ -48,6 +48,9 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// `report`'s report folder when none is given.
+pub const DEFAULT_REPORT_OUT: &str = "reports/campaign";
+
 /// Options of `report` (checked by [`ParamGuard::check`] into a [`ReportValid`]).
 #[derive(Debug, Clone)]
 pub struct ReportOptions {

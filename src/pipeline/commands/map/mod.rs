@@ -251,6 +251,8 @@ impl ParamGuard for PoseNoise {
 }
 
 impl PoseNoise {
+    /// The seed `pradar map` draws with when `--pose-seed` is not given.
+    pub const DEFAULT_SEED: u64 = 1;
     /// Whether it changes any pose.
     pub fn is_none(&self) -> bool {
         self.position_m == 0.0 && self.heading_deg == 0.0
