@@ -493,8 +493,6 @@ fn out_of_range_flags_give_one_clear_line() {
         (&map, &["--og-credit-depth", "-1"], "--og-credit-depth"),
         (&map, &["--og-credit-depth", "nan"], "--og-credit-depth"),
         (&map, &["--og-bound-silent", "maybe"], "--og-bound-silent"),
-        (&map, &["--ekf-explain-poses", "0"], "--ekf-explain-poses"),
-        (&map, &["--ekf-bound-silent", "maybe"], "--ekf-bound-silent"),
         (&calibrate, &["--ridge", "lasso"], "--ridge"),
         (&calibrate, &["--walls", "--prior", "p.toml"], "--walls"),
         (&extract, &["--margin-db", "-1"], "--margin-db"),

@@ -15,10 +15,11 @@ use pradar::mapping::ekf::{
     RrcsFilter, TiledEkf,
 };
 use pradar::mapping::grid::{GridParams, ObservationModel};
-use pradar::mapping::job::{load_run, observable_region, score_binary, window_kernel, MapRun};
 use pradar::mapping::metrics::evaluate;
 use pradar::mapping::reference::{CellClass, GridSpec};
+use pradar::mapping::score::{observable_region, score_binary};
 use pradar::params::ParamGuard;
+use pradar::pipeline::commands::map::{load_run, window_kernel, MapRun};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -37,7 +38,7 @@ fn corridor100() -> &'static (PathBuf, PathBuf) {
     })
 }
 
-fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::mapping::job::LoadedRun {
+fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::pipeline::commands::map::LoadedRun {
     let run = MapRun {
         campaign: c.to_path_buf(),
         energy: e.to_path_buf(),
@@ -56,7 +57,7 @@ fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::mapping::job::LoadedRun {
     .unwrap()
 }
 
-fn noise_of(l: &pradar::mapping::job::LoadedRun, p: &EkfParams) -> NoiseModel {
+fn noise_of(l: &pradar::pipeline::commands::map::LoadedRun, p: &EkfParams) -> NoiseModel {
     NoiseModel::new(&l.energy.header().meta, p.model_error, &l.energy_path).unwrap()
 }
 
@@ -287,7 +288,7 @@ fn prediction_matches_the_simulated_point_echo() {
         subsamples: 8,
         ..Default::default()
     };
-    let mb = pradar::mapping::job::min_bin(&em);
+    let mb = pradar::pipeline::commands::map::min_bin(&em);
     let model = ObservationModel::new(
         spec,
         &gp.check().unwrap(),
@@ -401,7 +402,7 @@ fn dense_update_equals_a_textbook_ekf_on_a_real_beam() {
         margin_m: 0.0,
         ..Default::default()
     };
-    let mb = pradar::mapping::job::min_bin(&em);
+    let mb = pradar::pipeline::commands::map::min_bin(&em);
     let model = ObservationModel::new(
         spec,
         &gp.check().unwrap(),
@@ -450,7 +451,7 @@ fn dense_update_equals_a_textbook_ekf_on_a_real_beam() {
 
 /// Run a filter over a loaded run.
 fn run_filter(
-    l: &pradar::mapping::job::LoadedRun,
+    l: &pradar::pipeline::commands::map::LoadedRun,
     params: &pradar::mapping::EkfValid,
     f: &mut dyn RrcsFilter,
 ) -> pradar::mapping::ekf::EkfStats {
@@ -544,9 +545,9 @@ fn scalable_against_dense(strict: bool) {
     let spec = l.model.spec;
     let n = spec.len();
     let reference = l.layout.rasterize(0.3, GridParams::default().margin_m);
-    let region = pradar::mapping::job::Regions {
+    let region = pradar::mapping::score::Regions {
         observable: observable_region(&[&l.model], &l.layout),
-        building: pradar::mapping::job::building_region(&l.layout, &reference),
+        building: pradar::mapping::score::building_region(&l.layout, &reference),
         objects: None,
         edge_band: Vec::new(),
     };

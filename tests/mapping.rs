@@ -7,11 +7,12 @@ use crate::common;
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat};
 use pradar::energy;
-use pradar::mapping::job::{load_run, observable_region, score, LoadedRun, MapRun};
 use pradar::mapping::metrics::{evaluate, psi};
 use pradar::mapping::og::{fuse, og_map, sigmoid, LogOddsMap, Method, OgParams};
 use pradar::mapping::output::{soft_grey, write_map_files};
+use pradar::mapping::score::{observable_region, score};
 use pradar::params::ParamGuard;
+use pradar::pipeline::commands::map::{load_run, LoadedRun, MapRun};
 use pradar::simulate::simulate;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -536,9 +537,9 @@ fn two_trajectories_fused_beat_either_alone() {
     assert_eq!(worst, 0.0);
     // and the library's scores agree with the CLI's
     let reference = loaded[0].layout.rasterize(0.1, 0.5);
-    let region = pradar::mapping::job::Regions {
+    let region = pradar::mapping::score::Regions {
         observable: observable_region(&[&loaded[0].model, &loaded[1].model], &loaded[0].layout),
-        building: pradar::mapping::job::building_region(&loaded[0].layout, &reference),
+        building: pradar::mapping::score::building_region(&loaded[0].layout, &reference),
         objects: None,
         edge_band: Vec::new(),
     };

@@ -49,6 +49,9 @@ pub enum Distance {
 /// weights cost N·N_α per generation).
 pub const MAX_POPULATION: usize = 10_000;
 
+/// The smallest population N (and simulation budget) the check accepts.
+pub const MIN_POPULATION: usize = 20;
+
 /// The largest simulation budget (about an hour at the corridor's 30 simulations/s).
 pub const MAX_SIMULATIONS: usize = 100_000;
 
@@ -127,10 +130,13 @@ impl ParamGuard for CalibrateParams {
 
     /// Every field in its range (module docs); the error names the field.
     fn check(&self) -> Result<CalibrateValid> {
-        if !(20..=MAX_POPULATION).contains(&self.population) {
+        if !(MIN_POPULATION..=MAX_POPULATION).contains(&self.population) {
             return Err(Error::param(
                 "calibrate.population",
-                format!("must be in [20, {MAX_POPULATION}], got {}", self.population),
+                format!(
+                    "must be in [{MIN_POPULATION}, {MAX_POPULATION}], got {}",
+                    self.population
+                ),
             ));
         }
         if self.simulations < self.population || self.simulations > MAX_SIMULATIONS {

@@ -77,6 +77,10 @@ pub struct CheckParams {
     pub posterior: Option<PosteriorSample>,
 }
 
+/// The draw counts [`CheckParams`]'s check accepts (`--draws`): the reference
+/// distribution needs at least one draw↔draw pair.
+pub const DRAWS_RANGE: std::ops::RangeInclusive<usize> = 2..=1000;
+
 impl Default for CheckParams {
     fn default() -> Self {
         CheckParams {
@@ -221,7 +225,7 @@ impl ParamGuard for CheckParams {
     type Checked = CheckValid;
 
     fn check(&self) -> Result<CheckValid> {
-        if !(2..=1000).contains(&self.draws) {
+        if !DRAWS_RANGE.contains(&self.draws) {
             return Err(Error::param(
                 "--draws",
                 format!("must be in [2, 1000], got {}", self.draws),

@@ -12,10 +12,15 @@ pub mod params;
 pub mod ranges;
 
 use clap::{Args, Parser, Subcommand};
+use pradar::calibrate::CalibrateParams;
 use pradar::campaign::manifest::SweepFormat;
-use pradar::cluster::Criterion;
-use pradar::mapping::{EkfVariant, Method as MapMethod};
-use pradar::mpc::Method as ExtractMethod;
+use pradar::check::CheckParams;
+use pradar::cluster::{ClusterParams, Criterion};
+use pradar::fit::channel::FitParams;
+use pradar::mapping::{EkfParams, EkfVariant, GridParams, Method as MapMethod, OgParams};
+use pradar::mpc::{DiffuseParams, ExtractParams, Method as ExtractMethod};
+use pradar::pipeline::commands::map::PoseNoise;
+use pradar::pipeline::experiment::ExperimentParams;
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -127,7 +132,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub elements: Option<usize>,
     /// Sweep file format.
-    #[arg(long, value_enum, default_value = "touchstone")]
+    #[arg(long, value_enum, default_value_t = SweepFormat::default())]
     pub format: SweepFormat,
 }
 
@@ -191,7 +196,7 @@ pub struct CalibrateArgs {
     #[arg(long, conflicts_with = "prior")]
     pub walls: bool,
     /// Simulation budget (at least the population).
-    #[arg(long, default_value_t = 3000, value_parser = ranges::simulations)]
+    #[arg(long, default_value_t = CalibrateParams::default().simulations, value_parser = ranges::simulations)]
     pub simulations: usize,
     /// Report folder: index.html with the marginal posteriors and their correlations, and
     /// the predictive checks (`pradar check`'s table and CDFs) of the calibrated model
@@ -204,22 +209,16 @@ pub struct CalibrateArgs {
     #[arg(long, requires = "report")]
     pub chain: Option<PathBuf>,
     /// Population size per generation.
-    #[arg(long, default_value_t = 400, value_parser = ranges::population)]
+    #[arg(long, default_value_t = CalibrateParams::default().population, value_parser = ranges::population)]
     pub population: usize,
     /// Seed (default: the campaign's).
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
-    /// The ABC distance: `summaries-quantiles` (semi-automatic summaries of the 42 pooled
-    /// statistics and the check statistics' quantiles), `summaries` (the 42
-    /// pooled statistics only) or `mmd` (the MMD between the per-profile and
-    /// per-position statistics' distributions).
-    #[arg(long, value_enum, default_value = "summaries-quantiles")]
+    /// The ABC distance (docs/cli.md).
+    #[arg(long, value_enum, default_value_t = CalibrateParams::default().distance)]
     pub distance: pradar::calibrate::Distance,
-    /// The summaries' projection's ridge penalty: `cv` (per parameter by 5-fold
-    /// cross-validation over 1e-3·n … 1e3·n at every refit), `fixed` (1e-3·n)
-    /// or `cv-drop` (as `cv`, parameters whose held-out R² is ≤ 0 left out of the
-    /// distance).
-    #[arg(long, value_enum, default_value = "cv")]
+    /// The summaries' projection's ridge penalty (docs/cli.md).
+    #[arg(long, value_enum, default_value_t = CalibrateParams::default().ridge)]
     pub ridge: pradar::calibrate::Ridge,
 }
 
@@ -236,7 +235,7 @@ pub struct CheckArgs {
     #[arg(long)]
     pub energy: PathBuf,
     /// synth draws of the model.
-    #[arg(long, default_value_t = 20, value_parser = ranges::draws)]
+    #[arg(long, default_value_t = CheckParams::default().draws, value_parser = ranges::draws)]
     pub draws: usize,
     /// Seed of the draws (default: the campaign's).
     #[arg(long, allow_negative_numbers = true)]
@@ -256,121 +255,73 @@ pub struct CheckArgs {
 // `pradar map`
 #[derive(Args)]
 pub struct MapArgs {
-    /// Inverse sensor model.
-    #[arg(long, value_enum, default_value = "og")]
+    /// Mapper: og, og-boresight or ekf.
+    #[arg(long, value_enum, default_value_t = MapMethod::default(), hide_possible_values = true, help_heading = "Input")]
     pub method: MapMethod,
     /// Campaign manifest of a single run (with --energy).
-    #[arg(long, requires = "energy", conflicts_with = "run")]
-    pub campaign: Option<PathBuf>,
-    /// Energy Parquet of a single run (with --campaign).
-    #[arg(long, requires = "campaign")]
-    pub energy: Option<PathBuf>,
-    /// A run `campaign.toml=energy.parquet` (repeatable: runs are fused).
-    #[arg(long)]
-    pub run: Vec<String>,
-    /// Output folder.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Override [array] elements (16, 100, 400).
-    #[arg(long)]
-    pub elements: Option<usize>,
-    /// Cell side, m.
-    #[arg(long, default_value_t = 0.1, value_parser = ranges::cell_m, allow_negative_numbers = true)]
-    pub cell_m: f64,
-    /// Detector false-alarm probability per bin.
-    #[arg(long, default_value_t = 1e-3, value_parser = ranges::pfa, allow_negative_numbers = true)]
-    pub pfa: f64,
-    /// Prior occupancy probability.
-    #[arg(long, default_value_t = 0.5, value_parser = ranges::open_unit, allow_negative_numbers = true)]
-    pub prior: f64,
-    /// Passes of the side-lobe-aware OG (`--method og`): pass 2 on uses the previous pass's
-    /// map for the responsibilities and the mapped surfaces, 1..=10.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=10))]
-    pub passes: u64,
-    /// EKF implementation (`--method ekf`): dense (exact) or scalable (tiled).
     #[arg(
         long,
-        value_enum,
-        default_value = "scalable",
-        hide_possible_values = true
+        requires = "energy",
+        conflicts_with = "run",
+        help_heading = "Input"
     )]
-    pub ekf: EkfVariant,
-    /// EKF prior mean of the RRCS μ0, m.
-    #[arg(long, default_value_t = 0.01, value_parser = ranges::positive, allow_negative_numbers = true)]
-    pub mu0: f64,
-    /// EKF prior standard deviation σ0, m.
-    #[arg(long, default_value_t = 0.1, value_parser = ranges::positive, allow_negative_numbers = true)]
-    pub sigma0: f64,
-    /// EKF binary rule: occupied when x̂ − κ·σ̂ > μ0.
-    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().kappa, value_parser = ranges::non_negative, allow_negative_numbers = true)]
-    pub kappa: f64,
-    /// EKF free-space evidence (low-energy bins in front of an echo observed as RRCS ≈ 0).
-    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().free_space, action = clap::ArgAction::Set)]
-    pub ekf_free_space: bool,
-    /// EKF negative means: reflected (true) or clamped to the lowest mean (false).
-    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().reflect, action = clap::ArgAction::Set)]
-    pub ekf_reflect: bool,
-    /// OG (`--method og`): no free evidence at the range of a main-lobe echo before the
-    /// beam's occluder.
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().hold_echoes, action = clap::ArgAction::Set)]
-    pub og_hold_echoes: bool,
-    /// OG (`--method og`): where a beam's free evidence ends: at its occluder, its first
-    /// echo not explained by a side lobe, or its first detection.
-    #[arg(long, value_enum, default_value = "occluder")]
-    pub og_free_end: pradar::mapping::og::FreeEnd,
-    /// OG (`--method og`): weight in [0, 1] of the free evidence of a beam without an
-    /// occluder (no detection not explained by a side lobe).
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_without_occluder)]
-    pub og_free_without_occluder: f64,
-    /// OG (`--method og`): how a direction without an occluder bounds the visibility
-    /// polygon: not at all (`off`, alias `false`), at its first detection (`leak`, alias
-    /// `true`; interpolated from its neighbours without one), or at the nearer of that and
-    /// the range interpolated from its neighbours' occluders (`nearer`).
-    #[arg(long, value_enum, default_value = "nearer")]
+    pub campaign: Option<PathBuf>,
+    /// Energy Parquet of a single run (with --campaign).
+    #[arg(long, requires = "campaign", help_heading = "Input")]
+    pub energy: Option<PathBuf>,
+    /// A run `campaign.toml=energy.parquet` (repeatable: runs are fused).
+    #[arg(long, help_heading = "Input")]
+    pub run: Vec<String>,
+    /// Output folder.
+    #[arg(long, help_heading = "Input")]
+    pub out: PathBuf,
+    /// Override [array] elements (16, 100, 400).
+    #[arg(long, help_heading = "Input")]
+    pub elements: Option<usize>,
+    /// Cell side, m.
+    #[arg(long, default_value_t = GridParams::default().cell_m, value_parser = ranges::cell_m, allow_negative_numbers = true, help_heading = "Input")]
+    pub cell_m: f64,
+    /// Detector false-alarm probability per bin.
+    #[arg(long, default_value_t = OgParams::default().pfa, value_parser = ranges::pfa, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
+    pub pfa: f64,
+    /// Prior occupancy probability.
+    #[arg(long, default_value_t = OgParams::default().prior, value_parser = ranges::open_unit, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
+    pub prior: f64,
+    /// Where a direction without an occluder bounds the visibility polygon: off, leak or nearer.
+    #[arg(long, value_enum, default_value_t = OgParams::default().bound_silent, hide_possible_values = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub og_bound_silent: pradar::mapping::grid::SilentBound,
-    /// OG (`--method og`): lowest log-odds free evidence can bring a cell to (the clamp,
-    /// −10, by default: no floor).
-    #[arg(long, default_value_t = pradar::mapping::OgParams::default().free_floor, allow_hyphen_values = true)]
-    pub og_free_floor: f64,
-    /// OG (`--method og`): occupancy credit of a range ring only to cells whose centre lies
-    /// at most this far (m, >= 0) behind the visibility polygon (0.05 m: half a cell of
-    /// the default 0.1 m grid); `guard`: every visible cell, to the occlusion guard.
-    #[arg(long, default_value = "0.05", value_parser = ranges::credit_depth, allow_negative_numbers = true)]
+    /// Deepest behind the visibility polygon a cell gets occupancy credit, m, or `guard`.
+    #[arg(long, default_value_t = credit_depth_default(), value_parser = ranges::credit_depth, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub og_credit_depth: f64,
-    /// Ghost rule of `og` and `ekf` once the map is built: mirror (each pose's evidence
-    /// judged again against the final map's surfaces), aspect (occupancy needs support from
-    /// poses spanning a minimum aspect) or none.
-    #[arg(long, value_enum, default_value = "none", hide_possible_values = true)]
-    pub ghost: pradar::mapping::grid::GhostRule,
-    /// Minimum aspect of `--ghost aspect`, in two-way −3 dB main-lobe widths, [0, 36].
-    #[arg(long, default_value_t = pradar::mapping::grid::GhostParams::default().aspect_lobes, value_parser = ranges::aspect_lobes, allow_negative_numbers = true)]
-    pub ghost_aspect_lobes: f64,
-    /// Scalable EKF: split each bin's information over the tiles it touches (false: the
-    /// plain tiled update, overconfident).
-    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().split, action = clap::ArgAction::Set)]
-    pub ekf_split: bool,
-    /// EKF arc explanation γ in [0, 1]: a cell is occupied only if, on the range ring of some
-    /// detected echo (main and side lobes), its share c̃·x̂² of the echo is at least γ times
-    /// the ring's largest (0: off).
-    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().arc_explain, value_parser = ranges::probability)]
+    /// EKF implementation: dense (exact) or scalable (tiled).
+    #[arg(long, value_enum, default_value_t = EkfParams::default().variant, hide_possible_values = true, help_heading = "EKF (ekf)")]
+    pub ekf: EkfVariant,
+    /// Prior mean of the RRCS μ0, m.
+    #[arg(long, default_value_t = EkfParams::default().mu0, value_parser = ranges::positive, allow_negative_numbers = true, help_heading = "EKF (ekf)")]
+    pub mu0: f64,
+    /// Prior standard deviation σ0, m.
+    #[arg(long, default_value_t = EkfParams::default().sigma0, value_parser = ranges::positive, allow_negative_numbers = true, help_heading = "EKF (ekf)")]
+    pub sigma0: f64,
+    /// Binary rule: occupied when x̂ − κ·σ̂ > μ0.
+    #[arg(long, default_value_t = EkfParams::default().kappa, value_parser = ranges::non_negative, allow_negative_numbers = true, help_heading = "EKF (ekf)")]
+    pub kappa: f64,
+    /// Arc explanation γ in [0, 1] (0: off).
+    #[arg(long, default_value_t = EkfParams::default().arc_explain, value_parser = ranges::probability, help_heading = "EKF (ekf)")]
     pub ekf_arc_explain: f64,
-    /// EKF arc explanation: distinct poses whose echoes a cell must explain to be occupied
-    /// (1: one echo suffices; needs `--ekf-arc-explain` > 0).
-    #[arg(long, default_value_t = pradar::mapping::EkfParams::default().explain_poses, value_parser = ranges::explain_poses)]
-    pub ekf_explain_poses: u32,
-    /// EKF: how a direction without an occluder bounds the visibility polygon of the
-    /// filter's sight (as `--og-bound-silent`): `off`, `leak` or `nearer`.
-    #[arg(long, value_enum, default_value = "off")]
-    pub ekf_bound_silent: pradar::mapping::grid::SilentBound,
-    /// Pose noise given to the mapper: position standard deviation per axis, m.
-    #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    /// Position standard deviation per axis given to the mapper, m.
+    #[arg(long, default_value_t = PoseNoise::default().position_m, value_parser = ranges::non_negative, allow_negative_numbers = true, help_heading = "Pose noise")]
     pub pose_noise_m: f64,
-    /// Pose noise given to the mapper: heading standard deviation, degrees.
-    #[arg(long, default_value_t = 0.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    /// Heading standard deviation given to the mapper, degrees.
+    #[arg(long, default_value_t = PoseNoise::default().heading_deg, value_parser = ranges::non_negative, allow_negative_numbers = true, help_heading = "Pose noise")]
     pub pose_noise_deg: f64,
     /// Seed of the pose-noise draws.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = PoseNoise::DEFAULT_SEED, help_heading = "Pose noise")]
     pub pose_seed: u64,
+}
+
+/// `--og-credit-depth`'s default: the library's depth (`guard`, infinity, when it has none).
+fn credit_depth_default() -> f64 {
+    OgParams::default().credit_depth_m.unwrap_or(f64::INFINITY)
 }
 
 // `pradar extract`
@@ -386,15 +337,15 @@ pub struct ExtractArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Method.
-    #[arg(long, value_enum, default_value = "clean")]
+    #[arg(long, value_enum, default_value_t = ExtractParams::default().method)]
     pub method: ExtractMethod,
     /// Keep components above the floor plus this margin, dB.
-    #[arg(long, default_value_t = 13.0, value_parser = ranges::non_negative, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = ExtractParams::default().margin_db, value_parser = ranges::non_negative, allow_negative_numbers = true)]
     pub margin_db: f64,
     /// Stop at components this far below the position's strongest, dB.
     #[arg(
         long,
-        default_value_t = pradar::mpc::ExtractParams::default().dynamic_range_db,
+        default_value_t = ExtractParams::default().dynamic_range_db,
         value_parser = ranges::dynamic_range_db,
         allow_negative_numbers = true
     )]
@@ -405,7 +356,7 @@ pub struct ExtractArgs {
     /// An MPC on a wall's curve this far above the diffuse level is discrete, dB.
     #[arg(
         long,
-        default_value_t = pradar::mpc::DiffuseParams::default().discrete_db,
+        default_value_t = DiffuseParams::default().discrete_db,
         value_parser = ranges::non_negative,
         allow_negative_numbers = true
     )]
@@ -422,13 +373,13 @@ pub struct ClusterArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Largest K tried per position.
-    #[arg(long, default_value_t = pradar::cluster::ClusterParams::default().k_max, value_parser = ranges::k_max, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = ClusterParams::default().k_max, value_parser = ranges::k_max, allow_negative_numbers = true)]
     pub k_max: usize,
     /// Seed of the k-means++ draws.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = ClusterParams::default().seed)]
     pub seed: u64,
     /// Criterion choosing K.
-    #[arg(long, value_enum, default_value = "cv")]
+    #[arg(long, value_enum, default_value_t = ClusterParams::default().criterion)]
     pub criterion: Criterion,
 }
 
@@ -448,10 +399,10 @@ pub struct FitArgs {
     #[arg(long)]
     pub table: PathBuf,
     /// Bootstrap resamples.
-    #[arg(long, default_value_t = 1000, value_parser = ranges::bootstrap, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = FitParams::default().bootstrap, value_parser = ranges::bootstrap, allow_negative_numbers = true)]
     pub bootstrap: usize,
     /// Seed.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = FitParams::default().seed)]
     pub seed: u64,
     /// A simulator's truth/ folder: add the same estimators on its true clusters.
     #[arg(long)]
@@ -472,7 +423,7 @@ pub struct ReportArgs {
     #[arg(long)]
     pub energy: Option<PathBuf>,
     /// Report folder.
-    #[arg(long, default_value = "reports/campaign")]
+    #[arg(long, default_value = pradar::pipeline::DEFAULT_REPORT_OUT)]
     pub out: PathBuf,
     /// Model for the check and the experiments (default: the one fitted from the campaign).
     #[arg(long)]
@@ -484,21 +435,15 @@ pub struct ReportArgs {
     /// Skip the mapping experiments.
     #[arg(long)]
     pub skip_experiments: bool,
-    /// Model-data seeds of the experiments (comma-separated).
-    #[arg(
-        long,
-        allow_negative_numbers = true,
-        value_delimiter = ',',
-        default_value = "1,2,3"
-    )]
-    pub seeds: Vec<u64>,
+    #[command(flatten)]
+    pub seeds: SeedsArg,
 }
 
 // `pradar reproduce`
 #[derive(Args)]
 pub struct ReproduceArgs {
     /// Report folder.
-    #[arg(long, default_value = "reports/corridor")]
+    #[arg(long, default_value = pradar::pipeline::DEFAULT_REPRODUCE_OUT)]
     pub out: PathBuf,
     /// Use this manifest instead of the built-in corridor.
     #[arg(long)]
@@ -509,14 +454,8 @@ pub struct ReproduceArgs {
     /// Skip the mapping experiments.
     #[arg(long)]
     pub skip_experiments: bool,
-    /// Model-data seeds of the experiments (comma-separated).
-    #[arg(
-        long,
-        allow_negative_numbers = true,
-        value_delimiter = ',',
-        default_value = "1,2,3"
-    )]
-    pub seeds: Vec<u64>,
+    #[command(flatten)]
+    pub seeds: SeedsArg,
 }
 
 // `pradar experiment`
@@ -536,12 +475,19 @@ pub struct ExperimentArgs {
     /// Model file for model data (default: fitted from the campaign's energy table).
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Model-data seeds (comma-separated).
+    #[command(flatten)]
+    pub seeds: SeedsArg,
+}
+
+/// `--seeds`, shared by `report`, `reproduce` and `experiment`.
+#[derive(Args)]
+pub struct SeedsArg {
+    /// Model-data seeds of the experiments (comma-separated).
     #[arg(
-        long,
+        long = "seeds",
         allow_negative_numbers = true,
         value_delimiter = ',',
-        default_value = "1,2,3"
+        default_values_t = ExperimentParams::default().seeds
     )]
     pub seeds: Vec<u64>,
 }

@@ -9,9 +9,10 @@ use super::{
 };
 use anyhow::Result;
 use pradar::campaign::import::{ImportParams, SweepFiles};
-use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, OgParams};
+use pradar::mapping::{EkfParams, GridParams, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
+use pradar::pipeline::commands::map::{MapOptions, MapRun, PoseNoise};
 use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
 
@@ -126,10 +127,6 @@ impl MapArgs {
             .campaign
             .zip(self.energy)
             .map(|(campaign, energy)| MapRun { campaign, energy });
-        let ghost = pradar::mapping::grid::GhostParams {
-            rule: self.ghost,
-            aspect_lobes: self.ghost_aspect_lobes,
-        };
         commands::Map {
             options: MapOptions {
                 method: self.method,
@@ -143,17 +140,11 @@ impl MapArgs {
                 og: OgParams {
                     pfa: self.pfa,
                     prior: self.prior,
-                    passes: self.passes as usize,
-                    hold_echoes: self.og_hold_echoes,
-                    free_end: self.og_free_end,
-                    free_without_occluder: self.og_free_without_occluder,
                     bound_silent: self.og_bound_silent,
-                    free_floor: self.og_free_floor,
                     credit_depth_m: self
                         .og_credit_depth
                         .is_finite()
                         .then_some(self.og_credit_depth),
-                    ghost,
                     ..Default::default()
                 },
                 ekf: EkfParams {
@@ -161,16 +152,10 @@ impl MapArgs {
                     mu0: self.mu0,
                     sigma0: self.sigma0,
                     kappa: self.kappa,
-                    free_space: self.ekf_free_space,
-                    reflect: self.ekf_reflect,
-                    ghost,
-                    split: self.ekf_split,
                     arc_explain: self.ekf_arc_explain,
-                    explain_poses: self.ekf_explain_poses,
-                    bound_silent: self.ekf_bound_silent,
                     ..Default::default()
                 },
-                pose_noise: pradar::mapping::job::PoseNoise {
+                pose_noise: PoseNoise {
                     position_m: self.pose_noise_m,
                     heading_deg: self.pose_noise_deg,
                     seed: self.pose_seed,
@@ -243,7 +228,9 @@ impl ReproduceArgs {
             campaign: self.campaign,
             elements: self.elements,
             experiments: !self.skip_experiments,
-            experiment_params: ExperimentParams::default().seeds(self.seeds).check()?,
+            experiment_params: ExperimentParams::default()
+                .seeds(self.seeds.seeds)
+                .check()?,
         }
         .check()?)
     }
@@ -259,7 +246,9 @@ impl ReportArgs {
             model: self.model,
             truth: self.truth,
             experiments: !self.skip_experiments,
-            experiment_params: ExperimentParams::default().seeds(self.seeds).check()?,
+            experiment_params: ExperimentParams::default()
+                .seeds(self.seeds.seeds)
+                .check()?,
         }
         .check()?)
     }
@@ -275,7 +264,7 @@ impl ExperimentArgs {
                 energy: self.energy,
                 model: self.model,
             },
-            params: ExperimentParams::default().seeds(self.seeds),
+            params: ExperimentParams::default().seeds(self.seeds.seeds),
             out: self.out,
         }
     }
@@ -286,18 +275,23 @@ mod tests {
     use super::super::{Cli, Cmd};
     use clap::Parser;
     use pradar::mapping::{EkfParams, GridParams, OgParams};
+    use pradar::pipeline::commands::map::PoseNoise;
+    use pradar::pipeline::experiment::ExperimentParams;
 
-    /// `map` without mapper flags gives the library's defaults: the CLI's hard-coded
-    /// defaults (`--og-bound-silent nearer`, `--og-credit-depth 0.05`, `--ekf-bound-silent
-    /// off`, …) cannot drift from `OgParams::default()` and `EkfParams::default()`.
+    /// One subcommand parsed from its required arguments only.
+    fn parse(argv: &[&str]) -> Cmd {
+        let mut full = vec!["pradar"];
+        full.extend_from_slice(argv);
+        Cli::try_parse_from(full).unwrap().cmd
+    }
+
+    /// `map` without mapper flags gives the library's defaults: the CLI's defaults cannot
+    /// drift from `OgParams::default()`, `EkfParams::default()` and `GridParams::default()`.
     #[test]
     fn map_flags_default_to_the_library_defaults() {
         let options = |extra: &[&str]| {
             let mut argv = vec![
-                "pradar",
                 "map",
-                "--method",
-                "og",
                 "--campaign",
                 "c.toml",
                 "--energy",
@@ -306,16 +300,119 @@ mod tests {
                 "o",
             ];
             argv.extend_from_slice(extra);
-            let Cmd::Map(args) = Cli::try_parse_from(argv).unwrap().cmd else {
+            let Cmd::Map(args) = parse(&argv) else {
                 panic!("not map")
             };
             args.into_command().options
         };
         let o = options(&[]);
+        assert_eq!(o.method, pradar::mapping::Method::default());
         assert_eq!(o.og, OgParams::default());
         assert_eq!(o.ekf, EkfParams::default());
         assert_eq!(o.grid, GridParams::default());
+        assert_eq!(
+            o.pose_noise,
+            PoseNoise {
+                seed: PoseNoise::DEFAULT_SEED,
+                ..Default::default()
+            }
+        );
         let guard = options(&["--og-credit-depth", "guard"]);
         assert_eq!(guard.og.credit_depth_m, None);
+    }
+
+    /// Every other subcommand's defaults are the library's: each parsed with only its
+    /// required arguments gives the library's default parameter struct.
+    #[test]
+    fn every_subcommand_defaults_to_the_library_defaults() {
+        let (c, e, m, o) = ("--campaign", "--energy", "--model", "--out");
+        match parse(&["simulate", c, "c.toml", o, "s"]) {
+            Cmd::Simulate(a) => assert_eq!(a.into_command().format, Default::default()),
+            _ => unreachable!(),
+        }
+        match parse(&["synth", m, "m.toml", c, "c.toml", o, "e.parquet"]) {
+            Cmd::Synth(a) => {
+                let cmd = a.into_command();
+                assert_eq!(cmd.params, pradar::model::SynthParams::default());
+                assert!(cmd.values.is_empty() && cmd.elements.is_none());
+            }
+            _ => unreachable!(),
+        }
+        match parse(&["calibrate", e, "e.parquet", c, "c.toml", o, "m.toml"]) {
+            Cmd::Calibrate(a) => assert_eq!(
+                a.into_command().params,
+                pradar::calibrate::CalibrateParams::default()
+            ),
+            _ => unreachable!(),
+        }
+        match parse(&["check", m, "m.toml", c, "c.toml", e, "e.parquet"]) {
+            Cmd::Check(a) => {
+                assert!(a.fail_below.is_none());
+                assert_eq!(
+                    a.into_command().params,
+                    pradar::check::CheckParams::default()
+                );
+            }
+            _ => unreachable!(),
+        }
+        match parse(&["extract", e, "e.parquet", c, "c.toml", o, "m.parquet"]) {
+            Cmd::Extract(a) => assert_eq!(
+                a.into_command().params,
+                pradar::mpc::ExtractParams::default()
+            ),
+            _ => unreachable!(),
+        }
+        match parse(&["cluster", "--mpcs", "m.parquet", o, "k.parquet"]) {
+            Cmd::Cluster(a) => assert_eq!(
+                a.into_command().params,
+                pradar::cluster::ClusterParams::default()
+            ),
+            _ => unreachable!(),
+        }
+        let fit = [
+            "fit",
+            "--clusters",
+            "k.parquet",
+            c,
+            "c.toml",
+            o,
+            "m.toml",
+            "--table",
+            "t.md",
+        ];
+        match parse(&fit) {
+            Cmd::Fit(a) => assert_eq!(
+                a.into_command().params,
+                pradar::fit::channel::FitParams::default()
+            ),
+            _ => unreachable!(),
+        }
+        let seeds = ExperimentParams::default().seeds;
+        match parse(&["report", c, "c.toml"]) {
+            Cmd::Report(a) => {
+                assert_eq!(
+                    a.out,
+                    std::path::Path::new(pradar::pipeline::DEFAULT_REPORT_OUT)
+                );
+                assert_eq!(a.seeds.seeds, seeds);
+                assert!(!a.skip_experiments);
+            }
+            _ => unreachable!(),
+        }
+        match parse(&["reproduce"]) {
+            Cmd::Reproduce(a) => {
+                assert_eq!(
+                    a.out,
+                    std::path::Path::new(pradar::pipeline::DEFAULT_REPRODUCE_OUT)
+                );
+                assert_eq!(a.seeds.seeds, seeds);
+                assert!(!a.skip_experiments);
+            }
+            _ => unreachable!(),
+        }
+        match parse(&["experiment", "all", o, "x"]) {
+            Cmd::Experiment(a) => assert_eq!(a.into_command().params, ExperimentParams::default()),
+            _ => unreachable!(),
+        }
     }
 }

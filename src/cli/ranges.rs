@@ -33,17 +33,6 @@ fn whole_in(s: &str, lo: usize, hi: usize, why: &str) -> Result<usize, String> {
     }
 }
 
-/// `--ekf-explain-poses`: in [1, 1000] (`EkfParams` explain_poses).
-pub fn explain_poses(s: &str) -> Result<u32, String> {
-    whole_in(
-        s,
-        1,
-        1000,
-        "distinct poses whose echoes a cell must explain",
-    )
-    .map(|v| v as u32)
-}
-
 /// `--k-max`: in [1, 64] (`ClusterParams` k_max, [`pradar::cluster::params::MAX_K`]).
 pub fn k_max(s: &str) -> Result<usize, String> {
     whole_in(
@@ -65,22 +54,34 @@ pub fn bootstrap(s: &str) -> Result<usize, String> {
     )
 }
 
-/// `calibrate --simulations`: in [20, 100000] (`calibrate::params::MAX_SIMULATIONS`; it
-/// must also reach the population, which the library checks).
+/// `calibrate --simulations`: in [`MIN_POPULATION`, `MAX_SIMULATIONS`]
+/// (`calibrate::params`; it must also reach the population, which the library checks).
+///
+/// [`MIN_POPULATION`]: pradar::calibrate::params::MIN_POPULATION
+/// [`MAX_SIMULATIONS`]: pradar::calibrate::params::MAX_SIMULATIONS
 pub fn simulations(s: &str) -> Result<usize, String> {
-    use pradar::calibrate::params::MAX_SIMULATIONS;
-    whole_in(s, 20, MAX_SIMULATIONS, "the simulation budget")
+    use pradar::calibrate::params::{MAX_SIMULATIONS, MIN_POPULATION};
+    whole_in(s, MIN_POPULATION, MAX_SIMULATIONS, "the simulation budget")
 }
 
-/// `calibrate --population`: in [20, 10000] (`calibrate::params::MAX_POPULATION`).
+/// `calibrate --population`: in [`MIN_POPULATION`, `MAX_POPULATION`] (`calibrate::params`).
+///
+/// [`MIN_POPULATION`]: pradar::calibrate::params::MIN_POPULATION
+/// [`MAX_POPULATION`]: pradar::calibrate::params::MAX_POPULATION
 pub fn population(s: &str) -> Result<usize, String> {
-    use pradar::calibrate::params::MAX_POPULATION;
-    whole_in(s, 20, MAX_POPULATION, "particles per generation")
+    use pradar::calibrate::params::{MAX_POPULATION, MIN_POPULATION};
+    whole_in(
+        s,
+        MIN_POPULATION,
+        MAX_POPULATION,
+        "particles per generation",
+    )
 }
 
-/// `check --draws`: in [2, 1000] (`CheckParams` draws).
+/// `check --draws`: in [`pradar::check::DRAWS_RANGE`] (`CheckParams` draws).
 pub fn draws(s: &str) -> Result<usize, String> {
-    whole_in(s, 2, 1000, "synth draws of the model")
+    let r = pradar::check::DRAWS_RANGE;
+    whole_in(s, *r.start(), *r.end(), "synth draws of the model")
 }
 
 /// `check --fail-below`: in [0, 1] (a p-value).
@@ -88,9 +89,14 @@ pub fn probability(s: &str) -> Result<f64, String> {
     checked(s, |v| (0.0..=1.0).contains(&v), "in [0, 1]")
 }
 
-/// `--cell-m`: in [0.005, 10] m (`GridParams` cell_m).
+/// `--cell-m`: in [`pradar::mapping::grid::CELL_M_RANGE`] (`GridParams` cell_m).
 pub fn cell_m(s: &str) -> Result<f64, String> {
-    checked(s, |v| (0.005..=10.0).contains(&v), "in [0.005, 10] m")
+    let r = pradar::mapping::grid::CELL_M_RANGE;
+    checked(
+        s,
+        |v| r.contains(&v),
+        &format!("in [{}, {}] m", r.start(), r.end()),
+    )
 }
 
 /// `--pfa`: in (0, 0.5] (`OgParams` pfa).
@@ -124,15 +130,6 @@ pub fn credit_depth(s: &str) -> Result<f64, String> {
         s,
         |v| v.is_finite() && v >= 0.0,
         "finite and >= 0, or `guard`",
-    )
-}
-
-/// `--ghost-aspect-lobes`: in [0, 36] (`GhostParams` aspect_lobes).
-pub fn aspect_lobes(s: &str) -> Result<f64, String> {
-    checked(
-        s,
-        |v| v.is_finite() && (0.0..=36.0).contains(&v),
-        "in [0, 36]",
     )
 }
 
@@ -180,7 +177,39 @@ mod tests {
         assert!(k_max("-2").unwrap_err().starts_with("must be in [1, 64]"));
         assert!(bootstrap("0").is_err() && bootstrap("1").is_err() && bootstrap("39").is_err());
         assert!(bootstrap("40").is_ok() && bootstrap("100001").is_err());
-        assert!(cell_m("0").is_err() && cell_m("0.005").is_ok() && cell_m("10.5").is_err());
+        // the bounds are the library's: each accepted here exactly when its check accepts it
+        let grid = |c: f64| {
+            pradar::params::ParamGuard::check(&pradar::mapping::GridParams {
+                cell_m: c,
+                ..Default::default()
+            })
+            .is_ok()
+        };
+        for v in ["0", "0.004", "0.005", "0.1", "10", "10.5", "inf"] {
+            assert_eq!(cell_m(v).is_ok(), grid(v.parse().unwrap()), "--cell-m {v}");
+        }
+        let check = |n: usize| {
+            pradar::params::ParamGuard::check(&pradar::check::CheckParams {
+                draws: n,
+                ..Default::default()
+            })
+            .is_ok()
+        };
+        for n in [0, 1, 2, 20, 1000, 1001] {
+            assert_eq!(draws(&n.to_string()).is_ok(), check(n), "--draws {n}");
+        }
+        let calibrate = |n: usize| {
+            pradar::params::ParamGuard::check(&pradar::calibrate::CalibrateParams {
+                population: n,
+                simulations: n,
+                ..Default::default()
+            })
+            .is_ok()
+        };
+        for n in [19, 20, 400, 10_000, 10_001] {
+            let ok = population(&n.to_string()).is_ok() && simulations(&n.to_string()).is_ok();
+            assert_eq!(ok, calibrate(n), "--population {n} --simulations {n}");
+        }
         assert!(pfa("0").is_err() && pfa("0.5").is_ok() && pfa("1.5").is_err());
         assert!(open_unit("0").is_err() && open_unit("1").is_err() && open_unit("0.5").is_ok());
         assert!(positive("0").is_err() && positive("inf").is_err() && positive("1e-3").is_ok());

@@ -10,7 +10,7 @@
 //! rounded.
 
 use crate::export::{Cell, Column, LineChart};
-use crate::mapping::job::PoseNoise;
+use crate::mapping::pose_noise::PoseNoise;
 use crate::mapping::reference::ReferenceMap;
 use serde::Serialize;
 
@@ -80,10 +80,10 @@ pub struct CaseFigures {
     /// Wrong cells of the all-free map on the interior.
     pub all_free_wrong_interior: usize,
     /// The map's errors per reference class.
-    pub classes: crate::mapping::job::ClassFigures,
+    pub classes: crate::mapping::score::ClassFigures,
     /// The map against the three-class reference (structure, the data's truth objects,
     /// free), when the data have a truth (simulated sweeps, model data).
-    pub three_class: Option<crate::mapping::job::ThreeClassFigures>,
+    pub three_class: Option<crate::mapping::score::ThreeClassFigures>,
 }
 
 /// What one experiment measured and wrote.

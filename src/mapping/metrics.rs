@@ -16,7 +16,7 @@
 //!   map's F1 is 0); with no reference occupied cell the recall is 0.
 //!
 //! The caller maps the reference's `Outside` cells to free for the whole-map figures and
-//! builds the region masks ([`crate::mapping::job`] states the observable region).
+//! builds the region masks ([`crate::mapping::score`] states the observable region).
 //!
 //! **Three-class reference** ([`evaluate_three_class`], a simulated scene: DESIGN §2). The
 //! classes: *structure* S = the layout's wall cells (the reference's occupied cells: a wall

@@ -13,26 +13,31 @@
 //!   covariance);
 //! * [`metrics`]: ψ (Birk & Carpin 2006), wrong-cell rate, occupied precision/recall/F1
 //!   (exact and within one cell);
-//! * [`output`]: PNG, PGM + YAML (ROS map_server);
-//! * [`job`]: the `pradar map` command (runs, fusion, observable region, metrics.json; it
-//!   uses [`ekf`] and [`og`], never the other way).
+//! * [`score`]: a map's figures against the reference map on the observable region, the
+//!   building and the whole map, and the report's metrics table; [`objects`]: the truth's
+//!   objects for the three-class figures;
+//! * [`output`]: PNG, PGM + YAML (ROS map_server).
+//!
+//! The `pradar map` command (runs, fusion, metrics.json) is
+//! `pipeline::commands::map`; it uses these modules, never the other way.
 //!
 //! Parameters are checked once, by type ([`crate::params::ParamGuard`]): [`GridParams`] →
-//! [`GridValid`], [`OgParams`] → [`OgValid`], [`EkfParams`] → [`EkfValid`] and the whole
-//! [`MapOptions`] → [`MapValid`]; the algorithms take only the checked types. The report
-//! page of the maps is `report::maps`. Measurements: `docs/mapping.md`.
+//! [`GridValid`], [`OgParams`] → [`OgValid`], [`EkfParams`] → [`EkfValid`]; the algorithms
+//! take only the checked types. The report page of the maps is `report::maps`.
+//! Measurements: `docs/mapping.md`.
 
 pub mod ekf;
 pub mod experiment;
 pub mod grid;
-pub mod job;
-mod memo;
+pub(crate) mod memo;
 pub mod metrics;
+pub mod objects;
 pub mod og;
 pub mod output;
+pub mod pose_noise;
 pub mod reference;
+pub mod score;
 
 pub use ekf::{EkfParams, EkfValid, EkfVariant};
 pub use grid::{Beam, GridParams, GridValid, ObservationModel};
-pub use job::{run_map, MapOptions, MapReport, MapRun, MapValid};
 pub use og::{fuse, og_map, LogOddsMap, Method, OgParams, OgValid};

@@ -48,6 +48,9 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// `report`'s report folder when none is given.
+pub const DEFAULT_REPORT_OUT: &str = "reports/campaign";
+
 /// Options of `report` (checked by [`ParamGuard::check`] into a [`ReportValid`]).
 #[derive(Debug, Clone)]
 pub struct ReportOptions {
@@ -376,7 +379,8 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
     timings.time("report plots", || write_plots(&s, &a, out, progress))?;
     let maps = timings.time("maps (OG, OG boresight, EKF)", || {
         Ok(
-            crate::report::maps::report_section(&s.campaign.path, &s.energy_path, out, "maps")
+            super::commands::map::report_maps(&s.campaign.path, &s.energy_path, &out.join("maps"))
+                .map(|maps| crate::report::maps::report_section(&maps, "maps"))
                 .unwrap_or_else(|e| Section {
                     title: "Maps".into(),
                     html: page::failed("mapping", &e),

@@ -23,8 +23,8 @@ mod kmax;
 mod reproduce;
 
 pub use analysis::{analyse, Analysis};
-pub use campaign_report::{report, ReportOptions, ReportValid};
-pub use reproduce::{reproduce, ReproduceOptions, ReproduceValid};
+pub use campaign_report::{report, ReportOptions, ReportValid, DEFAULT_REPORT_OUT};
+pub use reproduce::{reproduce, ReproduceOptions, ReproduceValid, DEFAULT_REPRODUCE_OUT};
 
 /// The built-in corridor manifest.
 pub const CORRIDOR_MANIFEST: &str = include_str!("../../data/corridor/campaign.toml");

@@ -17,6 +17,9 @@ use crate::params::{ParamGuard, Valid};
 use crate::simulate::has_scene;
 use std::path::{Path, PathBuf};
 
+/// `reproduce`'s report folder when none is given.
+pub const DEFAULT_REPRODUCE_OUT: &str = "reports/corridor";
+
 /// Options of `reproduce` (checked by [`ParamGuard::check`] into a [`ReproduceValid`]).
 #[derive(Debug, Clone)]
 pub struct ReproduceOptions {

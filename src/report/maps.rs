@@ -1,45 +1,19 @@
 //! The maps section of the `reproduce` report: the occupancy maps (`og`, `og-boresight`)
-//! and the EKF RRCS map (`ekf`, scalable filter) of one run, written under
-//! `report_dir/<sub>/<method>/`, shown beside the reference map with their figures and the
-//! all-free map's ([`crate::mapping::job::metrics_table`], rendered by
+//! and the EKF RRCS map (`ekf`, scalable filter) of one run, already written under
+//! `report_dir/<sub>/<method>/` by the pipeline, shown beside the reference map with their
+//! figures and the all-free map's ([`crate::mapping::score::metrics_table`], rendered by
 //! [`crate::report::html_table`]).
 
-use crate::error::Result;
-use crate::mapping::job::{metrics_table, run_map, MapOptions, MapRun, MetricsPair, PoseNoise};
-use crate::mapping::{GridParams, Method, OgParams};
-use crate::params::ParamGuard;
+use crate::mapping::score::{metrics_table, MetricsPair};
 use crate::report::{html_escape, html_table, Section};
-use std::path::Path;
 
-/// Map `campaign` + `energy` with every method into `report_dir/<sub>/<method>/` and build
-/// the report section (figures and metrics table).
-pub fn report_section(
-    campaign: &Path,
-    energy: &Path,
-    report_dir: &Path,
-    sub: &str,
-) -> Result<Section> {
+/// The report section of the maps of one run, written under `report_dir/<sub>/<method>/`
+/// (each method's name and figures, in order; the first method's folder holds the
+/// reference map): the figures and the metrics table.
+pub fn report_section(maps: &[(&str, MetricsPair)], sub: &str) -> Section {
     let mut imgs = String::new();
     let mut rows: Vec<(String, MetricsPair, Option<String>)> = Vec::new();
-    for (i, method) in [Method::Og, Method::OgBoresight, Method::Ekf]
-        .into_iter()
-        .enumerate()
-    {
-        let name = method.name();
-        let opts = MapOptions {
-            method,
-            runs: vec![MapRun {
-                campaign: campaign.to_path_buf(),
-                energy: energy.to_path_buf(),
-            }],
-            out: report_dir.join(sub).join(name),
-            elements: None,
-            grid: GridParams::default(),
-            og: OgParams::default(),
-            ekf: Default::default(),
-            pose_noise: PoseNoise::default(),
-        };
-        let r = run_map(&opts.check()?, &|_, _| {})?;
+    for (i, (name, metrics)) in maps.iter().enumerate() {
         if i == 0 {
             imgs.push_str(&format!(
                 "<figure><img src=\"{sub}/{name}/reference.png\" alt=\"reference\"><figcaption>reference</figcaption></figure>\n"
@@ -53,7 +27,7 @@ pub fn report_section(
         }
         rows.push((
             name.to_string(),
-            r.metrics,
+            *metrics,
             Some(format!("{sub}/{name}/metrics.json")),
         ));
     }
@@ -64,8 +38,8 @@ pub fn report_section(
     let html = format!(
         "<p>Occupancy grids (0.1 m cells; binary map: p &gt; 0.5) and the EKF map over RRCS (scalable filter; binary map: mean − 2·std &gt; μ0). Observable region: cells inside the −3 dB main lobe of some (pose, direction) within the usable bins, not outside the perimeter; whole map: every cell, outside cells counted as free. ψ in cells (lower is better).</p>\n<div>{imgs}</div>\n{table}"
     );
-    Ok(Section {
+    Section {
         title: "Maps: occupancy grid (side-lobe aware vs boresight) and EKF".into(),
         html,
-    })
+    }
 }

@@ -49,6 +49,9 @@ pub use ghost::{GhostJudge, GhostParams, GhostRule, GhostValid};
 use std::f64::consts::PI;
 pub use visibility::{Occlusion, Polygon, ScanEchoes, SilentBound, Visibility};
 
+/// The cell sides [`GridParams::check`] accepts, m (`--cell-m`).
+pub const CELL_M_RANGE: std::ops::RangeInclusive<f64> = 0.005..=10.0;
+
 /// Grid and observation-model parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GridParams {
@@ -85,7 +88,7 @@ impl ParamGuard for GridParams {
     /// Cell side in [0.005, 10] m, margin ≥ 0, lobe floor < 0 dB, main-lobe level in
     /// [lobe floor, 0) dB, sub-samples in 1..=16.
     fn check(&self) -> Result<GridValid> {
-        if !(self.cell_m.is_finite() && self.cell_m >= 0.005 && self.cell_m <= 10.0) {
+        if !(self.cell_m.is_finite() && CELL_M_RANGE.contains(&self.cell_m)) {
             return Err(Error::param("cell_m", "must be in [0.005, 10] m"));
         }
         if !(self.margin_m.is_finite() && self.margin_m >= 0.0) {

@@ -94,17 +94,18 @@ pub use scan::{og_map, og_map_stats};
 
 use crate::error::{Error, Result};
 
-/// Inverse sensor model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+/// Inverse sensor model (`og` by default).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Method {
     /// Side-lobe-aware occupancy grid (responsibilities over the range ring).
     #[value(name = "og", help = "Side-lobe-aware occupancy grid")]
+    #[default]
     Og,
     /// Boresight-only baseline.
     #[value(name = "og-boresight", help = "Boresight-only baseline")]
     OgBoresight,
     /// EKF over the RRCS per cell ([`crate::mapping::ekf`]; not an inverse sensor model:
-    /// [`og_map`] refuses it, [`crate::mapping::run_map`] dispatches it).
+    /// [`og_map`] refuses it, `pipeline::commands::map::run_map` dispatches it).
     #[value(name = "ekf", help = "EKF over the RRCS per cell")]
     Ekf,
 }

@@ -25,7 +25,8 @@
 //!
 //! The commands are grouped by stage, each group in its own file and every item
 //! re-exported here: `campaign` (import, simulate, energy, synth), `analysis` (extract,
-//! cluster, fit), `model` (calibrate, check) and `maps` (map, experiments).
+//! cluster, fit), `model` (calibrate, check), [`map`](mod@map) (the map job: options, runs,
+//! fusion, metrics.json) and `experiments`.
 //!
 //!
 //! ```no_run
@@ -82,7 +83,7 @@
 //! )?;
 //! println!("{synth}");
 //! let map = commands::Map {
-//!     options: pradar::mapping::MapOptions {
+//!     options: pradar::pipeline::commands::map::MapOptions {
 //!         method: pradar::mapping::Method::Og,
 //!         runs: vec![],
 //!         out: "map".into(),
@@ -108,7 +109,8 @@
 
 mod analysis;
 mod campaign;
-mod maps;
+mod experiments;
+pub mod map;
 mod model;
 
 pub use crate::campaign::import::ImportParams;
@@ -120,9 +122,8 @@ pub use campaign::{
     energy, import, simulate, synth, Energy, EnergySummary, Simulate, SimulateSummary, Synth,
     SynthSummary,
 };
-pub use maps::{
-    experiments, map, select_experiments, Experiments, ExperimentsSummary, Map, MapSummary,
-};
+pub use experiments::{experiments, select_experiments, Experiments, ExperimentsSummary};
+pub use map::{map, Map, MapSummary};
 pub use model::{
     calibrate, check, posterior_csv, Calibrate, CalibrateSummary, Check, CheckSummary,
 };

@@ -12,8 +12,8 @@
 //! bytes).
 
 use super::{
-    load_runs, runs_regions, score_binary, write_metrics_json, write_reference, FusionRow,
-    LoadedRun, MapReport, MapValid, MetricsPair, Regions, RunSummary,
+    load_runs, runs_regions, write_metrics_json, write_reference, FusionRow, LoadedRun, MapReport,
+    MapValid, RunSummary,
 };
 use crate::energy::EnergySource;
 use crate::error::{Error, Result};
@@ -24,6 +24,7 @@ use crate::mapping::ekf::{
 use crate::mapping::grid::{GhostJudge, GhostRule, Occlusion};
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
 use crate::mapping::reference::{GridSpec, ReferenceMap};
+use crate::mapping::score::{score_binary, MetricsPair, Regions};
 use crate::params::Valid;
 use std::path::Path;
 

@@ -1,7 +1,8 @@
-//! The `pradar map` job: one or several runs (campaign + energy table) → one occupancy map,
-//! its files and its metrics against the reference map.
+//! The `pradar map` command: one or several runs (campaign + energy table) → one map, its
+//! files and its metrics against the reference map. The experiments and the report's maps
+//! run the same job ([`run_map`]).
 //!
-//! Takes [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
+//! Takes [`Map`] (the CLI's [`MapOptions`] and `--run` values) or [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
 //! gives in the output folder, for method `<m>` (`og` or `og-boresight`):
 //! * `<m>.png/.pgm/.yaml` — the soft map (grey = 1 − p), YAML `occupied_thresh` = η = 0.5,
 //!   `free_thresh` = 0.45 (cells left at the prior read as unknown in map_server);
@@ -9,13 +10,13 @@
 //! * `reference.png/.pgm/.yaml` — the reference map rasterised from the layout on the same
 //!   grid (occupied 0, free 254, outside 205);
 //! * `metrics.json` — figures on the observable region, the building and the whole map, each
-//!   beside the all-free map's, and the per-class figures ([`score`](mod@score)); with several runs also every single run's figures and the fused map's
+//!   beside the all-free map's, and the per-class figures ([`crate::mapping::score`]); with several runs also every single run's figures and the fused map's
 //!   figures for the first n runs, n = 1..R (metrics vs number of runs).
 //!
 //! Choices:
 //! * the grid is the reference raster's ([`Layout::rasterize`](crate::campaign::layout::Layout::rasterize): cell 0.1 m, margin 0.5 m);
 //!   fused runs must share the layout's grid;
-//! * regions ([`score`](mod@score)): observable = cells in line of sight of a pose through
+//! * regions ([`crate::mapping::score`]): observable = cells in line of sight of a pose through
 //!   the layout's walls, inside the −3 dB main lobe of one of its directions, within the
 //!   usable bins (coupling gate to the last bin); building = inside the perimeter or on a
 //!   wall; whole map = every cell, `Outside` reference cells counted as free. None comes
@@ -30,13 +31,14 @@
 
 //!
 //! Layout: [`load`] (runs → [`LoadedRun`]s on one grid, the first usable bin, the window
-//! kernel), [`score`](mod@score) (metrics against the reference, observable region, the metrics
-//! table), [`ekf`] (the `--method ekf` job); this file holds the options, the occupancy-grid
-//! job and the report written to `metrics.json`. The report page is assembled by
-//! `report::maps`.
+//! kernel, the runs' scoring regions), [`ekf`] (the `--method ekf` job); the scoring
+//! against the reference is [`crate::mapping::score`]. This file holds the command, the
+//! options, the occupancy-grid job and the report written to `metrics.json`. The report
+//! page is rendered by `report::maps` from [`report_maps`].
 //!
 //! ```no_run
-//! use pradar::mapping::{run_map, MapOptions, MapRun, Method};
+//! use pradar::mapping::Method;
+//! use pradar::pipeline::commands::map::{run_map, MapOptions, MapRun};
 //! use pradar::params::ParamGuard;
 //! let opts = MapOptions {
 //!     method: Method::Og,
@@ -55,18 +57,13 @@
 
 pub mod ekf;
 pub mod load;
-pub mod objects;
-pub mod score;
 
 pub use ekf::run_map_ekf;
-pub use load::{load_run, load_runs, min_bin, window_kernel, LoadedRun};
-pub use objects::{find_truth, load_objects, Objects};
-pub use score::{
-    building_region, metrics_table, observable_region, runs_regions, score, score_binary,
-    ClassFigures, MetricsPair, Regions, ThreeClassFigures,
-};
+pub use load::{load_run, load_runs, min_bin, runs_regions, window_kernel, LoadedRun};
 
-use crate::campaign::manifest::Pose;
+pub use crate::mapping::pose_noise::{PoseNoise, PoseNoiseValid};
+use crate::mapping::score::{score, MetricsPair};
+
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{EkfParams, EkfReport, EkfValid};
 use crate::mapping::grid::{GridParams, GridValid};
@@ -76,6 +73,56 @@ use crate::mapping::reference::{CellClass, ReferenceMap};
 use crate::params::{ParamGuard, Valid};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+
+/// `pradar map`: the map options plus the `--run` specifications still to parse.
+#[derive(Debug, Clone)]
+pub struct Map {
+    /// Everything but the `--run` runs (`options.runs` holds the `--campaign` +
+    /// `--energy` run, if given).
+    pub options: MapOptions,
+    /// `--run campaign.toml=energy.parquet` values, appended after `options.runs`.
+    pub run_specs: Vec<String>,
+}
+
+/// What `map` wrote.
+#[derive(Debug, Clone)]
+pub struct MapSummary {
+    /// The stage's report.
+    pub report: MapReport,
+    /// The output folder.
+    pub out: PathBuf,
+}
+
+impl std::fmt::Display for MapSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = &self.report;
+        let m = &r.metrics.observable;
+        write!(
+            f,
+            "{} map {}x{} -> {} (observable: psi {:.3}, F1 {:.3}; all-free psi {:.3})",
+            r.method,
+            r.rows,
+            r.cols,
+            self.out.display(),
+            m.psi,
+            m.f1,
+            r.metrics.observable_all_free.psi
+        )
+    }
+}
+
+/// Run `pradar map` ([`run_map`]); `progress` counts poses over all runs.
+pub fn map(cmd: &Map, progress: super::StepProgress) -> Result<MapSummary> {
+    let mut opts = cmd.options.clone();
+    for r in &cmd.run_specs {
+        opts.runs.push(MapRun::parse(r)?);
+    }
+    let report = run_map(&opts.check()?, progress)?;
+    Ok(MapSummary {
+        report,
+        out: opts.out,
+    })
+}
 
 /// One run: a campaign manifest and its energy table.
 #[derive(Debug, Clone, PartialEq)]
@@ -170,67 +217,34 @@ impl Valid<MapOptions> {
     }
 }
 
-/// Pose noise of the mapper: the energy was recorded at the manifest's poses, the mapper is
-/// given x̃ = x + N(0, σ_p²), ỹ = y + N(0, σ_p²), h̃ = h + N(0, σ_h²), drawn independently
-/// per pose (no drift) from a ChaCha stream keyed by (`seed`, run index). The observable
-/// region and the reference stay those of the true poses, so maps with and without noise are
-/// scored on the same cells.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
-pub struct PoseNoise {
-    /// Position standard deviation per axis, m.
-    pub position_m: f64,
-    /// Heading standard deviation, degrees.
-    pub heading_deg: f64,
-    /// Seed of the draws.
-    pub seed: u64,
-}
-
-/// Pose noise that passed [`ParamGuard::check`].
-pub type PoseNoiseValid = Valid<PoseNoise>;
-
-impl ParamGuard for PoseNoise {
-    type Checked = PoseNoiseValid;
-
-    /// Both standard deviations finite and ≥ 0.
-    fn check(&self) -> Result<PoseNoiseValid> {
-        if !(self.position_m.is_finite() && self.position_m >= 0.0) {
-            return Err(Error::param("pose_noise.position_m", "must be >= 0"));
-        }
-        if !(self.heading_deg.is_finite() && self.heading_deg >= 0.0) {
-            return Err(Error::param("pose_noise.heading_deg", "must be >= 0"));
-        }
-        Ok(Valid::new(*self))
+/// The maps of the report: one run mapped with every method (`og`, `og-boresight`, `ekf`;
+/// default parameters) into `dir/<method>/`; gives each method's name and figures, in
+/// that order.
+pub fn report_maps(
+    campaign: &Path,
+    energy: &Path,
+    dir: &Path,
+) -> Result<Vec<(&'static str, MetricsPair)>> {
+    let mut maps = Vec::new();
+    for method in [Method::Og, Method::OgBoresight, Method::Ekf] {
+        let name = method.name();
+        let opts = MapOptions {
+            method,
+            runs: vec![MapRun {
+                campaign: campaign.to_path_buf(),
+                energy: energy.to_path_buf(),
+            }],
+            out: dir.join(name),
+            elements: None,
+            grid: GridParams::default(),
+            og: OgParams::default(),
+            ekf: EkfParams::default(),
+            pose_noise: PoseNoise::default(),
+        };
+        let r = run_map(&opts.check()?, &|_, _| {})?;
+        maps.push((name, r.metrics));
     }
-}
-
-impl PoseNoise {
-    /// Whether it changes any pose.
-    pub fn is_none(&self) -> bool {
-        self.position_m == 0.0 && self.heading_deg == 0.0
-    }
-    /// The poses the mapper believes for run `run` (the true poses when there is no noise).
-    pub fn apply(&self, poses: &[Pose], run: usize) -> Vec<Pose> {
-        use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
-        if self.is_none() {
-            return poses.to_vec();
-        }
-        let key = self.seed ^ (run as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(key);
-        poses
-            .iter()
-            .map(|p| {
-                let dx: f64 = StandardNormal.sample(&mut rng);
-                let dy: f64 = StandardNormal.sample(&mut rng);
-                let dh: f64 = StandardNormal.sample(&mut rng);
-                Pose {
-                    x_m: p.x_m + self.position_m * dx,
-                    y_m: p.y_m + self.position_m * dy,
-                    heading_deg: p.heading_deg + self.heading_deg * dh,
-                }
-            })
-            .collect()
-    }
+    Ok(maps)
 }
 
 /// One row of the fusion table.

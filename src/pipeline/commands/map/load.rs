@@ -14,8 +14,10 @@ use crate::energy::{EnergyMatrix, EnergySource, EnergyTable};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
 use crate::mapping::memo::Memo;
+use crate::mapping::objects::{find_truth, load_objects};
 use crate::mapping::og::{detection_threshold, Detector, OgValid};
 use crate::mapping::reference::{GridSpec, ReferenceMap};
+use crate::mapping::score::{building_region, observable_region, Regions};
 use std::path::PathBuf;
 
 /// A loaded, checked run ready to map.
@@ -153,4 +155,30 @@ pub fn load_runs(opts: &MapValid) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
         return Err(Error::param("cell_m", "reference grid mismatch"));
     }
     Ok((loaded, reference))
+}
+
+/// The regions of loaded runs, from the poses their data were recorded at and the first
+/// run's layout, with the first run's truth objects when it has a truth
+/// ([`find_truth`]; an unreadable truth is an error).
+pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Regions> {
+    let models: Vec<ObservationModel> = loaded
+        .iter()
+        .map(|l| {
+            let mut m = l.model.clone();
+            m.poses = l.true_poses.clone();
+            m
+        })
+        .collect();
+    let refs: Vec<&ObservationModel> = models.iter().collect();
+    let layout = &loaded[0].layout;
+    let objects = match find_truth(&loaded[0].campaign.path, &loaded[0].energy_path) {
+        Some(dir) => Some(load_objects(&dir, layout, reference.spec)?),
+        None => None,
+    };
+    Ok(Regions {
+        observable: observable_region(&refs, layout),
+        building: building_region(layout, reference),
+        edge_band: layout.edge_band(reference),
+        objects,
+    })
 }

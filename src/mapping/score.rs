@@ -1,4 +1,4 @@
-//! Scoring a map job: the map's and the all-free map's figures on three regions
+//! Scoring a map: the map's and the all-free map's figures on three regions
 //! ([`MetricsPair`]), the map's errors per reference class ([`ClassFigures`]), the regions
 //! themselves ([`Regions`]), and the metrics table of the report ([`metrics_table`]).
 //!
@@ -25,14 +25,12 @@
 //! all-free map's, with the cells a wall touches only along an edge as an ignore band
 //! ([`Layout::edge_band`]). A campaign without a truth has `three_class: null`.
 
-use super::objects::{find_truth, load_objects, Objects};
-use super::LoadedRun;
 use crate::campaign::layout::Layout;
-use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::mapping::grid::ObservationModel;
 use crate::mapping::memo::Memo;
 use crate::mapping::metrics::{evaluate, evaluate_three_class, MapMetrics, ThreeClassMetrics};
+use crate::mapping::objects::Objects;
 use crate::mapping::og::LogOddsMap;
 use crate::mapping::reference::{CellClass, ReferenceMap};
 use rayon::prelude::*;
@@ -242,32 +240,6 @@ fn observable_region_of(runs: &[&ObservationModel], layout: &Layout) -> Vec<bool
         }
     }
     region
-}
-
-/// The regions of loaded runs, from the poses their data were recorded at and the first
-/// run's layout, with the first run's truth objects when it has a truth
-/// ([`find_truth`]; an unreadable truth is an error).
-pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Regions> {
-    let models: Vec<ObservationModel> = loaded
-        .iter()
-        .map(|l| {
-            let mut m = l.model.clone();
-            m.poses = l.true_poses.clone();
-            m
-        })
-        .collect();
-    let refs: Vec<&ObservationModel> = models.iter().collect();
-    let layout = &loaded[0].layout;
-    let objects = match find_truth(&loaded[0].campaign.path, &loaded[0].energy_path) {
-        Some(dir) => Some(load_objects(&dir, layout, reference.spec)?),
-        None => None,
-    };
-    Ok(Regions {
-        observable: observable_region(&refs, layout),
-        building: building_region(layout, reference),
-        edge_band: layout.edge_band(reference),
-        objects,
-    })
 }
 
 /// The metrics table of the report: one row per map (name, its [`MetricsPair`], the link
