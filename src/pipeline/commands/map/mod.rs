@@ -438,16 +438,6 @@ pub fn write_reference(out: &Path, reference: &ReferenceMap) -> Result<()> {
 mod tests {
     use super::*;
 
-    fn line(n: usize) -> Vec<Pose> {
-        (0..n)
-            .map(|i| Pose {
-                x_m: i as f64 * 0.4,
-                y_m: -0.3,
-                heading_deg: 10.0,
-            })
-            .collect()
-    }
-
     #[test]
     fn map_options_are_checked_once_with_every_part() {
         let ok = MapOptions {
@@ -478,50 +468,5 @@ mod tests {
         let mut o = ok;
         o.pose_noise.position_m = -1.0;
         assert!(field(o).contains("`pose_noise.position_m`"));
-    }
-
-    #[test]
-    fn no_pose_noise_keeps_the_poses() {
-        let p = line(5);
-        assert_eq!(PoseNoise::default().apply(&p, 0), p);
-    }
-
-    #[test]
-    fn pose_noise_has_the_stated_spread_and_is_seeded() {
-        let p = line(20_000);
-        let n = PoseNoise {
-            position_m: 0.05,
-            heading_deg: 2.0,
-            seed: 7,
-        };
-        let a = n.apply(&p, 0);
-        assert_eq!(a, n.apply(&p, 0), "same seed, same draws");
-        assert_ne!(a, n.apply(&p, 1), "another run, other draws");
-        // mean within 4 standard errors of 0, sample std returned
-        let sd = |f: &dyn Fn(&Pose, &Pose) -> f64, sigma: f64| {
-            let v: Vec<f64> = a.iter().zip(&p).map(|(x, y)| f(x, y)).collect();
-            let m = v.iter().sum::<f64>() / v.len() as f64;
-            assert!(m.abs() < 4.0 * sigma / (v.len() as f64).sqrt(), "mean {m}");
-            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
-        };
-        let sx = sd(&|x, y| x.x_m - y.x_m, 0.05);
-        let sy = sd(&|x, y| x.y_m - y.y_m, 0.05);
-        let sh = sd(&|x, y| x.heading_deg - y.heading_deg, 2.0);
-        // 20,000 draws: the sample std is within 2 % of σ (≈ 4 standard errors)
-        assert!((sx / 0.05 - 1.0).abs() < 0.02, "x {sx}");
-        assert!((sy / 0.05 - 1.0).abs() < 0.02, "y {sy}");
-        assert!((sh / 2.0 - 1.0).abs() < 0.02, "heading {sh}");
-        assert!(PoseNoise {
-            position_m: -1.0,
-            ..n
-        }
-        .check()
-        .is_err());
-        assert!(PoseNoise {
-            heading_deg: f64::NAN,
-            ..n
-        }
-        .check()
-        .is_err());
     }
 }
