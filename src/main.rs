@@ -79,10 +79,11 @@ fn run(cli: Cli) -> Result<()> {
         }
         Cmd::Energy(a) => {
             let cmd = a.into_command();
-            report(
-                quiet,
-                with_bar(quiet, "energy", |p| commands::energy(&cmd, p))?,
-            )
+            let summary = with_bar(quiet, "energy", |p| commands::energy(&cmd, p))?;
+            for w in &summary.report.warnings {
+                eprintln!("warning: {w}");
+            }
+            report(quiet, summary)
         }
         Cmd::Synth(a) => {
             let cmd = a.into_command();

@@ -24,10 +24,13 @@
 //! TW = L² / Σ_{n,m∈bin} |ρ(n−m)|² (from the window, like its ENBW = K·Σw²/(Σw)² which is
 //! also recorded), and N0 = N0_h / TW, so a bin of signal energy E_s (averaged over N_p
 //! pulses) has mean N0·TW + E_s and variance (N0²·TW + 2·N0·E_s)/N_p (DESIGN's energy
-//! detector formulas divided by N_p, N_p² since we store the mean). N0 is estimated from
-//! the bins at delays ≥ `noise_from_ns` (signal-free by assumption) over the whole campaign,
-//! stopping `gate_ns` + 2 ns before the end of the span (those bins hold negative delays of
-//! the circular IFFT, where the coupling's kernel tail wraps to).
+//! detector formulas divided by N_p, N_p² since we store the mean). N0 is estimated
+//! ([`noise`]) from the median of the bins at delays ≥ `noise_from_ns` over the whole
+//! campaign under that law, so echoes that alias or arrive late into those bins do not
+//! move it; the bins stop `gate_ns` + 2 ns before the end of the span (those bins hold
+//! negative delays of the circular IFFT, where the coupling's kernel tail wraps to). When
+//! the manifest's `[noise]` floor implies an N0 more than 3 dB from the data's, `energy`
+//! warns with both values.
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 //!
 //! Refused, naming the manifest and the step: an energy that is not finite (a calibration
@@ -41,6 +44,7 @@
 
 pub mod calibration;
 pub mod matrix;
+pub mod noise;
 pub mod processor;
 pub mod writer;
 
@@ -68,6 +72,37 @@ pub struct EnergyReport {
     pub n0: f64,
     /// Mean noise-bin energy.
     pub noise_bin_mean: f64,
+    /// What the user should know (the manifest's `[noise]` floor far from the data's).
+    pub warnings: Vec<String>,
+}
+
+/// How far (dB) the data's N0 may be from the one the manifest's `[noise]` floor implies
+/// before `energy` warns.
+pub const NOISE_MISMATCH_DB: f64 = 3.0;
+
+/// The warning when the manifest's `[noise]` floor implies an N0 more than
+/// [`NOISE_MISMATCH_DB`] from the data's: the floor σ² per frequency point gives
+/// N0 = σ²·Σw²/(Σw)² / TW. Not compared when a calibration reference rescales the sweeps.
+fn manifest_noise_warning(
+    c: &Campaign,
+    proc: &EnergyProcessor,
+    cal: &Calibration,
+    n0: f64,
+) -> Option<String> {
+    if cal.reference_template().is_some() {
+        return None;
+    }
+    let noise = c.manifest.noise;
+    let expected = proc.noise_per_sample(noise.s21_variance()) / proc.tw();
+    let db = 10.0 * (n0 / expected).log10();
+    (db.abs() > NOISE_MISMATCH_DB).then(|| {
+        format!(
+            "{}: the data's noise level N0 = {n0:.3e} is {db:+.1} dB from the {expected:.3e} that [noise] floor_dbm = {} (tx_power_dbm = {}) implies",
+            c.path.display(),
+            noise.floor_dbm,
+            noise.tx_power_dbm
+        )
+    })
 }
 
 /// Compute the energy matrices of a campaign and write the energy Parquet table.
@@ -75,7 +110,8 @@ pub struct EnergyReport {
 ///
 /// Steps: open the sweeps, build the [`EnergyProcessor`], stream the positions (energies of
 /// bins 0..=max_delay written as they come by an [`EnergyWriter`], the noise region
-/// summed), N0 = noise-bin mean / TW, then the metadata ([`table_metadata`]) at the end.
+/// sampled), N0 from the noise bins' median ([`noise`]), then the metadata
+/// ([`table_metadata`]) at the end.
 ///
 /// ```no_run
 /// use pradar::campaign::Campaign;
@@ -117,7 +153,7 @@ pub fn run(
         ));
     }
     let writer = EnergyWriter::create(out, m, nb)?;
-    let (mut noise_sum, mut noise_n) = (0.0, 0usize);
+    let mut noise = noise::NoiseSampler::new(np * nd * (noise_to - noise_from));
     let chunk = reader.chunk_positions();
     // three stages in flight: the next chunk of sweeps is read on one thread and the
     // previous positions' rows encoded on another while this one computes (bounded
@@ -161,8 +197,7 @@ pub fn run(
                             return Err(not_finite(campaign, &cal, sw.position, d, b));
                         }
                         energies.extend_from_slice(&prof[..nb]);
-                        noise_sum += prof[noise_from..noise_to].iter().sum::<f64>();
-                        noise_n += noise_to - noise_from;
+                        noise.push(&prof[noise_from..noise_to]);
                     }
                     if to_writer.send(energies).is_err() {
                         return Ok(()); // the writer stopped: its error is reported below
@@ -179,8 +214,8 @@ pub fn run(
     })?;
     computed?;
     let writer = writer?;
-    let noise_bin_mean = noise_sum / noise_n as f64;
-    let n0 = noise_bin_mean / proc.tw();
+    let est = noise.estimate(proc.tw(), m.pulses);
+    let n0 = est.map_or(f64::NAN, |e| e.n0);
     if !(n0 > 0.0 && n0.is_finite()) {
         // the bins read as signal-free hold nothing: every energy is zero too, or the
         // background removed the noise with the signal (a background that is the
@@ -196,14 +231,19 @@ pub fn run(
             format!("energy: the noise estimate N0 = {n0:e}{why}: the bins from processing.noise_from_ns hold no noise, so no detection threshold can be set"),
         ));
     }
-    let mut meta = table_metadata(m, &proc, n0, noise_bin_mean);
+    let est = est.expect("a finite N0 comes from an estimate");
+    let mut meta = table_metadata(m, &proc, &est);
     meta.extend(cal.metadata());
     writer.finish(meta)?;
+    let warnings = manifest_noise_warning(campaign, &proc, &cal, n0)
+        .into_iter()
+        .collect();
     Ok(EnergyReport {
         sweeps: (np * nd - m.missing().len()) * m.pulses,
         rows: np * nd * nb,
         n0,
-        noise_bin_mean,
+        noise_bin_mean: est.bin_mean,
+        warnings,
     })
 }
 

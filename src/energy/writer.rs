@@ -16,15 +16,16 @@ use crate::table;
 use std::path::Path;
 
 /// The key-value metadata of an energy table (DESIGN §3 plus `tw`, `window`, `coupling`,
-/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `campaign`, `band`,
+/// `gate_ns`, `oversample`, `noise_from_ns`, `noise_bin_mean`, `noise_bin_median`,
+/// `n0_estimator`, `campaign`, `band`,
 /// `parameter` when `[sweeps] parameter` is not S21, and `missing` — the `position:direction`
 /// pairs without a sweep, space-separated — when the campaign lists any).
 pub fn table_metadata(
     m: &Manifest,
     proc: &EnergyProcessor,
-    n0: f64,
-    noise_bin_mean: f64,
+    noise: &super::noise::NoiseEstimate,
 ) -> Vec<(String, String)> {
+    let (n0, noise_bin_mean) = (noise.n0, noise.bin_mean);
     let mut meta = vec![
         ("schema_version".to_string(), SCHEMA_VERSION.to_string()),
         (
@@ -52,6 +53,11 @@ pub fn table_metadata(
             m.processing.noise_from_ns.to_string(),
         ),
         ("noise_bin_mean".into(), format!("{noise_bin_mean:.17e}")),
+        (
+            "noise_bin_median".into(),
+            format!("{:.17e}", noise.bin_median),
+        ),
+        ("n0_estimator".into(), super::noise::ESTIMATOR.to_string()),
         ("campaign".into(), m.name.clone()),
         (
             "band".into(),
