@@ -1,8 +1,7 @@
 //! Campaign stage: manifest, layout, array patterns, sweep formats (Touchstone, Parquet),
-//! model-file schema, the physics-based simulator and `import` (a manifest from a folder of
-//! measured sweeps).
+//! model-file schema and the physics-based simulator. (`import`, a manifest from a folder of
+//! measured sweeps, is a command: `pipeline::commands::import`.)
 
-pub mod import;
 pub mod layout;
 pub mod manifest;
 pub mod modelfile;

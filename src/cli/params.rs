@@ -8,10 +8,10 @@ use super::{
     ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use anyhow::Result;
-use pradar::campaign::import::{ImportParams, SweepFiles};
 use pradar::mapping::{EkfParams, GridParams, MapOptions, MapRun, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
+use pradar::pipeline::commands::{ImportParams, SweepFiles};
 use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
 
