@@ -1132,6 +1132,20 @@ fn cases() -> Vec<Case> {
             },
         ),
         case(
+            "poses CSV with x = 1e308",
+            IMPORT,
+            &["error: poses.csv: line 2: x = 1e308 m, beyond ±10000 m"],
+            |d| {
+                let p = d.join("poses.csv");
+                let text = std::fs::read_to_string(&p).unwrap();
+                let mut lines: Vec<String> = text.lines().map(String::from).collect();
+                let mut cells: Vec<String> = lines[1].split(',').map(String::from).collect();
+                cells[1] = "1e308".into();
+                lines[1] = cells.join(",");
+                std::fs::write(&p, lines.join("\n") + "\n").unwrap();
+            },
+        ),
+        case(
             "calibrate --population 10001",
             &[
                 "calibrate",

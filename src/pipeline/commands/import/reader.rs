@@ -405,6 +405,23 @@ mod tests {
     }
 
     #[test]
+    fn a_pose_beyond_the_bound_is_one_short_line_naming_the_csv() {
+        let e = |text: &str| {
+            parse_poses(text, Path::new("poses.csv"))
+                .unwrap_err()
+                .to_string()
+        };
+        assert_eq!(
+            e("position,x,y,heading\n0,1e308,0,0\n"),
+            "poses.csv: line 2: x = 1e308 m, beyond ±10000 m"
+        );
+        assert_eq!(
+            e("Pos,X [m],Y [m],Heading [deg]\nP01,1,-20000.5,0\n"),
+            "poses.csv: line 2: y_m = -2.00005e4 m, beyond ±10000 m"
+        );
+    }
+
+    #[test]
     fn lab_headers_are_folded() {
         assert_eq!(header_name("X [m]"), "x_m");
         assert_eq!(header_name("Heading [deg]"), "heading_deg");
