@@ -1,5 +1,5 @@
-//! The fuzz driver (`scripts/fuzz`): `cargo run --release --example fuzz -- [--iterations N]
-//! [--seed S] [TARGET…]` runs every parser's harness ([`pradar::fuzz`]) for N mutated
+//! The fuzz driver (`scripts/fuzz`): `cargo run --release --features fuzz --example fuzz --
+//! [--iterations N] [--seed S] [TARGET…]` runs every parser's harness ([`pradar::fuzz`]) for N mutated
 //! inputs (default 100 000) from its committed seeds and prints one line per target:
 //! executions, accepted, refused, panics, aborts. Each target runs in a child process
 //! (this program with `--child`); when the child dies (an allocation failure aborts it),

@@ -1,7 +1,8 @@
 //! In-process fuzzing of the parsers on stable Rust: a harness per file kind a user gives
 //! pradar, a seeded mutator over committed seed inputs, and the run loop shared by
 //! `examples/fuzz.rs` (`scripts/fuzz N`: N executions per parser) and the bounded run of
-//! the test suite (`tests/fuzz.rs`).
+//! the test suite (`tests/fuzz.rs`). Built only with the cargo feature `fuzz`
+//! (`scripts/fuzz` and `scripts/test` turn it on).
 //!
 //! Targets ([`Target`]): Touchstone (`parse_touchstone`, under each of the extensions
 //! `.s2p`, `.s1p`, `.s3p`, `.s4p`, `.ts` until one accepts: v1 takes its port count from
@@ -10,7 +11,7 @@
 //! (`ModelConfig::from_str`), and the energy, MPC and clustered-MPC Parquet readers
 //! (`EnergyMatrix::read` and `EnergyTable::open` + `load`, `read_mpcs` + `read_sector_deg`, `read_clustered`; the bytes are
 //! written to a scratch file first, as the readers take paths), the import's poses and
-//! index CSV readers (`import::parse_poses`, `import::parse_index`, on the text decoded as
+//! index CSV readers (`commands::import::parse_poses`, `parse_index`, on the text decoded as
 //! `import` decodes it), and the calibration step (`Calibration::from_sweeps` + `apply` on
 //! measured, background and reference sweeps decoded from the bytes as f64 pairs, see
 //! `calibration_step`; an accepted calibration leaving a non-finite value is a failure). An execution passes when
@@ -20,8 +21,8 @@
 //! Mutations ([`Mutator`]): bit flips, interesting bytes (0, 0xff, 0x7f, 0x80), random
 //! insertions, deletions, duplicated ranges, truncation, splices with another seed and,
 //! for the text formats, a number replaced by an extreme one (`1e308`, `-1`, `nan`,
-//! `70000`, `1e-7`, …) — the values that found the panics and unbounded allocations of
-//! issue 20. One to four mutations are stacked per input. Everything is drawn from a
+//! `70000`, `1e-7`, …) — the values that found the panics and unbounded allocations
+//! (docs/reliability.md). One to four mutations are stacked per input. Everything is drawn from a
 //! ChaCha8 stream of the run's seed: a run is reproducible, and a failing input is
 //! written to the crash folder under its hash; committed to `fuzz/regressions/<target>/`
 //! it is replayed by every test run.
@@ -261,12 +262,12 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
         Target::Poses => {
             let p = scratch.dir.join("poses.csv");
             let text = crate::campaign::touchstone::decode(bytes);
-            crate::campaign::import::parse_poses(&text, &p).map(|_| ())
+            crate::pipeline::commands::import::parse_poses(&text, &p).map(|_| ())
         }
         Target::Index => {
             let p = scratch.dir.join("index.csv");
             let text = crate::campaign::touchstone::decode(bytes);
-            crate::campaign::import::parse_index(&text, &p).map(|_| ())
+            crate::pipeline::commands::import::parse_index(&text, &p).map(|_| ())
         }
         Target::Calibration => calibration_step(bytes, &scratch.dir),
         Target::Energy | Target::Mpc | Target::Cluster => {
@@ -300,7 +301,7 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
 /// sweeps there are (bit 0 background, bit 1 reference), the directions (1–3, bits 2–3)
 /// and pulses (1–2, bit 4); byte 1 the points (8–64); the rest are little-endian f64
 /// pairs (re, im): the measured sweeps, then the background, then the reference. Too few
-/// values is a refusal. [`crate::energy::calibration::Calibration::from_sweeps`] checks
+/// values is a refusal. `Calibration::from_sweeps` checks
 /// the reference, `apply` computes (S − B)/R; when both accept, every value must be finite
 /// (a non-finite one accepted would be a NaN energy): a panic otherwise.
 fn calibration_step(bytes: &[u8], dir: &Path) -> Result<()> {

@@ -13,6 +13,7 @@ pub mod energy;
 pub mod error;
 pub mod export;
 pub mod fit;
+#[cfg(feature = "fuzz")]
 pub mod fuzz;
 pub mod io;
 pub mod mapping;

@@ -1,11 +1,11 @@
-//! The bad-input corpus (issue 20): inputs a user can produce by mistake, each run through
+//! The bad-input corpus: inputs a user can produce by mistake, each run through
 //! the `pradar` binary in a fresh copy of one small campaign (the corridor, 3 poses, 16
 //! elements, simulated once). Every case must exit with status 1 and print exactly one
 //! `error: ` line naming the file and the field at fault, never panic, leave every file of
 //! the folder byte-identical (hash before and after) and add no file (no partial output,
 //! no temp file).
 //!
-//! Issue 33 added the import, calibration and calibrate surfaces: outputs that are inputs
+//! It covers the import, calibration and calibrate surfaces too: outputs that are inputs
 //! (also by hard link, and files inputs name: index rows, `[calibration]` files, the base,
 //! the layout, `--to-parquet`'s table), outputs that are folders, sockets or a full
 //! device, sweep files that are FIFOs, devices, folders, dangling links or loops, bounded
@@ -905,7 +905,7 @@ fn cases() -> Vec<Case> {
             &["nowhere.toml"],
             nothing,
         ),
-        // ---- issue 33: outputs that are not regular files
+        // ---- outputs that are not regular files
         case(
             "energy --out is a folder",
             &["energy", "--campaign", M, "--out", "sim/sweeps"],
@@ -933,7 +933,7 @@ fn cases() -> Vec<Case> {
             &["/dev/full", "No space left on device"],
             nothing,
         ),
-        // ---- issue 33: an output that is an input, also one an input names
+        // ---- an output that is an input, also one an input names
         case(
             "energy --out = a hard link of its manifest",
             &["energy", "--campaign", M, "--out", "link.toml"],
@@ -1013,7 +1013,7 @@ fn cases() -> Vec<Case> {
                 std::fs::copy(d.join("poses.csv"), d.join("imp/sweeps.parquet")).unwrap();
             },
         ),
-        // ---- issue 33: sweep files and index entries that are not regular files
+        // ---- sweep files and index entries that are not regular files
         case(
             "sweep file is a FIFO",
             ENERGY,
@@ -1118,7 +1118,7 @@ fn cases() -> Vec<Case> {
                 edit(d, "index.csv", "0,0,0,sim", "0,NaN,0,sim");
             },
         ),
-        // ---- issue 33: sizes bounded
+        // ---- sizes bounded
         case(
             "poses CSV of 10^6 rows",
             IMPORT,
@@ -1129,6 +1129,20 @@ fn cases() -> Vec<Case> {
                     s += &format!("{i},1.0,0.0,0.0\n");
                 }
                 std::fs::write(d.join("poses.csv"), s).unwrap();
+            },
+        ),
+        case(
+            "poses CSV with x = 1e308",
+            IMPORT,
+            &["error: poses.csv: line 2: x = 1e308 m, beyond ±10000 m"],
+            |d| {
+                let p = d.join("poses.csv");
+                let text = std::fs::read_to_string(&p).unwrap();
+                let mut lines: Vec<String> = text.lines().map(String::from).collect();
+                let mut cells: Vec<String> = lines[1].split(',').map(String::from).collect();
+                cells[1] = "1e308".into();
+                lines[1] = cells.join(",");
+                std::fs::write(&p, lines.join("\n") + "\n").unwrap();
             },
         ),
         case(
@@ -1163,7 +1177,7 @@ fn cases() -> Vec<Case> {
             &["--simulations", "[20, 100000]"],
             nothing,
         ),
-        // ---- issue 33: values that overflow, calibrations that leave nothing
+        // ---- values that overflow, calibrations that leave nothing
         case(
             "Touchstone value 1e308",
             ENERGY,
@@ -1221,7 +1235,7 @@ fn cases() -> Vec<Case> {
                 toml_set(d, "prior.toml", "ray_decay.interval", v);
             },
         ),
-        // ---- issue 33: a v2 two-port without its data order, energy metadata out of range
+        // ---- a v2 two-port without its data order, energy metadata out of range
         case(
             "Touchstone v2 two-port without [Two-Port Data Order]",
             ENERGY,
@@ -1270,7 +1284,7 @@ fn cases() -> Vec<Case> {
             &["e.parquet", "metadata `bin_width_ns` = -0.5", "> 0"],
             |d| energy_meta(d, "bin_width_ns", "-0.5"),
         ),
-        // ---- issue 32: labels, missing sweeps, NaN energies
+        // ---- labels, missing sweeps, NaN energies
         case(
             "manifest labels fewer than the poses",
             ENERGY,
@@ -1321,7 +1335,7 @@ fn cases() -> Vec<Case> {
             &["e.parquet", "lists as `missing`", "NaN expected"],
             |d| energy_meta(d, "missing", "0:0"),
         ),
-        // ---- issue 33: rows out of order, commas in index paths
+        // ---- rows out of order, commas in index paths
         case(
             "Touchstone frequency rows swapped",
             ENERGY,
@@ -1403,7 +1417,7 @@ fn cases() -> Vec<Case> {
                 )
             },
         ),
-        // ---- issue 33: clap's usage errors, one line
+        // ---- clap's usage errors, one line
         case(
             "import with --index and --sweeps",
             &[
@@ -1504,7 +1518,7 @@ fn every_bad_input_is_one_line_exit_1_inputs_unchanged_nothing_written() {
         if err.contains("panicked") {
             why.push("panic".into());
         }
-        // the `error:` line first; an import's problem lines after it (issue 32)
+        // the `error:` line first; an import's problem lines after it
         if lines.len() != 1 + c.problems || !lines[0].starts_with("error: ") {
             why.push(format!("{} lines", lines.len()));
         }
@@ -1565,7 +1579,7 @@ fn run_bounded(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
     (status.code(), err)
 }
 
-/// Issue 33: an output that is a FIFO or a character device is written into (exit 0) and
+/// An output that is a FIFO or a character device is written into (exit 0) and
 /// is still a FIFO or a character device afterwards, never a regular file renamed over it;
 /// `--out /dev/null` discards. The character device is made with `mknod X c 1 3` (the
 /// node of /dev/null) where that is permitted, else that part is skipped with the reason

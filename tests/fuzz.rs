@@ -3,6 +3,10 @@
 //! mutated inputs per parser. No input may panic; the seeds must be accepted (a harness
 //! that refuses its own seeds fuzzes nothing past the first check); and the refusals must
 //! be errors naming the scratch file.
+//!
+//! The harness is behind the cargo feature `fuzz`, so this module runs only with it:
+//! `cargo test --release --features fuzz --test tests fuzz::` (`scripts/test` passes
+//! `--features fuzz`, so the suite and CI run it).
 
 use crate::common::root;
 use pradar::fuzz::{execute, load_seeds, regression_dir, run, Drive, Outcome, Scratch, Target};

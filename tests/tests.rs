@@ -20,6 +20,7 @@ mod experiment;
 mod fit_cli;
 mod fit_coverage;
 mod fit_estimators;
+#[cfg(feature = "fuzz")]
 mod fuzz;
 mod import;
 mod kill;

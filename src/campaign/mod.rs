@@ -2,7 +2,6 @@
 //! (Touchstone, Parquet). The physics simulator is [`crate::simulate`], the model file's schema
 //! [`crate::model::file`].
 
-pub mod import;
 pub mod layout;
 pub mod manifest;
 pub mod pattern;

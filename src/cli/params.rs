@@ -8,11 +8,11 @@ use super::{
     ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use anyhow::Result;
-use pradar::campaign::import::{ImportParams, SweepFiles};
 use pradar::mapping::{EkfParams, GridParams, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
 use pradar::pipeline::commands::map::{MapOptions, MapRun, PoseNoise};
+use pradar::pipeline::commands::{ImportParams, SweepFiles};
 use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
 

@@ -160,8 +160,9 @@ impl Calibration {
     /// A calibration of one background and one reference sweep for the whole campaign
     /// (either may be absent), already read: each a file name (for errors) and its values
     /// on `band`'s grid. The reference is checked as [`Calibration::load`] checks it. What
-    /// the fuzz harness of the calibration step builds ([`crate::fuzz`]).
-    pub fn from_sweeps(
+    /// the fuzz harness of the calibration step builds (`crate::fuzz`, feature `fuzz`).
+    #[cfg(feature = "fuzz")]
+    pub(crate) fn from_sweeps(
         band: &Band,
         background: Option<(std::path::PathBuf, Vec<Complex64>)>,
         reference: Option<(std::path::PathBuf, Vec<Complex64>)>,

@@ -152,8 +152,10 @@ pub fn fit_truth(truth_dir: &Path, c: &Campaign, p: &FitValid) -> Result<Channel
 }
 
 /// Read and check a clustered MPC table as `fit` does (before any fitting); returns its
-/// number of discrete rays. The fuzz harness's entry for the cluster table.
-pub fn read_clustered(path: &Path) -> Result<usize> {
+/// number of discrete rays. The fuzz harness's entry for the cluster table (`crate::fuzz`,
+/// feature `fuzz`).
+#[cfg(feature = "fuzz")]
+pub(crate) fn read_clustered(path: &Path) -> Result<usize> {
     Ok(read_rays(path, false)?.len())
 }
 

@@ -1,11 +1,8 @@
-//! The campaign commands: `import` (a poses CSV and sweep files into a manifest, and the
-//! problem report when the files do not fit: [`ImportOutcome::problem_report`]), `simulate` (a manifest
-//! with `[scene]` into sweeps, a manifest and its truth), `energy` (a campaign's sweeps into
-//! an energy table) and `synth` (a model file and a campaign into an energy table and its
-//! truth). Each takes its command struct and gives a summary whose `Display` is printed.
+//! The campaign commands: `simulate` (a manifest with `[scene]` into sweeps, a manifest and
+//! its truth), `energy` (a campaign's sweeps into an energy table) and `synth` (a model file
+//! and a campaign into an energy table and its truth). Each takes its command struct and gives a summary whose `Display` is printed.
 
 use super::{campaign_inputs, load_campaign, refuse, StepProgress};
-use crate::campaign::import::{ImportOutcome, ImportParams};
 use crate::campaign::manifest::{Campaign, SweepFormat};
 use crate::energy::EnergyReport;
 use crate::error::Result;
@@ -15,13 +12,6 @@ use crate::params::ParamGuard;
 use crate::simulate::SimReport;
 use std::fmt;
 use std::path::PathBuf;
-
-/// Run `pradar import` ([`crate::campaign::import::run`]): a manifest (and optionally the
-/// Parquet sweep table) from a poses CSV and sweep files. The outcome's `Display` is what
-/// the command prints; an outcome with problems wrote nothing ([`ImportOutcome::problem_report`]).
-pub fn import(params: &ImportParams, progress: StepProgress) -> Result<ImportOutcome> {
-    crate::campaign::import::run(params, progress)
-}
 
 /// `pradar simulate`: a manifest with `[scene]` simulated into a folder.
 #[derive(Debug, Clone)]

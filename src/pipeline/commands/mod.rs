@@ -13,7 +13,7 @@
 //! pose headings of an MPC table ([`pose_headings`]), reading the scanned sector from the
 //! MPC table's metadata, the K = K_max warning, writing the model file beside Table 1,
 //! resolving `all` into the list of experiments, the problem report of an import that
-//! found problems ([`crate::campaign::import::ImportOutcome::problem_report`]) and the `--fail-below` verdict of a check
+//! found problems ([`ImportOutcome::problem_report`]) and the `--fail-below` verdict of a check
 //! ([`CheckSummary::failure`]).
 //!
 //! Every command first refuses to write over one of its own inputs
@@ -24,7 +24,8 @@
 //! writes Table 1 first and the model file last, so a failed table leaves no model.
 //!
 //! The commands are grouped by stage, each group in its own file and every item
-//! re-exported here: `campaign` (import, simulate, energy, synth), `analysis` (extract,
+//! re-exported here: `import` (a folder of its own: its CSV reader, name pattern, file
+//! collection, check and write), `campaign` (simulate, energy, synth), `analysis` (extract,
 //! cluster, fit), `model` (calibrate, check), [`map`](mod@map) (the map job: options, runs,
 //! fusion, metrics.json) and `experiments`.
 //!
@@ -110,19 +111,21 @@
 mod analysis;
 mod campaign;
 mod experiments;
+pub(crate) mod import;
 pub mod map;
 mod model;
 
-pub use crate::campaign::import::ImportParams;
 pub use analysis::{
     cluster, extract, fit, pose_headings, Cluster, ClusterSummary, Extract, ExtractSummary, Fit,
     FitSummary,
 };
 pub use campaign::{
-    energy, import, simulate, synth, Energy, EnergySummary, Simulate, SimulateSummary, Synth,
-    SynthSummary,
+    energy, simulate, synth, Energy, EnergySummary, Simulate, SimulateSummary, Synth, SynthSummary,
 };
 pub use experiments::{experiments, select_experiments, Experiments, ExperimentsSummary};
+pub use import::{
+    import, ImportOutcome, ImportParams, SweepFiles, MAX_INDEX_ROWS, MAX_POSES, SHOWN_PROBLEMS,
+};
 pub use map::{map, Map, MapSummary};
 pub use model::{
     calibrate, check, posterior_csv, Calibrate, CalibrateSummary, Check, CheckSummary,
