@@ -25,7 +25,8 @@
 //!
 //! The commands are grouped by stage, each group in its own file and every item
 //! re-exported here: `campaign` (import, simulate, energy, synth), `analysis` (extract,
-//! cluster, fit), `model` (calibrate, check) and `maps` (map, experiments).
+//! cluster, fit), `model` (calibrate, check), `maps` (map, experiments) and `zoo` (the
+//! scene zoo's manifests).
 //!
 //!
 //! ```no_run
@@ -110,6 +111,7 @@ mod analysis;
 mod campaign;
 mod maps;
 mod model;
+mod zoo;
 
 pub use crate::campaign::import::ImportParams;
 pub use analysis::{
@@ -126,6 +128,7 @@ pub use maps::{
 pub use model::{
     calibrate, check, posterior_csv, Calibrate, CalibrateSummary, Check, CheckSummary,
 };
+pub use zoo::{zoo, Zoo, ZooSummary};
 
 use crate::campaign::manifest::Campaign;
 use crate::error::Result;
