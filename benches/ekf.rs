@@ -355,7 +355,7 @@ fn dense(b: &Bench, poses: usize) {
             let lin = Linearized::new(&o, f.mean(), &noise);
             let t = Instant::now();
             f.update(&o, &lin).unwrap();
-            f.project_positive(p.x_min(), p.reflect);
+            f.project_positive(p.x_min());
             upd += t.elapsed().as_secs_f64();
             count += 1;
             rows += o.rows();
@@ -406,7 +406,7 @@ fn numpy(b: &Bench, dir: &Path) {
             }
             let lin = Linearized::new(&o, f.mean(), &noise);
             f.update(&o, &lin).unwrap();
-            f.project_positive(p.x_min(), p.reflect);
+            f.project_positive(p.x_min());
         }
     }
     let o = pick.unwrap();

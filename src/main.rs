@@ -128,6 +128,14 @@ fn run(cli: Cli) -> Result<()> {
             report(quiet, format_args!("report: {}", index.display()))
         }
         Cmd::Experiment(a) => report(quiet, commands::experiments(&a.into_command(), &stages)?),
+        Cmd::Zoo(a) => report(
+            quiet,
+            commands::zoo(&commands::Zoo {
+                out: a.out,
+                seed: a.seed,
+                count: a.count,
+            })?,
+        ),
     }
     Ok(())
 }

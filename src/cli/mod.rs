@@ -65,6 +65,23 @@ pub enum Cmd {
     Reproduce(ReproduceArgs),
     /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
     Experiment(ExperimentArgs),
+    /// Write the scene zoo: seeded physics scenes, each with a noise-only twin and a second
+    /// realisation (campaign.toml + layout.geojson per folder; scripts/zoo runs the chain).
+    Zoo(ZooArgs),
+}
+
+// `pradar zoo`
+#[derive(Args)]
+pub struct ZooArgs {
+    /// Output folder: DIR/<name>/, DIR/<name>-twin/, DIR/<name>-r2/, DIR/scenes.tsv.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Generator seed (same seed, same bytes).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Number of scenes (>= 1).
+    #[arg(long, default_value_t = 20)]
+    pub count: usize,
 }
 
 // `pradar import`

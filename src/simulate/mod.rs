@@ -42,7 +42,8 @@
 //! shared with [`crate::model`]), [`paths`] (paths seen from a pose), [`synth`] (S21
 //! synthesis and noise; `binned`, the same sum regrouped by pattern-table cell, which it uses
 //! for mechanical steering with the pattern at every point), [`truth`] (ground-truth tables) and `output` (sweep writer and the
-//! output manifest); [`simulate`] runs them in that order.
+//! output manifest); [`simulate`] runs them in that order. [`zoo`] generates scenes for it
+//! (the scene zoo, `pradar zoo`).
 
 mod binned;
 pub mod draws;
@@ -51,6 +52,7 @@ pub mod paths;
 pub mod scene;
 pub mod synth;
 pub mod truth;
+pub mod zoo;
 
 pub use draws::{draw_rays, draw_shadowed, laplace, perimeter_walk};
 pub use paths::Path1;

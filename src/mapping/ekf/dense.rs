@@ -387,11 +387,11 @@ impl RrcsFilter for DenseEkf {
         self.update_through_s(obs, lin, &act, &y)
     }
 
-    fn project_positive(&mut self, x_min: f64, reflect: bool) -> usize {
+    fn project_positive(&mut self, x_min: f64) -> usize {
         let n = self.n;
         let mut flipped = 0;
         for i in 0..n {
-            if reflect && self.x[i] < 0.0 {
+            if self.x[i] < 0.0 {
                 self.x[i] = -self.x[i];
                 for j in 0..n {
                     self.p[i * n + j] = -self.p[i * n + j];

@@ -23,8 +23,7 @@
 //! detection of a beam without an occluder) are dropped, except the occluder's own; and only the cells visible
 //! from the pose (depth behind the visibility polygon ≤ g) enter H — a shadowed cell's
 //! coefficient is 0 (a direction without an occluder leaves the polygon at the maximum
-//! range unless `bound_silent` bounds it as the OG's option does; off, measured in
-//! `docs/mapping.md`). The occluders are confirmed against the filter's own binary map
+//! range). The occluders are confirmed against the filter's own binary map
 //! before the previous pose. The cost of removing shadowed cells (measured,
 //! `docs/mapping.md`): a wall's bin is explained by the in-room part of its range ring
 //! only, so more room cells rise above μ0 than when the cells behind share it; keeping them
@@ -83,7 +82,7 @@
 //!   update above (R is diagonal). Dropping the cross-tile covariances alone (the plain
 //!   update) makes the filter overconfident: later bins of a ring count the other tiles'
 //!   contribution as fresh noise again. So each bin's information is split over the tiles
-//!   it touches (`split`, on by default): tile T takes the bin with its noise variance
+//!   it touches: tile T takes the bin with its noise variance
 //!   divided by its share ω_T = a_T/Σa of H·P·Hᵀ (a_T = H_{k,T}·P_T·H_{k,T}ᵀ),
 //!   s_T = a_T + (s − a_T)/ω_T, x_T += g_T·ν'_k/s_T, P_T −= g_T·g_Tᵀ/s_T with
 //!   g_T = P_T·H_{k,T}ᵀ; the reasons, the alternatives measured and the NEES are in
@@ -96,7 +95,7 @@
 //! order; the dense products split P in fixed blocks, so maps are identical for any number
 //! of threads.
 //!
-//! Free-space evidence (`free_space`, on by default). The energy observation
+//! Free-space evidence. The energy observation
 //! h = Σ c̃ x² + N0·TW says little about a cell near x = 0 (its Jacobian 2 c̃ x vanishes
 //! there), so a bin with only noise barely lowers the cells in front of an echo, while the
 //! echo's bin raises every cell of its range ring in the main lobe: the ring. The bins
@@ -124,7 +123,7 @@
 //! Arc explanation (`arc_explain` = γ, [`params::ARC_EXPLAIN`] by default; 0 =
 //! off). Once the runs are filtered, each detected echo's range ring (the cells with a
 //! coefficient in the bin of a kept row that holds a detection, main and side lobes:
-//! [`EchoArcs`], recorded by [`ekf_run_judged`]) is explained by its cells in proportion to
+//! [`EchoArcs`], recorded by [`ekf_run_with_arcs`]) is explained by its cells in proportion to
 //! c̃_i·x̂_i²; a cell is occupied only if on some ring its share is at least γ times the
 //! ring's strongest cell's ([`EkfMap::explain`]). The filter updates the whole ring with an
 //! echo, so the cells it cannot tell apart keep confident means (measured: the false room
@@ -137,21 +136,13 @@
 //! −9 to −18 %, room cells marked occupied 6.0–8.5 % → 3.4–4.4 %, cells beyond the walls
 //! ≤ 4.3 %, F1 within one cell up, walls found −0.005 to −0.038; the variants not kept (the
 //! −3 dB arcs only, κ, the mirror ghost rule, a ring without the detected-ring requirement)
-//! are there too. `explain_poses` = K (1 by default) asks a cell to explain the echoes of
-//! K distinct poses (a surface seen from several places); measured at K = 2 it clears
-//! more wall cells than room cells, so it is off. The binary map (below) is taken with the
-//! explanation; the soft map of an unexplained cell is capped at η; the occluders
-//! confirmed during the run use the rule without it.
+//! are there too. The binary map (below) is taken with the explanation; the soft map of an
+//! unexplained cell is capped at η; the occluders confirmed during the run use the rule
+//! without it.
 //!
-//! Ghosts across poses: a ghost rule ([`crate::mapping::grid::ghost`], `none` by default;
-//! [`EkfMap::discount`]) may discount, at the binary decision, the mean rises of the poses
-//! that cannot see a cell under the final map.
-//!
-//! Negative means are reflected (below), not clamped to zero: clamping (`reflect` = false,
-//! the projection onto x ≥ 0) was measured and not kept (with free-space evidence it raised
-//! the corridor's wrong building cells at N = 100 from 462 to 618, `docs/mapping.md`): a
-//! clamped mean sits where the Jacobian vanishes, so later rows cannot move it, while its
-//! variance stays that of the unconstrained estimate.
+//! Negative means are reflected (above), not clamped to zero (the projection onto x ≥ 0,
+//! measured in `docs/mapping.md`): a clamped mean sits where the Jacobian vanishes, so
+//! later rows cannot move it, while its variance stays that of the unconstrained estimate.
 //!
 //! Layout: [`params`] ([`EkfParams`] → [`EkfValid`]), [`observation`] (noise model, kernel,
 //! [`Observation`], [`Linearized`]), [`dense`] ([`DenseEkf`]) over [`linalg`], [`tiled`]
@@ -183,7 +174,7 @@ pub use linalg::cholesky;
 pub use observation::{truncate_kernel, Linearized, NoiseModel, Observation};
 pub use params::{normal_cdf, EkfParams, EkfValid, EkfVariant};
 pub use run::{
-    ekf_run, ekf_run_judged, mean_grey, std_grey, EchoArcs, EkfMap, EkfReport, EkfStats, Sight,
+    ekf_run, ekf_run_with_arcs, mean_grey, std_grey, EchoArcs, EkfMap, EkfReport, EkfStats, Sight,
 };
 pub use tiled::TiledEkf;
 
@@ -205,10 +196,9 @@ pub trait RrcsFilter: Send {
     fn covariance(&self, i: usize, j: usize) -> Option<f64>;
     /// One EKF update with an observation linearised at the current mean.
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()>;
-    /// With `reflect`, reflect negative means (x_i → −x_i, row/column i of P negated); then
-    /// keep means ≥ `x_min` (without `reflect` a negative mean is clamped: the projection
-    /// onto x ≥ 0); returns the cells reflected.
-    fn project_positive(&mut self, x_min: f64, reflect: bool) -> usize;
+    /// Reflect negative means (x_i → −x_i, row/column i of P negated), then keep means
+    /// ≥ `x_min`; returns the cells reflected.
+    fn project_positive(&mut self, x_min: f64) -> usize;
     /// Name (`dense`, `scalable`).
     fn name(&self) -> &'static str;
 }

@@ -2,14 +2,11 @@
 //! switch ([`EkfVariant`]).
 //!
 //! Defaults (reasons in [`crate::mapping::ekf`]): μ0 = 0.01 m, σ0 = 0.1 m, ε = 0.5, kernel
-//! floor −30 dB, κ = 3.09, free-space evidence on, arc explanation γ = −26.5 dB, negative
-//! means reflected, the scalable
-//! filter with 4 × 4 tiles and each bin's information split over its tiles, at most 20,000
-//! cells for the dense filter. Derived: the binary threshold η = Φ(κ) on p = P(x > μ0) and
-//! the lowest mean kept by the positivity step, 1e-3·μ0.
+//! floor −30 dB, κ = 3.09, arc explanation γ = −26.5 dB, the scalable filter with 4 × 4
+//! tiles, at most 20,000 cells for the dense filter. Derived: the binary threshold
+//! η = Φ(κ) on p = P(x > μ0) and the lowest mean kept by the positivity step, 1e-3·μ0.
 
 use crate::error::{Error, Result};
-use crate::mapping::grid::GhostParams;
 use crate::params::{ParamGuard, Valid};
 
 /// Which implementation of the EKF.
@@ -58,37 +55,16 @@ pub struct EkfParams {
     pub kernel_floor_db: f64,
     /// Binary rule: occupied when x̂ − κ·σ̂ > μ0 (κ = 3.09 = Φ⁻¹(1 − 10⁻³)).
     pub kappa: f64,
-    /// Free-space evidence: the main-lobe cells of the low-energy bins in front of a beam's
-    /// occluder observed as RRCS ≈ 0 ([`crate::mapping::ekf`] module docs).
-    pub free_space: bool,
-    /// A cell whose mean went negative: reflected (x → −x, the model's sign symmetry) when
-    /// true, clamped to the lowest mean (projection onto x ≥ 0) when false.
-    pub reflect: bool,
-    /// Scalable filter: split each bin's information over the tiles it touches
-    /// ([`crate::mapping::ekf::tiled`] module docs); false: the plain tiled update (the
-    /// earlier filter), which is overconfident.
-    pub split: bool,
     /// Arc explanation γ ([`crate::mapping::ekf`] module docs): a cell is occupied only if
     /// on some detected echo's range ring its share c̃·x̂² is at least γ times the ring's
     /// largest ([`ARC_EXPLAIN`]); 0 = off.
     pub arc_explain: f64,
-    /// Arc explanation: distinct poses whose echoes a cell must explain to be occupied
-    /// ([`crate::mapping::ekf::EkfMap::explain`]; 1: one echo suffices; ≥ 1).
-    pub explain_poses: u32,
-    /// How a direction without an occluder bounds the visibility polygon of the filter's
-    /// sight ([`crate::mapping::grid::SilentBound`], as the OG's `bound_silent`; `off`: at
-    /// the maximum range): the polygon limits which cells a beam's rows and free-space
-    /// evidence reach.
-    pub bound_silent: crate::mapping::grid::SilentBound,
     /// Implementation (scalable).
     pub variant: EkfVariant,
     /// Tile side of the scalable filter, cells (4).
     pub tile: usize,
     /// Largest grid the dense filter accepts (20,000 cells = 3.2 GB of covariance).
     pub max_dense_cells: usize,
-    /// Ghost rule applied to the map once the runs are filtered
-    /// ([`crate::mapping::grid::ghost`]; `none`).
-    pub ghost: GhostParams,
 }
 
 /// EKF parameters that passed [`ParamGuard::check`].
@@ -116,16 +92,10 @@ impl Default for EkfParams {
             model_error: 0.5,
             kernel_floor_db: -30.0,
             kappa: KAPPA,
-            free_space: true,
-            reflect: true,
-            split: true,
             arc_explain: ARC_EXPLAIN,
-            explain_poses: 1,
-            bound_silent: crate::mapping::grid::SilentBound::Off,
             variant: EkfVariant::Scalable,
             tile: 4,
             max_dense_cells: 20_000,
-            ghost: GhostParams::default(),
         }
     }
 }
@@ -134,8 +104,7 @@ impl ParamGuard for EkfParams {
     type Checked = EkfValid;
 
     /// Every field in range: μ0 > 0, σ0 > 0, ε ≥ 0, kernel floor < 0 dB, κ ≥ 0, tile in
-    /// 1..=64 cells, `max_dense_cells` > 0, γ in [0, 1], the ghost rule's parameters in
-    /// range.
+    /// 1..=64 cells, `max_dense_cells` > 0, γ in [0, 1].
     fn check(&self) -> Result<EkfValid> {
         if !(self.mu0.is_finite() && self.mu0 > 0.0) {
             return Err(Error::param(
@@ -161,16 +130,12 @@ impl ParamGuard for EkfParams {
         if !(0.0..=1.0).contains(&self.arc_explain) {
             return Err(Error::param("arc_explain", "must be in [0, 1]"));
         }
-        if self.explain_poses == 0 {
-            return Err(Error::param("explain_poses", "must be >= 1"));
-        }
         if self.tile == 0 || self.tile > 64 {
             return Err(Error::param("tile", "must be in 1..=64 cells"));
         }
         if self.max_dense_cells == 0 {
             return Err(Error::param("max_dense_cells", "must be > 0"));
         }
-        self.ghost.check()?;
         Ok(Valid::new(*self))
     }
 }

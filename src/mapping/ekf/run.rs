@@ -19,7 +19,7 @@ use super::{
 };
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
-use crate::mapping::grid::{GhostJudge, GhostRule, ObservationModel, Occlusion, ScanEchoes};
+use crate::mapping::grid::{ObservationModel, Occlusion};
 use crate::mapping::og::Detector;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -61,17 +61,15 @@ pub fn ekf_run(
     filter: &mut dyn RrcsFilter,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EkfStats> {
-    ekf_run_judged(
-        model, src, kernel, params, noise, sight, filter, None, None, progress,
+    ekf_run_with_arcs(
+        model, src, kernel, params, noise, sight, filter, None, progress,
     )
 }
 
-/// [`ekf_run`] that also records, with a sight model, each pose's echoes and the rise of
-/// each cell's mean in the pose's energy updates (net over its directions, the positive
-/// part) for a ghost rule ([`crate::mapping::grid::ghost`]) and, with `arcs`, the range
-/// ring (main and side lobes) of every detected echo ([`EchoArcs`]).
+/// [`ekf_run`] that also records, with a sight model and `arcs`, the range ring (main and
+/// side lobes) of every detected echo ([`EchoArcs`]).
 #[allow(clippy::too_many_arguments)]
-pub fn ekf_run_judged(
+pub fn ekf_run_with_arcs(
     model: &ObservationModel,
     src: &dyn EnergySource,
     kernel: &[f64],
@@ -79,7 +77,6 @@ pub fn ekf_run_judged(
     noise: &NoiseModel,
     sight: Option<Sight<'_>>,
     filter: &mut dyn RrcsFilter,
-    mut judge: Option<&mut GhostJudge<'_>>,
     mut arcs: Option<&mut EchoArcs>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EkfStats> {
@@ -104,12 +101,12 @@ pub fn ekf_run_judged(
     // the filter before pose p − 1 was applied (the state the observations are built from)
     // (the energies are loaded one pose at a time: a table read from its file is never
     // held whole)
-    // a pose's observations with their free-space evidence, build time, withheld rows
+    // a pose's observations with their free-space evidence, build time, withheld rows,
+    // echo arcs
     type Built = (
         Vec<(Observation, Option<FreeSpace>)>,
         f64,
         u64,
-        Option<ScanEchoes>,
         Vec<Vec<(u32, f32)>>,
     );
     let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<Built> {
@@ -122,9 +119,7 @@ pub fn ekf_run_judged(
             let echoes = s
                 .occlusion
                 .echoes(model, energy, p, dets, occupied.as_deref());
-            let vis = s
-                .occlusion
-                .visibility_bounded(model, &geom, &echoes, params.bound_silent);
+            let vis = s.occlusion.visibility(model, &geom, &echoes);
             (echoes, vis, s.occlusion.guard_bins())
         });
         type Dir = (Observation, Option<FreeSpace>, u64, Vec<Vec<(u32, f32)>>);
@@ -158,18 +153,10 @@ pub fn ekf_run_judged(
                         Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch);
                     let mut free = None;
                     if let (Some((echoes, _, _)), Some(s)) = (&seen, sight) {
-                        if params.free_space {
-                            let first = echoes.occluder[d].unwrap_or(bins);
-                            let j = kernel.len().saturating_sub(1);
-                            free = free_space(
-                                &o,
-                                &echoes.det[d],
-                                first,
-                                j,
-                                s.detector.threshold,
-                                noise,
-                            );
-                        }
+                        let first = echoes.occluder[d].unwrap_or(bins);
+                        let j = kernel.len().saturating_sub(1);
+                        free =
+                            free_space(&o, &echoes.det[d], first, j, s.detector.threshold, noise);
                     }
                     if let Some((echoes, _, _)) = &seen {
                         // the rows around a detection before the occluder (leakage of a strong
@@ -206,13 +193,7 @@ pub fn ekf_run_judged(
                 (o.0, o.1)
             })
             .collect();
-        Ok((
-            obs,
-            tb.elapsed().as_secs_f64(),
-            withheld,
-            seen.map(|s| s.0),
-            arcs,
-        ))
+        Ok((obs, tb.elapsed().as_secs_f64(), withheld, arcs))
     };
     // the filter's binary map (EkfMap's rule)
     let snapshot = |f: &dyn RrcsFilter| -> Option<Vec<bool>> {
@@ -224,42 +205,25 @@ pub fn ekf_run_judged(
         None
     };
     for p in 0..np {
-        let (obs, build_s, withheld, echoes, pose_arcs) = current.take().expect("built")?;
+        let (obs, build_s, withheld, pose_arcs) = current.take().expect("built")?;
         if let Some(a) = arcs.as_deref_mut() {
             for arc in pose_arcs {
                 a.push(p as u32, &arc);
             }
         }
-        let recording = judge.is_some() && echoes.is_some();
-        let mut rise: Vec<std::collections::BTreeMap<u32, f64>> =
-            vec![Default::default(); obs.len()];
         st.build_seconds += build_s;
         st.withheld += withheld;
         let occupied = if p + 1 < np { snapshot(&*filter) } else { None };
-        let mut apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
+        let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
             let tu = Instant::now();
-            for (d, (o, free)) in obs.iter().enumerate() {
-                let before: Vec<(u32, f64)> = if recording {
-                    let mut cells = o.cell.clone();
-                    cells.sort_unstable();
-                    cells.dedup();
-                    cells
-                        .into_iter()
-                        .map(|c| (c, filter.mean()[c as usize]))
-                        .collect()
-                } else {
-                    Vec::new()
-                };
+            for (o, free) in &obs {
                 let lin = Linearized::new(o, filter.mean(), noise);
                 filter.update(o, &lin)?;
-                st.reflected += filter.project_positive(params.x_min(), params.reflect) as u64;
-                for (c, b) in before {
-                    *rise[d].entry(c).or_default() += filter.mean()[c as usize] - b;
-                }
+                st.reflected += filter.project_positive(params.x_min()) as u64;
                 if let Some((f, r)) = free {
                     let lin = Linearized::direct(f, filter.mean(), r);
                     filter.update(f, &lin)?;
-                    st.reflected += filter.project_positive(params.x_min(), params.reflect) as u64;
+                    st.reflected += filter.project_positive(params.x_min()) as u64;
                     st.free_cells += f.rows() as u64;
                 }
                 st.updates += 1;
@@ -274,18 +238,6 @@ pub fn ekf_run_judged(
             || (p + 1 < np).then(|| build(p + 1, occupied)),
         );
         applied?;
-        if let (Some(j), Some(e)) = (judge.as_deref_mut(), echoes.as_ref()) {
-            let evidence = rise
-                .into_iter()
-                .map(|m| {
-                    m.into_iter()
-                        .filter(|&(_, r)| r > 0.0)
-                        .map(|(c, r)| (c, r as f32))
-                        .collect()
-                })
-                .collect();
-            j.record(p, e, evidence);
-        }
         current = next;
         progress(p + 1, np);
     }
@@ -374,7 +326,7 @@ fn echo_arcs(o: &Observation, det: &[bool]) -> Vec<Vec<(u32, f32)>> {
 }
 
 /// The range rings (arcs) of the echoes a run observed (one per detected bin of a kept row,
-/// [`ekf_run_judged`]), for the arc-explanation step ([`EkfMap::explain`]): compressed rows
+/// [`ekf_run_with_arcs`]), for the arc-explanation step ([`EkfMap::explain`]): compressed rows
 /// of (cell, c̃) and the pose of each arc.
 #[derive(Debug, Clone, Default)]
 pub struct EchoArcs {
@@ -439,10 +391,6 @@ pub struct EkfMap {
     pub mu0: f64,
     /// κ of the binary rule.
     pub kappa: f64,
-    /// Evidence a ghost rule removed from each cell's mean, m
-    /// ([`crate::mapping::grid::ghost`]; zeros without one): the decisions use
-    /// x̂ − discount.
-    pub discount: Vec<f64>,
     /// Echo arcs through each cell ([`EkfMap::explain`]; zeros before it).
     pub arcs: Vec<u32>,
     /// Distinct poses of those arcs.
@@ -469,7 +417,6 @@ impl EkfMap {
             std: f.variances().iter().map(|v| v.max(0.0).sqrt()).collect(),
             mu0: params.mu0,
             kappa: params.kappa,
-            discount: vec![0.0; rows * cols],
             arcs: vec![0; rows * cols],
             arc_poses: vec![0; rows * cols],
             arc_share: vec![0.0; rows * cols],
@@ -479,25 +426,18 @@ impl EkfMap {
         }
     }
 
-    /// The arc-explanation step (module docs of [`super`]): with x'_i = max(x̂_i − d_i, 0)
-    /// (d the ghost rule's discount), the energy of an echo's range ring (every cell with a
-    /// coefficient c̃ in the echo's bin, [`EchoArcs`]) is explained by its cells in
-    /// proportion to c̃_i·x'_i²; a cell explains the echo when its share is at least `gamma`
-    /// times the ring's largest. With `gamma` > 0 and at least one run's rings given, a cell
-    /// that explains no echo (including a cell on no echo's ring: raised by bins without a
-    /// detection only) is marked unexplained and never decided occupied. With `min_poses`
-    /// K > 1 a cell must explain the echoes of at least K distinct poses (a surface seen
-    /// from several places; K = 1 is the rule above). Also counts the rings and their
-    /// distinct poses per cell, the rings it explains and their distinct poses, and keeps
-    /// each cell's largest relative share.
-    pub fn explain(&mut self, arcs: &[EchoArcs], gamma: f64, min_poses: u32) {
+    /// The arc-explanation step (module docs of [`super`]): with x'_i = max(x̂_i, 0), the
+    /// energy of an echo's range ring (every cell with a coefficient c̃ in the echo's bin,
+    /// [`EchoArcs`]) is explained by its cells in proportion to c̃_i·x'_i²; a cell explains
+    /// the echo when its share is at least `gamma` times the ring's largest. With `gamma` > 0
+    /// and at least one run's rings given, a cell that explains no echo (including a cell on
+    /// no echo's ring: raised by bins without a detection only) is marked unexplained and
+    /// never decided occupied. Also counts the rings and their distinct poses per cell, the
+    /// rings it explains and their distinct poses, and keeps each cell's largest relative
+    /// share.
+    pub fn explain(&mut self, arcs: &[EchoArcs], gamma: f64) {
         let n = self.mean.len();
-        let x: Vec<f64> = self
-            .mean
-            .iter()
-            .zip(&self.discount)
-            .map(|(&m, &d)| (m - d).max(0.0))
-            .collect();
+        let x: Vec<f64> = self.mean.iter().map(|&m| m.max(0.0)).collect();
         // the (run, pose) each count saw last per cell: a pose's arcs are consecutive in a
         // run, so a new pair is a new distinct pose (1 to add), a repeat is not (0)
         let mut last_arc = vec![(usize::MAX, u32::MAX); n];
@@ -525,68 +465,20 @@ impl EkfMap {
             }
         }
         if gamma > 0.0 && !arcs.is_empty() {
-            let k = min_poses.max(1);
             for (u, &e) in self.unexplained.iter_mut().zip(&self.explained_poses) {
-                *u = e < k;
+                *u = e < 1;
             }
         }
     }
 
-    /// Snapshot of a filter with the ghost rule of `judges` (one per run filtered so far):
-    /// `mirror` discounts the mean rises of the poses that cannot see a cell under the
-    /// binary map; `aspect` brings the occupied cells whose supporting poses (mean rise
-    /// ≥ μ0) span less than the minimum aspect in any run back to the prior mean.
-    pub fn judged(
-        f: &dyn RrcsFilter,
-        rows: usize,
-        cols: usize,
-        params: &EkfValid,
-        judges: &[GhostJudge<'_>],
-    ) -> Self {
-        let mut m = EkfMap::from_filter(f, rows, cols, params);
-        let Some(rule) = judges.first().map(|j| j.rule()) else {
-            return m;
-        };
-        let occupied = m.binary();
-        match rule {
-            GhostRule::None => {}
-            GhostRule::Mirror => {
-                for j in judges {
-                    for (d, e) in m
-                        .discount
-                        .iter_mut()
-                        .zip(j.explained(rows * cols, &occupied))
-                    {
-                        *d += e;
-                    }
-                }
-            }
-            GhostRule::Aspect => {
-                let mut ok = vec![false; rows * cols];
-                for j in judges {
-                    for (o, a) in ok.iter_mut().zip(j.aspect_ok(&occupied, params.mu0)) {
-                        *o |= a;
-                    }
-                }
-                for (i, ok) in ok.into_iter().enumerate() {
-                    if !ok {
-                        m.discount[i] = m.mean[i] - m.mu0;
-                    }
-                }
-            }
-        }
-        m
-    }
-    /// p_i = Φ((x̂_i − d_i − μ0)/σ̂_i), d_i the ghost rule's discount; at most η = Φ(κ) for
-    /// an unexplained cell ([`EkfMap::explain`]).
+    /// p_i = Φ((x̂_i − μ0)/σ̂_i); at most η = Φ(κ) for an unexplained cell
+    /// ([`EkfMap::explain`]).
     pub fn probs(&self) -> Vec<f64> {
         self.mean
             .iter()
-            .zip(&self.discount)
-            .map(|(&m, &d)| m - d)
             .zip(&self.std)
             .zip(&self.unexplained)
-            .map(|((m, &s), &u)| {
+            .map(|((&m, &s), &u)| {
                 if u {
                     // not decided occupied: capped at the binary threshold
                     normal_cdf(self.kappa).min(if s > 0.0 {
@@ -604,15 +496,13 @@ impl EkfMap {
             })
             .collect()
     }
-    /// Binary map: x̂ − d − κ·σ̂ > μ0 (d the ghost rule's discount) and not unexplained
-    /// ([`EkfMap::explain`]).
+    /// Binary map: x̂ − κ·σ̂ > μ0 and not unexplained ([`EkfMap::explain`]).
     pub fn binary(&self) -> Vec<bool> {
         self.mean
             .iter()
-            .zip(&self.discount)
             .zip(&self.std)
             .zip(&self.unexplained)
-            .map(|(((&m, &d), &s), &u)| !u && m - d - self.kappa * s > self.mu0)
+            .map(|((&m, &s), &u)| !u && m - self.kappa * s > self.mu0)
             .collect()
     }
 }
@@ -671,7 +561,6 @@ mod tests {
             std: vec![1e-3; 4],
             mu0: params.mu0,
             kappa: params.kappa,
-            discount: vec![0.0; 4],
             arcs: vec![0; 4],
             arc_poses: vec![0; 4],
             arc_share: vec![0.0; 4],
@@ -681,25 +570,21 @@ mod tests {
         };
         assert_eq!(map.binary(), vec![true; 4]);
         let mut off = map.clone();
-        off.explain(std::slice::from_ref(&arcs), 0.0, 1);
+        off.explain(std::slice::from_ref(&arcs), 0.0);
         assert_eq!(off.binary(), vec![true; 4]);
         assert_eq!(off.arcs, vec![2, 2, 1, 0]);
         assert_eq!(off.arc_poses, vec![2, 2, 1, 0]);
         let mut on = map.clone();
-        on.explain(std::slice::from_ref(&arcs), params.arc_explain, 1);
+        on.explain(std::slice::from_ref(&arcs), params.arc_explain);
         assert_eq!(on.binary(), vec![true, false, true, false]);
         assert_eq!(on.explained_arcs, vec![2, 0, 1, 0]);
         assert_eq!(on.explained_poses, vec![2, 0, 1, 0]);
-        // two poses required: cell 2 explains pose 0's echo only
-        let mut two = map.clone();
-        two.explain(std::slice::from_ref(&arcs), params.arc_explain, 2);
-        assert_eq!(two.binary(), vec![true, false, false, false]);
         assert!((on.arc_share[1] - 0.04f64.powi(2)).abs() < 1e-12);
         // an unexplained cell's soft value is capped at η
         assert!(on.probs()[1] <= params.eta() && on.probs()[0] > params.eta());
         // without rings (no sight model) nothing is judged
         let mut none = map;
-        none.explain(&[], params.arc_explain, 1);
+        none.explain(&[], params.arc_explain);
         assert_eq!(none.binary(), vec![true; 4]);
     }
 

@@ -9,15 +9,14 @@
 //! diagonal). Per bin k, for every tile T it touches: g_T = P_T·H_{k,T}ᵀ and
 //! a_T = H_{k,T}·g_T (the tile's share of H·P·Hᵀ); s = Σ_T a_T + R_k.
 //!
-//! **Plain update** (`split` = false, the earlier filter): x_T += g_T·ν'/s,
+//! **Why not the plain update**: x_T += g_T·ν'/s,
 //! P_T −= g_T·g_Tᵀ/s, the cross-tile terms −g_T·g_Uᵀ/s dropped. From a block-diagonal
 //! prior this is the exact marginal of one bin's update; but the next bin of the same ring
 //! (the kernel's neighbouring bins, the neighbouring directions' side lobes) meets tiles
 //! whose errors are correlated through the dropped terms, and treats the other tiles'
 //! contribution n_T = Σ_{U≠T} H_{k,U}·(x_U − x̂_U) as fresh noise again: the same nuisance
 //! is counted once per bin, and each tile's variance shrinks as if it alone explained the
-//! ring. Measured: NEES 1.07–1.60 times its expectation in the near-linear regime (the
-//! χ² band is ±5 %; `docs/mapping.md`).
+//! ring: the filter is overconfident (NEES measured in `docs/mapping.md`).
 //!
 //! **Why not a bound.** From a block-diagonal prior B, one bin's exact posterior is
 //! B − g·gᵀ/s with g = B·Hᵀ. If the bin touches two tiles there is a direction v mixing
@@ -30,7 +29,7 @@
 //! a weak bin inflates every tile it touches by 1/ω_T: the variances overflowed in every
 //! run, with ω_T = 1/m and with ω_T ∝ a_T.
 //!
-//! **Information split** (`split` = true, the default; Walter, Eustice & Leonard 2007 on
+//! **Information split** (what the filter does; Walter, Eustice & Leonard 2007 on
 //! the overconfidence of filters that drop correlations). Each touched tile sees the bin
 //! as a measurement of its own contribution, y_T = z_k − Σ_{U≠T} h_U(x̂_U) = H_{k,T}·x_T +
 //! n_T + v, of noise variance s − a_T; the m tiles get m copies of one measurement, whose
@@ -45,17 +44,9 @@
 //! so each tile's reported variance covers its own (suboptimal) gain's error for one bin.
 //! With one tile (ω = 1) it is the exact update, so one tile covering the grid still equals
 //! the dense filter (tested). What it does not bound: the correlation of a tile's prior
-//! error with the nuisance, built by earlier bins; over a campaign it is an approximation.
-//! Measured (`docs/mapping.md`; 20-run sets in the near-linear regime, four scenes): NEES
-//! inside the 95 % χ² band in 16 of 20 sets (pooled average NEES per cell 0.97–1.06), the
-//! plain update in 3 of 20 (1.07–1.60), the dense filter in 20 of 20 (1.00–1.02); its std
-//! at least the dense filter's (to 0.1 %) in every updated cell. Tried and not kept, each alone: the plain
-//! downdate scaled by ω_T with the plain gain (0.90–1.02), equal weights ω_T = 1/m
-//! (0.68–0.77: too conservative), splitting the nuisance only and not R (1.05–1.38), a
-//! covariance intersection of each tile's prior with the bin along H_{k,T} with the optimal
-//! ω (0.67–0.73, yet below 0.9× the dense std in 47 % of the corridor's cells), 6 × 6 and
-//! 8 × 8 tiles with the plain update (what halo tiles of one or two cells would couple at
-//! most: 1.26–1.31 at ε = 0.1; a ring couples cells metres apart).
+//! error with the nuisance, built by earlier bins; over a campaign it is an approximation,
+//! whose NEES against the dense filter's and the alternatives measured are in
+//! `docs/mapping.md`. A bin that touches one tile is the exact update.
 //!
 //! Cost per bin: Σ_T (|T|·nnz_T + |T|²) as before; the a_T are summed in the pass that sums
 //! s, so a campaign costs O(nnz(H)·tile²) and memory O(n·tile²) (runtime against the plain
@@ -88,8 +79,6 @@ pub struct TiledEkf {
     abuf: Vec<f64>,
     /// Scratch: tiles the current row touches, in order of first touch.
     touched: Vec<u32>,
-    /// Information split of a row over its tiles (module docs); false: the plain update.
-    split: bool,
     /// Tiles whose means changed since the last `project_positive` (`None`: all cells).
     dirty: Option<Vec<u32>>,
     /// Membership flags of `dirty`.
@@ -141,7 +130,6 @@ impl TiledEkf {
             goff: Vec::new(),
             abuf: Vec::new(),
             touched: Vec::new(),
-            split: params.split,
         })
     }
     /// Number of tiles.
@@ -214,9 +202,9 @@ impl RrcsFilter for TiledEkf {
                     *gi += h * pv;
                 }
             }
-            // s = H·P·Hᵀ + R (summed entry by entry, the plain update's order) and, for the
-            // split, a_T = h_T·g_T (the tile's share of H·P·Hᵀ)
-            let split = self.split && self.touched.len() > 1;
+            // s = H·P·Hᵀ + R (summed entry by entry) and, for the split over several tiles,
+            // a_T = h_T·g_T (the tile's share of H·P·Hᵀ)
+            let split = self.touched.len() > 1;
             self.abuf.clear();
             self.abuf.resize(self.touched.len(), 0.0);
             let mut s = lin.r[j];
@@ -241,7 +229,7 @@ impl RrcsFilter for TiledEkf {
             let hph: f64 = if split { self.abuf.iter().sum() } else { 0.0 };
             for (q, &t) in self.touched.iter().enumerate() {
                 let t = t as usize;
-                // the tile's innovation variance: s for the plain update; with the split,
+                // the tile's innovation variance: s for a single tile; with the split,
                 // a_T + (s − a_T)/ω_T, ω_T = a_T / Σ a (module docs)
                 let a = self.abuf[q];
                 let st = if split {
@@ -279,7 +267,7 @@ impl RrcsFilter for TiledEkf {
         Ok(())
     }
 
-    fn project_positive(&mut self, x_min: f64, reflect: bool) -> usize {
+    fn project_positive(&mut self, x_min: f64) -> usize {
         // only the cells of tiles updated since the last call can violate the bounds
         let cells: Vec<u32> = match self.dirty.replace(Vec::new()) {
             None => (0..self.x.len() as u32).collect(),
@@ -295,7 +283,7 @@ impl RrcsFilter for TiledEkf {
         let mut flipped = 0;
         for i in cells {
             let i = i as usize;
-            if reflect && self.x[i] < 0.0 {
+            if self.x[i] < 0.0 {
                 self.x[i] = -self.x[i];
                 let t = self.cell_tile[i] as usize;
                 let k = self.tile_cells[t].len();
@@ -322,16 +310,15 @@ mod tests {
     use crate::params::ParamGuard;
 
     /// One bin over two cells in two 1 × 1 tiles (a_1 = h_1²·P_1, a_2 = h_2²·P_2): the
-    /// plain update gives each cell the exact marginal P_i − a_i·P_i/s; the split gives
-    /// P_i − a_i·P_i/s_i with s_i = a_i + (s − a_i)·(a_1 + a_2)/a_i, a larger variance, and
-    /// the mean moved by the same factor less.
+    /// exact marginal of each cell is P_i − a_i·P_i/s; the split gives P_i − a_i·P_i/s_i
+    /// with s_i = a_i + (s − a_i)·(a_1 + a_2)/a_i, a larger variance, and the mean moved by
+    /// the same factor less.
     #[test]
     fn split_divides_a_bin_over_its_tiles() {
         let p = EkfParams {
             tile: 1,
             ..Default::default()
         };
-        let plain_p = EkfParams { split: false, ..p }.check().unwrap();
         let split_p = p.check().unwrap();
         let obs = Observation {
             bin: vec![0],
@@ -348,9 +335,7 @@ mod tests {
             hval: h.to_vec(),
             x0: vec![p.mu0, p.mu0],
         };
-        let mut plain = TiledEkf::new(1, 2, 1, &plain_p).unwrap();
         let mut split = TiledEkf::new(1, 2, 1, &split_p).unwrap();
-        plain.update(&obs, &lin).unwrap();
         split.update(&obs, &lin).unwrap();
         let v0 = p.sigma0 * p.sigma0;
         let a = [h[0] * h[0] * v0, h[1] * h[1] * v0];
@@ -358,9 +343,8 @@ mod tests {
         for i in 0..2 {
             let si = a[i] + (s - a[i]) * (a[0] + a[1]) / a[i];
             let g = v0 * h[i];
-            assert!((plain.variances()[i] - (v0 - g * g / s)).abs() < 1e-15);
             assert!((split.variances()[i] - (v0 - g * g / si)).abs() < 1e-15);
-            assert!(split.variances()[i] > plain.variances()[i]);
+            assert!(split.variances()[i] > v0 - g * g / s);
             assert!((split.mean()[i] - (p.mu0 + g * nu / si)).abs() < 1e-15);
         }
     }

@@ -28,10 +28,8 @@
 //!   illuminated cells.
 //!
 //! What a scan can see (the occluder of each beam, the visibility of each cell) is
-//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Evidence a pose
-//! could not have had, judged again against the final map (multi-bounce ghosts), is
-//! [`ghost`]. Beams are built
-//! on demand per pose and reused for every bin and every pass of a mapper;
+//! [`visibility`]; [`ObservationModel::beam_seen`] restricts a beam to it. Beams are built
+//! on demand per pose and reused for every bin of a mapper;
 //! [`ObservationModel::beams`] builds one pose's beams in parallel.
 
 use crate::campaign::manifest::{Manifest, Pose};
@@ -42,10 +40,8 @@ use crate::units::{wrap_rad, C0};
 use rayon::prelude::*;
 
 mod gain;
-pub mod ghost;
 pub mod visibility;
 use gain::GainModel;
-pub use ghost::{GhostJudge, GhostParams, GhostRule, GhostValid};
 use std::f64::consts::PI;
 pub use visibility::{Occlusion, Polygon, ScanEchoes, SilentBound, Visibility};
 

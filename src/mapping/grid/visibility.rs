@@ -110,8 +110,7 @@ pub struct ScanEchoes {
     /// unknown, and the visible region is interpolated over it from its neighbours.
     pub missing: Vec<bool>,
     /// Per direction: the detections not explained by a side lobe, (bin, energy) by
-    /// ascending bin — the candidates of the occluder, kept so that a later map can judge
-    /// the scan again ([`crate::mapping::grid::ghost`]).
+    /// ascending bin — the candidates of the occluder.
     pub main: Vec<Vec<(u32, f64)>>,
 }
 
@@ -535,6 +534,23 @@ fn polygon_inverse_range(samples: &[(f64, f64)], th: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// metrics.json names each mapping choice as its command-line value, so a user's
+    /// script can pass a run's parameters back as flags (`"variant": "scalable"`, not
+    /// `"Scalable"`).
+    #[test]
+    fn mapping_choices_serialise_as_their_flag_values() {
+        use crate::mapping::ekf::EkfVariant;
+        use clap::ValueEnum;
+        fn same<T: ValueEnum + serde::Serialize>() {
+            for v in T::value_variants() {
+                let flag = v.to_possible_value().unwrap().get_name().to_string();
+                assert_eq!(serde_json::to_string(v).unwrap(), format!("\"{flag}\""));
+            }
+        }
+        same::<EkfVariant>();
+        same::<SilentBound>();
+    }
 
     #[test]
     fn inverse_range_interpolation_follows_a_straight_wall() {

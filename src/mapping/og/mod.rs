@@ -32,10 +32,8 @@
 //!   leakage of an echo another direction credits, or a surface the main lobe just cleared)
 //!   and detections more than g beyond it (shadowed: multipath or echoes from behind the
 //!   surface) are withheld, counted in [`OgStats::withheld`]; bins after the occluder
-//!   without a detection give no evidence. With `hold_echoes` (off by default) the bins
-//!   within g of a main-lobe detection before the occluder give no free evidence either.
-//!   Two rules on by default and three options off (figures in
-//!   `docs/mapping.md`). On: `bound_silent = nearer` (a direction without an occluder
+//!   without a detection give no evidence. Two rules bound what a scan sees (figures in
+//!   `docs/mapping.md`): `bound_silent = nearer` (a direction without an occluder
 //!   bounds the visibility polygon at the nearer of its first detection and the range
 //!   interpolated from its neighbours' occluders, instead of lying at the maximum range:
 //!   indoors every bearing ends at a surface, and a beam that detects none was most likely
@@ -46,17 +44,10 @@
 //!   at most 0.05 m, half a cell of the default 0.1 m grid, behind the polygon: a cell
 //!   whose centre lies further beyond the surface does not hold it, and without the limit
 //!   the guard's two bins leave a rim of credited cells beyond every wall the polygon now
-//!   reaches). Together they find the walls the silent beams cleared without that rim; the
-//!   choice is measured against the rules before, `off` and no depth limit (same maps byte
-//!   for byte), in `docs/mapping.md`. Off: `free_without_occluder` (weight in [0, 1] of the
-//!   free evidence of a beam with no occluder), `free_end` (free evidence ends at the first
-//!   main-lobe echo or the first detection instead of the occluder) and `free_floor` (a
-//!   lower clamp for the log-odds), each measured and not kept (figures in
-//!   `docs/mapping.md`). A ghost rule ([`crate::mapping::grid::ghost`], `none` by default)
-//!   may judge every pose's increments again against the final map and replay them. The map
-//!   the occluders are confirmed against is the belief the responsibilities use, a cell
-//!   being a surface when p > max(0.5, p0): the scan's snapshot, or the previous pass's map
-//!   with `passes` ≥ 2;
+//!   reaches). Together they find the walls the silent beams cleared without that rim;
+//!   `off` and no depth limit are the alternatives, measured in `docs/mapping.md`. The map
+//!   the occluders are confirmed against is the belief the responsibilities use (the
+//!   scan's snapshot), a cell being a surface when p > max(0.5, p0);
 //! * `og-boresight` (baseline, the classic laser-like model): only the cells crossed by the
 //!   boresight ray; a cell gets l_occ if any bin the ray spends in it is detected, l_free if
 //!   the ray leaves it before the first detected bin;
@@ -89,7 +80,7 @@ pub mod params;
 pub mod scan;
 
 pub use detector::{detection_threshold, Detector};
-pub use params::{sigmoid, FreeEnd, OgParams, OgValid};
+pub use params::{sigmoid, OgParams, OgValid};
 pub use scan::{og_map, og_map_stats};
 
 use crate::error::{Error, Result};
@@ -276,34 +267,6 @@ mod tests {
                     ..Default::default()
                 },
                 "p_occ",
-            ),
-            (
-                OgParams {
-                    passes: 0,
-                    ..Default::default()
-                },
-                "passes",
-            ),
-            (
-                OgParams {
-                    free_floor: 0.0,
-                    ..Default::default()
-                },
-                "free_floor",
-            ),
-            (
-                OgParams {
-                    free_without_occluder: 1.5,
-                    ..Default::default()
-                },
-                "free_without_occluder",
-            ),
-            (
-                OgParams {
-                    free_without_occluder: f64::NAN,
-                    ..Default::default()
-                },
-                "free_without_occluder",
             ),
             (
                 OgParams {

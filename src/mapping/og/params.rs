@@ -5,22 +5,8 @@
 //! p_free; the inverse is the logistic function [`sigmoid`].
 
 use crate::error::{Error, Result};
-use crate::mapping::grid::{GhostParams, SilentBound};
+use crate::mapping::grid::SilentBound;
 use crate::params::{ParamGuard, Valid};
-
-/// Where a beam's free evidence ends.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum FreeEnd {
-    /// At the beam's occluder (its strongest detection not explained by a side lobe).
-    #[value(name = "occluder")]
-    Occluder,
-    /// At its first detection not explained by a side lobe.
-    #[value(name = "first-echo")]
-    FirstEcho,
-    /// At its first detection of any kind (a side-lobe-explained one included).
-    #[value(name = "first-detection")]
-    FirstDetection,
-}
 
 /// Occupancy-grid parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,38 +30,17 @@ pub struct OgParams {
     /// Lowest two-way weight of a cell that gets free evidence, dB (−10); the evidence is
     /// l_free·s·w (weighted by the two-way pattern).
     pub free_db: f64,
-    /// Passes of the side-lobe-aware model over the run (1; a pass > 1 restarts from the prior
-    /// and takes its responsibilities from the previous pass's final map).
-    pub passes: usize,
-    /// No free evidence within the guard of a main-lobe echo before the occluder (false; see
-    /// [`crate::mapping::grid::ghost`]): a weaker echo not explained by a side lobe is a
-    /// surface the beam sees (the wall in front of a stronger multi-bounce image), not free
-    /// space.
-    pub hold_echoes: bool,
-    /// Weight of the free evidence of a beam without an occluder (no detection not
-    /// explained by a side lobe), in [0, 1] (1: as any other beam's).
-    pub free_without_occluder: f64,
     /// How a direction without an occluder bounds the visibility polygon
-    /// ([`SilentBound`]; `nearer` by default, `off`: at the maximum range, the earlier
-    /// rule).
+    /// ([`SilentBound`]; `nearer` by default, `off`: at the maximum range).
     pub bound_silent: SilentBound,
-    /// Where a beam's free evidence ends (the occluder).
-    pub free_end: FreeEnd,
-    /// Lowest log-odds free evidence can bring a cell to (−10, the clamp: no floor); a
-    /// floor above −clamp keeps a cell cleared by many beams within reach of the occupancy
-    /// evidence of the beams that see it.
-    pub free_floor: f64,
     /// Deepest a cell's centre may lie behind the visibility polygon and still get
     /// occupancy credit from a range ring, m (0.05 m by default: half a cell of the
-    /// default 0.1 m grid; None: the occlusion guard g, every visible cell, the earlier
-    /// rule). A cell whose centre lies more than half a cell beyond the surface along
-    /// the ray does not hold it there; the guard's extra two bins (the window kernel's
-    /// half-width) keep the cells behind the surface visible, and a wall found where it was
-    /// missed comes with a rim of credited cells beyond it.
+    /// default 0.1 m grid; None: the occlusion guard g, every visible cell). A cell whose
+    /// centre lies more than half a cell beyond the surface along the ray does not hold it
+    /// there; the guard's extra two bins (the window kernel's half-width) keep the cells
+    /// behind the surface visible, and a wall found where it was missed comes with a rim of
+    /// credited cells beyond it.
     pub credit_depth_m: Option<f64>,
-    /// Ghost rule applied to the `og` map once it is built
-    /// ([`crate::mapping::grid::ghost`]; `none`).
-    pub ghost: GhostParams,
 }
 
 impl Default for OgParams {
@@ -87,16 +52,10 @@ impl Default for OgParams {
             p_free: 0.35,
             clamp: 10.0,
             mask_db: 10.0,
-            passes: 1,
             side_db: 0.0,
             free_db: -10.0,
-            hold_echoes: false,
-            free_end: FreeEnd::Occluder,
-            free_without_occluder: 1.0,
             bound_silent: SilentBound::Nearer,
-            free_floor: -10.0,
             credit_depth_m: Some(0.05),
-            ghost: GhostParams::default(),
         }
     }
 }
@@ -118,7 +77,7 @@ impl ParamGuard for OgParams {
 
     /// Prior in (0, 1) with log-odds inside the clamp, P_fa in (0, 0.5], p_occ in
     /// (0.5, 1), p_free in (0, 0.5), clamp > 0, masking margin ≥ 0 dB, free level ≤ 0 dB,
-    /// side-lobe margin finite, passes in 1..=10, the ghost rule's parameters in range.
+    /// side-lobe margin finite, credit depth ≥ 0 m, the prior's log-odds inside the clamp.
     fn check(&self) -> Result<OgValid> {
         let open01 = |v: f64| v.is_finite() && v > 0.0 && v < 1.0;
         if !open01(self.prior) {
@@ -145,31 +104,13 @@ impl ParamGuard for OgParams {
         if !self.side_db.is_finite() {
             return Err(Error::param("side_db", "must be finite"));
         }
-        if self.passes == 0 || self.passes > 10 {
-            return Err(Error::param("passes", "must be in 1..=10"));
-        }
-        if !(self.free_without_occluder.is_finite()
-            && (0.0..=1.0).contains(&self.free_without_occluder))
-        {
-            return Err(Error::param("free_without_occluder", "must be in [0, 1]"));
-        }
-        if !(self.free_floor.is_finite() && self.free_floor < 0.0) {
-            return Err(Error::param("free_floor", "must be < 0 (log-odds)"));
-        }
         if let Some(x) = self.credit_depth_m {
             if !(x.is_finite() && x >= 0.0) {
                 return Err(Error::param("credit_depth_m", "must be >= 0 m"));
             }
         }
-        self.ghost.check()?;
         if logit(self.prior).abs() >= self.clamp {
             return Err(Error::param("prior", "prior log-odds beyond the clamp"));
-        }
-        if self.free_floor >= logit(self.prior) {
-            return Err(Error::param(
-                "free_floor",
-                "must be below the prior's log-odds",
-            ));
         }
         Ok(Valid::new(*self))
     }

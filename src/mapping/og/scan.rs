@@ -2,14 +2,12 @@
 //! (`og-boresight`), see [`crate::mapping::og`] for the equations; [`og_map`] and
 //! [`og_map_stats`] map a run scan by scan.
 
-use super::{sigmoid, Detector, FreeEnd, LogOddsMap, Method, OgStats, OgValid};
+use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
 use crate::mapping::grid::{
-    Beam, GhostJudge, GhostRule, ObservationModel, Occlusion, PoseGeometry, ScanEchoes,
-    SilentBound, Visibility,
+    Beam, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, SilentBound, Visibility,
 };
-use crate::params::Valid;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -18,17 +16,14 @@ type ScanResult = (Vec<(u32, f32)>, u64, u64, u64);
 
 /// Side-lobe-aware increments of one scan (beam restricted to what it sees, detections,
 /// occluder bin `first` (`bins` when none), last observed bin `last`, visibility) into
-/// `out`; no free evidence within the guard of a bin of `held` (the main-lobe echoes before
-/// the occluder when `hold_echoes`); returns (detections, detections withheld: before
-/// `first` or after `last`).
+/// `out`: free evidence in the bins before `first`, occupancy credit from the detections
+/// from `first` to `last`; returns (detections, detections withheld: before `first` or
+/// after `last`).
 #[allow(clippy::too_many_arguments)]
 fn scan_og(
     beam: &Beam,
     det: &[bool],
-    held: &[u32],
     first: usize,
-    free_end: usize,
-    free_scale: f32,
     last: usize,
     vis: &Visibility,
     belief: &[f32],
@@ -36,15 +31,8 @@ fn scan_og(
     out: &mut Vec<(u32, f32)>,
 ) -> (u64, u64) {
     let bins = det.len().min(beam.ptr.len() - 1);
-    let lf = k.l_free as f32 * free_scale;
-    for b in k.min_bin..free_end.min(bins) {
-        if held
-            .iter()
-            .any(|&h| (h as usize).abs_diff(b) <= k.guard_bins)
-        {
-            // an echo in the main lobe at this range: something is there, not free
-            continue;
-        }
+    let lf = k.l_free as f32;
+    for b in k.min_bin..first.min(bins) {
         for j in beam.bin_range(b) {
             let w = beam.weight[j];
             if w >= k.free_w && vis.clearable(beam.cell[j]) {
@@ -100,10 +88,6 @@ struct IncrementConstants {
     l_free: f64,
     free_w: f32,
     min_bin: usize,
-    guard_bins: usize,
-    hold_echoes: bool,
-    free_end: FreeEnd,
-    free_without_occluder: f32,
     bound_silent: SilentBound,
     /// Deepest behind the polygon a cell gets occupancy credit, m (+∞: every visible cell).
     credit_depth: f32,
@@ -178,98 +162,37 @@ pub fn og_map_stats(
     let spec = model.spec;
     let ctx = ScanContext::new(model, params, method, detector);
     let mut stats = OgStats::default();
-    let passes = if method == Method::Og {
-        params.passes
-    } else {
-        1
-    };
     let mut map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
-    // the ghost rule judges the last pass's scans again once the map is built
-    let ghost_rule = match method {
-        Method::Og => params.ghost.rule,
-        _ => GhostRule::None,
-    };
-    let mut judge = (ghost_rule != GhostRule::None).then(|| {
-        GhostJudge::new(model, &ctx.occlusion, Valid::new(params.ghost))
-            .with_silent_bound(params.bound_silent)
-    });
-    // belief of the previous pass (pass ≥ 2 uses it, fixed, for the responsibilities)
-    let mut fixed_belief: Option<Vec<f32>> = None;
-    for pass in 0..passes {
-        let last_pass = pass + 1 == passes;
-        if pass > 0 {
-            fixed_belief = Some(map.logodds.par_iter().map(|&l| sigmoid(l) as f32).collect());
-            map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
-        }
-        let mut belief: Vec<f32> = Vec::new();
-        // pose geometries are independent of the map: build them a batch at a time in parallel
-        let batch = (2 * rayon::current_num_threads()).max(2);
-        let mut p0 = 0;
-        while p0 < np {
-            let p1 = (p0 + batch).min(np);
-            let part = src.load(p0, p1)?;
-            let geoms: Vec<_> = if method == Method::Og {
-                (p0..p1)
-                    .into_par_iter()
-                    .map(|p| Some(model.pose_geometry(p)))
-                    .collect()
-            } else {
-                (p0..p1).map(|_| None).collect()
-            };
-            for (p, geom) in (p0..p1).zip(geoms) {
-                if method == Method::Og && fixed_belief.is_none() {
-                    map.logodds
-                        .par_iter()
-                        .map(|&l| sigmoid(l) as f32)
-                        .collect_into_vec(&mut belief);
-                }
-                let bel: &[f32] = fixed_belief.as_deref().unwrap_or(&belief);
-                let (scans, echoes) = ctx.scan_pose(&part, p, geom.as_ref(), bel);
-                if let (Some(j), Some(e), true) = (judge.as_mut(), echoes.as_ref(), last_pass) {
-                    let evidence = scans.iter().map(|s| s.0.clone()).collect();
-                    j.record(p, e, evidence);
-                }
-                apply_scans(&mut map, &mut stats, scans, ctx.clamp, ctx.floor);
-                progress(pass * np + p + 1, passes * np);
+    let mut belief: Vec<f32> = Vec::new();
+    // pose geometries are independent of the map: build them a batch at a time in parallel
+    let batch = (2 * rayon::current_num_threads()).max(2);
+    let mut p0 = 0;
+    while p0 < np {
+        let p1 = (p0 + batch).min(np);
+        let part = src.load(p0, p1)?;
+        let geoms: Vec<_> = if method == Method::Og {
+            (p0..p1)
+                .into_par_iter()
+                .map(|p| Some(model.pose_geometry(p)))
+                .collect()
+        } else {
+            (p0..p1).map(|_| None).collect()
+        };
+        for (p, geom) in (p0..p1).zip(geoms) {
+            if method == Method::Og {
+                map.logodds
+                    .par_iter()
+                    .map(|&l| sigmoid(l) as f32)
+                    .collect_into_vec(&mut belief);
             }
-            p0 = p1;
+            let scans = ctx.scan_pose(&part, p, geom.as_ref(), &belief);
+            apply_scans(&mut map, &mut stats, scans, ctx.clamp);
+            progress(p + 1, np);
         }
-    }
-    if let Some(j) = &judge {
-        apply_ghost_rule(&mut map, j, params, ctx.surface_p);
+        p0 = p1;
     }
     stats.seconds = t0.elapsed().as_secs_f64();
     Ok((map, stats))
-}
-
-/// The ghost rule of `judge` on a finished map ([`crate::mapping::grid::ghost`]): `mirror`
-/// replays the kept increments from the prior; `aspect` sends the occupied cells whose
-/// supporting poses (summed increments ≥ |l_free|) span less than the minimum aspect back
-/// to the prior.
-fn apply_ghost_rule(map: &mut LogOddsMap, judge: &GhostJudge, params: &OgValid, surface_p: f32) {
-    let occupied: Vec<bool> = map
-        .logodds
-        .iter()
-        .map(|&l| sigmoid(l) as f32 > surface_p)
-        .collect();
-    match judge.rule() {
-        GhostRule::None => {}
-        GhostRule::Mirror => {
-            let (l, observed) =
-                judge.replay(map.logodds.len(), params.l0(), params.clamp, &occupied);
-            map.logodds = l;
-            map.observed = observed;
-        }
-        GhostRule::Aspect => {
-            let ok = judge.aspect_ok(&map.binary(), params.l_free().abs());
-            let l0 = params.l0();
-            for (l, ok) in map.logodds.iter_mut().zip(ok) {
-                if !ok {
-                    *l = l.min(l0);
-                }
-            }
-        }
-    }
 }
 
 /// What the scans of a run share: the model, the detector, the occlusion model and the
@@ -279,8 +202,6 @@ struct ScanContext<'a> {
     detector: &'a Detector,
     method: Method,
     clamp: f64,
-    /// Lowest log-odds: max(−clamp, free_floor).
-    floor: f64,
     /// Belief above which a cell is a mapped surface: max(0.5, p0).
     surface_p: f32,
     inc: IncrementConstants,
@@ -301,17 +222,12 @@ impl<'a> ScanContext<'a> {
             detector,
             method,
             clamp: params.clamp,
-            floor: params.free_floor.max(-params.clamp),
             surface_p: (super::sigmoid(params.l0()).max(0.5)) as f32,
             inc: IncrementConstants {
                 l_occ: params.l_occ(),
                 l_free: params.l_free(),
                 free_w: 10f64.powf(params.free_db / 10.0) as f32,
                 min_bin,
-                guard_bins: occlusion.guard_bins(),
-                hold_echoes: params.hold_echoes,
-                free_end: params.free_end,
-                free_without_occluder: params.free_without_occluder as f32,
                 bound_silent: params.bound_silent,
                 credit_depth: params.credit_depth_m.map_or(f32::INFINITY, |x| x as f32),
             },
@@ -327,7 +243,7 @@ impl<'a> ScanContext<'a> {
         p: usize,
         geom: Option<&PoseGeometry>,
         bel: &[f32],
-    ) -> (Vec<ScanResult>, Option<ScanEchoes>) {
+    ) -> Vec<ScanResult> {
         let nd = self.model.directions();
         let dets = self.detector.detect_pose(em, p);
         match (geom, self.method) {
@@ -347,7 +263,7 @@ impl<'a> ScanContext<'a> {
                     &echoes,
                     self.inc.bound_silent,
                 );
-                let scans = (0..nd)
+                (0..nd)
                     .into_par_iter()
                     .map(|d| {
                         if !em.has(p, d) {
@@ -355,31 +271,27 @@ impl<'a> ScanContext<'a> {
                         }
                         self.scan_direction_og(d, g, &echoes, &vis, bel)
                     })
-                    .collect();
-                (scans, Some(echoes))
+                    .collect()
             }
-            _ => (
-                (0..nd)
-                    .into_par_iter()
-                    .map(|d| {
-                        if !em.has(p, d) {
-                            return (Vec::new(), 0, 0, 0); // no sweep: no evidence
-                        }
-                        let ray = self.model.boresight_ray(p, d);
-                        let mut out = Vec::new();
-                        let dets = scan_boresight(
-                            &ray,
-                            &dets[d],
-                            self.inc.min_bin,
-                            self.inc.l_occ,
-                            self.inc.l_free,
-                            &mut out,
-                        );
-                        (out, dets, 0, ray.len() as u64)
-                    })
-                    .collect(),
-                None,
-            ),
+            _ => (0..nd)
+                .into_par_iter()
+                .map(|d| {
+                    if !em.has(p, d) {
+                        return (Vec::new(), 0, 0, 0); // no sweep: no evidence
+                    }
+                    let ray = self.model.boresight_ray(p, d);
+                    let mut out = Vec::new();
+                    let dets = scan_boresight(
+                        &ray,
+                        &dets[d],
+                        self.inc.min_bin,
+                        self.inc.l_occ,
+                        self.inc.l_free,
+                        &mut out,
+                    );
+                    (out, dets, 0, ray.len() as u64)
+                })
+                .collect(),
         }
     }
 
@@ -397,38 +309,10 @@ impl<'a> ScanContext<'a> {
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
         let mut out = Vec::with_capacity(beam.len() / 2);
-        let mut held: Vec<u32> = if self.inc.hold_echoes {
-            echoes.main[d]
-                .iter()
-                .map(|e| e.0)
-                .filter(|&k| (k as usize) < first)
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let free_end = match self.inc.free_end {
-            FreeEnd::Occluder => first,
-            FreeEnd::FirstEcho => echoes.main[d]
-                .first()
-                .map_or(first, |e| (e.0 as usize).min(first)),
-            FreeEnd::FirstDetection => (self.inc.min_bin..first.min(bins))
-                .find(|&k| echoes.det[d][k])
-                .unwrap_or(first),
-        };
-        if free_end < first {
-            held.push(free_end as u32);
-        }
         let (dets, withheld) = scan_og(
             &beam,
             &echoes.det[d],
-            &held,
             first,
-            free_end,
-            if echoes.occluder[d].is_none() {
-                self.inc.free_without_occluder
-            } else {
-                1.0
-            },
             last,
             vis,
             bel,
@@ -439,15 +323,9 @@ impl<'a> ScanContext<'a> {
     }
 }
 
-/// Add a pose's scans to the map in direction order (log-odds clamped to [`floor`, `clamp`]
-/// after every increment, `floor` = max(`free_floor`, −`clamp`)) and count them.
-fn apply_scans(
-    map: &mut LogOddsMap,
-    stats: &mut OgStats,
-    scans: Vec<ScanResult>,
-    clamp: f64,
-    floor: f64,
-) {
+/// Add a pose's scans to the map in direction order (log-odds clamped to ±`clamp` after
+/// every increment) and count them.
+fn apply_scans(map: &mut LogOddsMap, stats: &mut OgStats, scans: Vec<ScanResult>, clamp: f64) {
     for (inc, dets, withheld, entries) in scans {
         stats.scans += 1;
         stats.entries += entries;
@@ -456,7 +334,7 @@ fn apply_scans(
         stats.cell_updates += inc.len() as u64;
         for (c, dl) in inc {
             let c = c as usize;
-            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(floor, clamp);
+            map.logodds[c] = (map.logodds[c] + dl as f64).clamp(-clamp, clamp);
             map.observed[c] = true;
         }
     }

@@ -27,7 +27,8 @@
 //! re-exported here: `import` (a folder of its own: its CSV reader, name pattern, file
 //! collection, check and write), `campaign` (simulate, energy, synth), `analysis` (extract,
 //! cluster, fit), `model` (calibrate, check), [`map`](mod@map) (the map job: options, runs,
-//! fusion, metrics.json) and `experiments`.
+//! fusion, metrics.json), `experiments` and `zoo` (the scene zoo's
+//! manifests).
 //!
 //!
 //! ```no_run
@@ -114,6 +115,7 @@ mod experiments;
 pub(crate) mod import;
 pub mod map;
 mod model;
+mod zoo;
 
 pub use analysis::{
     cluster, extract, fit, pose_headings, Cluster, ClusterSummary, Extract, ExtractSummary, Fit,
@@ -130,6 +132,7 @@ pub use map::{map, Map, MapSummary};
 pub use model::{
     calibrate, check, posterior_csv, Calibrate, CalibrateSummary, Check, CheckSummary,
 };
+pub use zoo::{zoo, Zoo, ZooSummary};
 
 use crate::campaign::manifest::Campaign;
 use crate::error::Result;

@@ -18,14 +18,13 @@ use super::{
 use crate::energy::EnergySource;
 use crate::error::{Error, Result};
 use crate::mapping::ekf::{
-    ekf_run_judged, mean_grey, new_filter, std_grey, truncate_kernel, EchoArcs, EkfMap, EkfReport,
-    EkfStats, EkfValid, EkfVariant, NoiseModel, Sight,
+    ekf_run_with_arcs, mean_grey, new_filter, std_grey, truncate_kernel, EchoArcs, EkfMap,
+    EkfReport, EkfStats, EkfValid, EkfVariant, NoiseModel, RrcsFilter, Sight,
 };
-use crate::mapping::grid::{GhostJudge, GhostRule, Occlusion};
+use crate::mapping::grid::Occlusion;
 use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
 use crate::mapping::reference::{GridSpec, ReferenceMap};
 use crate::mapping::score::{score_binary, MetricsPair, Regions};
-use crate::params::Valid;
 use std::path::Path;
 
 /// The runs with their window kernels and noise models.
@@ -51,7 +50,7 @@ impl EkfInputs {
 /// What filtering the runs gave: the fused filter, its statistics per run, the fusion
 /// table and each run's figures alone.
 struct Filtered {
-    /// The fused map (the ghost rule applied).
+    /// The fused map (the arc explanation applied).
     map: EkfMap,
     stats: Vec<EkfStats>,
     fusion: Vec<FusionRow>,
@@ -143,33 +142,20 @@ fn filter_runs(
     let spec = inp.reference.spec;
     let total: usize = inp.loaded.iter().map(|l| l.model.poses.len()).sum();
     let mut filter = new_filter(params, spec.rows, spec.cols)?;
-    let judge = |i: usize| {
-        (params.ghost.rule != GhostRule::None).then(|| {
-            GhostJudge::new(
-                &inp.loaded[i].model,
-                &inp.occlusions[i],
-                Valid::new(params.ghost),
-            )
-            .with_silent_bound(params.bound_silent)
-        })
-    };
-    let mut judges: Vec<GhostJudge<'_>> = Vec::new();
     let mut arcs: Vec<EchoArcs> = Vec::new();
-    let judged =
-        |f: &dyn crate::mapping::ekf::RrcsFilter, judges: &[GhostJudge<'_>], arcs: &[EchoArcs]| {
-            let mut m = EkfMap::judged(f, spec.rows, spec.cols, params, judges);
-            m.explain(arcs, params.arc_explain, params.explain_poses);
-            m
-        };
+    let explained = |f: &dyn RrcsFilter, arcs: &[EchoArcs]| {
+        let mut m = EkfMap::from_filter(f, spec.rows, spec.cols, params);
+        m.explain(arcs, params.arc_explain);
+        m
+    };
     let mut done = 0;
     let mut stats = Vec::new();
     let mut fusion = Vec::new();
     let mut alone = Vec::new();
     for (i, l) in inp.loaded.iter().enumerate() {
         let base = done;
-        let mut j = judge(i);
         let mut a = EchoArcs::default();
-        let st = ekf_run_judged(
+        let st = ekf_run_with_arcs(
             &l.model,
             &l.energy,
             &inp.kernels[i],
@@ -177,15 +163,13 @@ fn filter_runs(
             &inp.noises[i],
             Some(inp.sight(i)),
             filter.as_mut(),
-            j.as_mut(),
             Some(&mut a),
             &|d, _| progress(base + d, total),
         )?;
-        judges.extend(j);
         arcs.push(a);
         done += l.model.poses.len();
         stats.push(st);
-        let snap = judged(filter.as_ref(), &judges, &arcs);
+        let snap = explained(filter.as_ref(), &arcs);
         let m = score_binary(&snap.binary(), &inp.reference, &inp.region);
         fusion.push(FusionRow {
             runs: i + 1,
@@ -198,9 +182,8 @@ fn filter_runs(
     if inp.loaded.len() > 1 {
         for (i, l) in inp.loaded.iter().enumerate() {
             let mut f = new_filter(params, spec.rows, spec.cols)?;
-            let mut j = judge(i);
             let mut a = EchoArcs::default();
-            ekf_run_judged(
+            ekf_run_with_arcs(
                 &l.model,
                 &l.energy,
                 &inp.kernels[i],
@@ -208,16 +191,15 @@ fn filter_runs(
                 &inp.noises[i],
                 Some(inp.sight(i)),
                 f.as_mut(),
-                j.as_mut(),
                 Some(&mut a),
                 &|_, _| {},
             )?;
-            let snap = judged(f.as_ref(), &j.into_iter().collect::<Vec<_>>(), &[a]);
+            let snap = explained(f.as_ref(), &[a]);
             alone.push(score_binary(&snap.binary(), &inp.reference, &inp.region));
         }
     }
     Ok(Filtered {
-        map: judged(filter.as_ref(), &judges, &arcs),
+        map: explained(filter.as_ref(), &arcs),
         stats,
         fusion,
         alone,
