@@ -21,6 +21,7 @@ pub mod mpc;
 pub mod params;
 pub mod pipeline;
 pub mod report;
+pub mod stats;
 pub mod table;
 pub mod units;
 

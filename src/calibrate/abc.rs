@@ -21,7 +21,7 @@
 //! then).
 //!
 //! The projection's ridge penalty ([`Ridge`]): `Fixed` is λ = 1e-3·n on every slope
-//! (issue 19's, only there to keep collinear statistics solvable). `Cv` chooses it per
+//! (only there to keep collinear statistics solvable). `Cv` chooses it per
 //! parameter from the data at every refit: λ_k = c_k·n_train with c_k the entry of
 //! [`RIDGE_GRID`] (1e-3 … 1e3, half decades) minimising the same 5-fold held-out squared
 //! error Σ_i (x_ik − x̂_ik^(−fold(i)))², ties to the smaller penalty. Why: with 87 raw
@@ -109,11 +109,11 @@ pub struct AbcOptions {
 /// The ridge penalty of the semi-automatic projection (`--ridge`; no effect with the MMD).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Ridge {
-    /// λ = 1e-3·n for every parameter (issue 19).
+    /// λ = 1e-3·n for every parameter.
     #[value(name = "fixed", help = None::<&str>)]
     Fixed,
     /// λ_k = c_k·n per parameter, c_k from [`RIDGE_GRID`] by 5-fold cross-validation on
-    /// the particles the projection is fitted on (issue 30).
+    /// the particles the projection is fitted on.
     #[value(name = "cv", help = None::<&str>)]
     Cv,
     /// As [`Ridge::Cv`], and a parameter whose projection's held-out R² is ≤ 0 (it
@@ -173,26 +173,15 @@ struct Projection {
     used: Vec<bool>,
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        return 0.0;
-    }
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Median and MAD (scaled by 1.4826 to a Gaussian σ) of a column; a MAD of 0 falls back
 /// to the standard deviation, then to 1.
 pub(crate) fn median_mad(col: &[f64]) -> (f64, f64) {
     let mut v: Vec<f64> = col.iter().copied().filter(|x| x.is_finite()).collect();
-    let m = median(&mut v);
-    let mut dev: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
-    let mad = 1.4826 * median(&mut dev);
+    // sorted in place: the mean below sums in that order
+    v.sort_by(f64::total_cmp);
+    let m = crate::stats::sorted::median(&v).unwrap_or(0.0);
+    let dev: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
+    let mad = 1.4826 * crate::stats::median(&dev).unwrap_or(0.0);
     if mad > 1e-12 {
         return (m, mad);
     }
@@ -296,7 +285,7 @@ impl Projection {
         Ok(proj)
     }
 
-    /// The projection with the fixed penalty 1e-3·n (issue 19).
+    /// The projection with the fixed penalty 1e-3·n.
     #[cfg(test)]
     fn fit(features: &[Vec<f64>], theta: &[Vec<f64>]) -> Result<Projection> {
         Projection::fit_with(features, theta, &vec![FIXED_RIDGE; theta[0].len()])
@@ -383,21 +372,6 @@ pub fn correlations(theta: &[Vec<f64>], w: &[f64]) -> Vec<Vec<f64>> {
                 .collect()
         })
         .collect()
-}
-
-/// Weighted quantile (`q` in [0, 1]) of a column.
-pub fn weighted_quantile(x: &[f64], w: &[f64], q: f64) -> f64 {
-    let mut idx: Vec<usize> = (0..x.len()).collect();
-    idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]).then(a.cmp(&b)));
-    let tw: f64 = w.iter().sum();
-    let mut acc = 0.0;
-    for &i in &idx {
-        acc += w[i] / tw;
-        if acc >= q {
-            return x[i];
-        }
-    }
-    x[*idx.last().expect("non-empty population")]
 }
 
 /// A particle: ln parameters, raw summaries, projected summaries, distance, weight.
@@ -826,6 +800,7 @@ fn adjust(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stats::weighted_quantile;
 
     /// A toy model: x ~ N(θ, 0.1²) per component, 20 draws, summaries their means.
     fn toy(theta: &[f64], seed: u64) -> Result<Vec<f64>> {
@@ -878,11 +853,11 @@ mod tests {
         let a = toy_apmc(budget, Ridge::Fixed, 2);
         for (k, want) in TOY_TRUTH.iter().enumerate() {
             let x: Vec<f64> = a.adjusted.iter().map(|t| t[k]).collect();
-            let m = weighted_quantile(&x, &a.weights, 0.5);
+            let m = weighted_quantile(&x, &a.weights, 0.5).unwrap();
             assert!((m - want).abs() < 0.05, "{k}: {m}");
             let (lo, hi) = (
-                weighted_quantile(&x, &a.weights, 0.025),
-                weighted_quantile(&x, &a.weights, 0.975),
+                weighted_quantile(&x, &a.weights, 0.025).unwrap(),
+                weighted_quantile(&x, &a.weights, 0.975).unwrap(),
             );
             // posterior sd 0.1/√20 ≈ 0.022: the 95 % interval ≈ ±0.044
             assert!(lo < *want && hi > *want && hi - lo < 0.3, "{lo} {hi}");
@@ -972,7 +947,7 @@ mod tests {
         eprintln!("mixed: ridge c {}, held-out R² {r2:.3?}", fmt_c(&c));
         assert!(c[0] < c[1] && c[1] >= 1.0, "c {c:?}");
         assert!(r2[0] > 0.9 && r2[1] > -0.1, "{r2:?}");
-        // the fixed choice is issue 19's penalty with its held-out R²
+        // the fixed choice is the fixed penalty with its held-out R²
         let (c, r2) = choose_ridge(&mixed, &theta, Ridge::Fixed);
         assert_eq!(c, vec![FIXED_RIDGE; 2]);
         assert_eq!(r2, heldout_r2(&mixed, &theta, FOLDS, FIXED_RIDGE));
@@ -989,7 +964,7 @@ mod tests {
         let a = toy_apmc(budget, Ridge::Cv, 2);
         for (k, want) in TOY_TRUTH.iter().enumerate() {
             let x: Vec<f64> = a.adjusted.iter().map(|t| t[k]).collect();
-            let m = weighted_quantile(&x, &a.weights, 0.5);
+            let m = weighted_quantile(&x, &a.weights, 0.5).unwrap();
             assert!((m - want).abs() < 0.1, "{k}: {m}");
         }
         assert_eq!(a, toy_apmc(budget, Ridge::Cv, 1));
@@ -1019,11 +994,11 @@ mod tests {
         assert!(a.distances.windows(2).all(|w| w[0] <= w[1]));
         assert_eq!(a.epsilon, *a.distances.last().unwrap());
         let x: Vec<f64> = a.theta.iter().map(|t| t[0]).collect();
-        let m = weighted_quantile(&x, &a.weights, 0.5);
+        let m = weighted_quantile(&x, &a.weights, 0.5).unwrap();
         assert!((m - 0.7).abs() < 0.05, "{m}");
         let (lo, hi) = (
-            weighted_quantile(&x, &a.weights, 0.025),
-            weighted_quantile(&x, &a.weights, 0.975),
+            weighted_quantile(&x, &a.weights, 0.025).unwrap(),
+            weighted_quantile(&x, &a.weights, 0.975).unwrap(),
         );
         assert!(lo < 0.7 && hi > 0.7 && hi - lo < 0.4, "{lo} {hi}");
     }

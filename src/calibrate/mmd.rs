@@ -1,4 +1,4 @@
-//! The MMD distance of `calibrate --distance mmd` (issue 30): the maximum mean discrepancy
+//! The MMD distance of `calibrate --distance mmd`: the maximum mean discrepancy
 //! between the empirical distribution of the measured table's per-profile (and
 //! per-position) statistics and a simulated table's (Bharti, Briol & Pedersen, "A general
 //! method for calibrating stochastic radio channel models with kernels", IEEE TAP 70(6),
@@ -258,14 +258,9 @@ pub fn median_heuristic(x: &VecSet) -> f64 {
             );
         }
     }
-    if d.is_empty() {
-        return 1.0;
-    }
-    let l = crate::fit::estimators::median(&d);
-    if l > 1e-12 {
-        l
-    } else {
-        1.0
+    match crate::stats::median(&d) {
+        Some(l) if l > 1e-12 => l,
+        _ => 1.0,
     }
 }
 

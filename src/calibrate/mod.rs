@@ -1,5 +1,5 @@
 //! `pradar calibrate`: the statistical channel model fitted without clustering, by
-//! simulation-based inference (DESIGN §1 "[calibrate]", issue 19).
+//! simulation-based inference (DESIGN §1 "[calibrate]").
 //!
 //! Takes a campaign's energy matrices (`pradar energy` or `pradar synth` output), the
 //! campaign (layout, poses, directions, band, array, noise, processing — never its
@@ -16,7 +16,7 @@
 //! `intra_cluster_aoa`, d_c `perimeter_spacing`, d_p `perimeter_offset`, Γ
 //! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, when the
 //! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`, and
-//! when it has `[walls]` (issue 30), `walls.specular_gamma` (0.01–1), `walls.corner_rcs`
+//! when it has `[walls]`, `walls.specular_gamma` (0.01–1), `walls.corner_rcs`
 //! and `walls.edge_rcs` (1e-4–10 m², when present; the per-material |Γ| are copied). A
 //! quantity whose 95 % interval spans ≥ 90 % of its prior's ln-range
 //! ([`Calibration::informed`]) is reported as not informed by the data. The
@@ -47,7 +47,7 @@
 //!    ρ(y, y_obs) = (Σ_k ((s_k(y) − s_k(y_obs))/MAD_k)²)^½, MAD_k of s_k under the prior
 //!    predictive (the t = 0 draws).
 //!
-//!    The raw summaries f (default, [`Distance::SummariesQuantiles`], issue 30) are the 42
+//!    The raw summaries f (default, [`Distance::SummariesQuantiles`]) are the 42
 //!    pooled statistics of [`summaries::summaries`] followed by 45 quantiles
 //!    ([`summaries::quantile_summaries`]): the 10, 25, 50, 75 and 90 % quantiles of each
 //!    component of the predictive check's per-profile 7-vectors and per-position 2-vectors
@@ -55,7 +55,7 @@
 //!    compares, where the 42 pool them into means; the regression picks what carries
 //!    information. `--distance summaries` ([`Distance::Summaries`]) uses the 42 alone.
 //!
-//!    With `--distance mmd` ([`Distance::Mmd`], issue 30) the distance is instead
+//!    With `--distance mmd` ([`Distance::Mmd`]) the distance is instead
 //!    ρ = MMD²_u(profiles) + MMD²_u(positions), the unbiased squared maximum mean
 //!    discrepancy between the measured and the simulated table's per-profile and
 //!    per-position statistics of `pradar check`, standardised by the measured set's
@@ -94,7 +94,7 @@ pub mod mmd;
 pub mod params;
 pub mod summaries;
 
-pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior, Ridge};
+pub use abc::{correlations, BoxPrior, Posterior, Ridge};
 pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
@@ -102,6 +102,7 @@ use crate::campaign::modelfile::{BinSettings, CalibrationMeta, ModelConfig, Quan
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::model::EnergySimulator;
+use crate::stats::weighted_quantile;
 use std::path::Path;
 use summaries::SummaryContext;
 
@@ -386,7 +387,7 @@ pub fn calibrate(
         ridge: params.ridge,
     };
     let stat_ctx = crate::check::context(energy);
-    // issue 30: the check statistics' quantiles appended to the pooled summaries
+    // the check statistics' quantiles appended to the pooled summaries
     let quant = params.distance == Distance::SummariesQuantiles;
     let (observed, reference) = if mmd_mode {
         let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
@@ -428,12 +429,10 @@ pub fn calibrate(
         let x: Vec<f64> = particles.iter().map(|t| t[k]).collect();
         let q = model.quantity_mut(name).expect("a free quantity exists");
         let w = &post.weights;
+        let at = |p: f64| weighted_quantile(&x, w, p).expect("a non-empty population");
         *q = Quantity {
-            value: weighted_quantile(&x, w, 0.5).exp(),
-            interval: Some([
-                weighted_quantile(&x, w, 0.025).exp(),
-                weighted_quantile(&x, w, 0.975).exp(),
-            ]),
+            value: at(0.5).exp(),
+            interval: Some([at(0.025).exp(), at(0.975).exp()]),
             n: Some(w.len()),
             ks: None,
             ks_p: None,

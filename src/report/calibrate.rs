@@ -1,13 +1,14 @@
-//! The calibration's report section (issue 19): the marginal posteriors of the free
+//! The calibration's report section: the marginal posteriors of the free
 //! quantities (weighted histograms in ln scale, one panel each, with the median, the 95 %
 //! credible interval and, when given, the cluster chain's value), their posterior
 //! correlations (in ln units), and the cluster-based fit beside the posterior, each
 //! quantity where the chain's value lies outside the credible interval flagged.
 
 use super::{html_escape, plot_err, register_font, Section};
-use crate::calibrate::{weighted_quantile, Calibration};
+use crate::calibrate::Calibration;
 use crate::campaign::modelfile::ModelConfig;
 use crate::error::Result;
+use crate::stats::weighted_quantile;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -74,9 +75,9 @@ pub fn posterior_plot(path: &Path, cal: &Calibration, chain: Option<&ModelConfig
                 .map_err(|e| plot_err(path, e))?;
             let line =
                 |v: f64, c: RGBColor| PathElement::new(vec![(v, 0.0), (v, top)], c.stroke_width(2));
-            let med = weighted_quantile(&x, w, 0.5);
-            let q0 = weighted_quantile(&x, w, 0.025);
-            let q1 = weighted_quantile(&x, w, 0.975);
+            let med = weighted_quantile(&x, w, 0.5).expect("a non-empty population");
+            let q0 = weighted_quantile(&x, w, 0.025).expect("a non-empty population");
+            let q1 = weighted_quantile(&x, w, 0.975).expect("a non-empty population");
             chart
                 .draw_series([
                     line(med, BLACK),
