@@ -359,7 +359,17 @@ fn check_pages_file(path: &Path, file: &File) -> Result<FileMetadataRef> {
 pub fn read_parquet(path: &Path, slice: Option<(usize, usize)>) -> Result<DataFrame> {
     check_pages(path)?;
     let file = open(path)?;
-    let df = guarded(path, || ParquetReader::new(file).with_slice(slice).finish())?;
+    let df =
+        guarded(path, || ParquetReader::new(file).with_slice(slice).finish()).map_err(|e| {
+            // the schema read again only to name a column the reader could not load
+            let schema = open(path)
+                .ok()
+                .and_then(|f| guarded(path, || ParquetReader::new(f).schema()).ok());
+            match schema {
+                Some(schema) => unreadable_column(path, &schema, e),
+                None => e,
+            }
+        })?;
     check_frame(path, &df)?;
     Ok(df)
 }
@@ -410,9 +420,47 @@ pub fn read_parquet_part(
     let cols = columns.iter().map(|c| c.to_string()).collect();
     let df = guarded(path, || {
         r.with_columns(Some(cols)).with_slice(Some(slice)).finish()
-    })?;
+    })
+    .map_err(|e| unreadable_column(path, &schema, e))?;
     check_frame(path, &df)?;
     Ok(df)
+}
+
+/// A read error of `path` made plain when it is polars' "cannot create series from
+/// <type>" (a column of a type this build does not load, such as Int8): the column named,
+/// with its type and the types read instead (from the file's `schema`). Any other error
+/// is returned as it is.
+fn unreadable_column(path: &Path, schema: &ArrowSchema, e: Error) -> Error {
+    let Error::Table { msg, .. } = &e else {
+        return e;
+    };
+    let Some(dtype) = msg
+        .split("cannot create series from ")
+        .nth(1)
+        .map(str::trim)
+    else {
+        return e;
+    };
+    let Some(field) = schema
+        .iter_values()
+        .find(|f| format!("{:?}", f.dtype) == dtype)
+    else {
+        return e;
+    };
+    let expected = if dtype.starts_with("Int") || dtype.starts_with("UInt") {
+        "Int32, Int64, UInt32 or UInt64"
+    } else if dtype.starts_with("Float") {
+        "Float32 or Float64"
+    } else {
+        "Int32, Int64, UInt32, UInt64, Float32, Float64 or String"
+    };
+    Error::input(
+        path,
+        format!(
+            "column `{}` is {dtype}, a type pradar does not read (expected {expected})",
+            field.name
+        ),
+    )
 }
 
 /// Number of rows of a Parquet file.

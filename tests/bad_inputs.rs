@@ -1,11 +1,11 @@
-//! The bad-input corpus (issue 20): inputs a user can produce by mistake, each run through
+//! The bad-input corpus: inputs a user can produce by mistake, each run through
 //! the `pradar` binary in a fresh copy of one small campaign (the corridor, 3 poses, 16
 //! elements, simulated once). Every case must exit with status 1 and print exactly one
 //! `error: ` line naming the file and the field at fault, never panic, leave every file of
 //! the folder byte-identical (hash before and after) and add no file (no partial output,
 //! no temp file).
 //!
-//! Issue 33 added the import, calibration and calibrate surfaces: outputs that are inputs
+//! It covers the import, calibration and calibrate surfaces too: outputs that are inputs
 //! (also by hard link, and files inputs name: index rows, `[calibration]` files, the base,
 //! the layout, `--to-parquet`'s table), outputs that are folders, sockets or a full
 //! device, sweep files that are FIFOs, devices, folders, dangling links or loops, bounded
@@ -375,6 +375,26 @@ const SYNTH: &[&str] = &[
     "s.parquet",
 ];
 
+/// `calibrate` with the prior `prior.toml` (see [`prior_interval`]).
+const CALIBRATE_PRIOR: &[&str] = &[
+    "calibrate",
+    "--energy",
+    "e.parquet",
+    "--campaign",
+    "sim/campaign.toml",
+    "--out",
+    "cal.toml",
+    "--prior",
+    "prior.toml",
+];
+
+/// `prior.toml`: the fitted model with `quantity`'s interval [lo, hi].
+fn prior_interval(dir: &Path, quantity: &str, lo: f64, hi: f64) {
+    std::fs::copy(dir.join("model.toml"), dir.join("prior.toml")).unwrap();
+    let v = toml::Value::Array(vec![lo.into(), hi.into()]);
+    toml_set(dir, "prior.toml", &format!("{quantity}.interval"), v);
+}
+
 const IMPORT: &[&str] = &[
     "import",
     "--poses",
@@ -694,6 +714,17 @@ fn cases() -> Vec<Case> {
             |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "bin", 5, 1e9)),
         ),
         case(
+            "energy `position` column of Int8",
+            EXTRACT,
+            &["e.parquet", "column `position` is Int8", "expected Int32"],
+            |d| {
+                parquet_edit(d, "e.parquet", |df| {
+                    let c = df.column("position").unwrap().cast(&DataType::Int8);
+                    df.with_column(c.unwrap()).unwrap();
+                })
+            },
+        ),
+        case(
             "one 1e300 energy bin",
             EXTRACT,
             &["e.parquet", "column `energy`", "1e300"],
@@ -905,7 +936,7 @@ fn cases() -> Vec<Case> {
             &["nowhere.toml"],
             nothing,
         ),
-        // ---- issue 33: outputs that are not regular files
+        // ---- outputs that are not regular files
         case(
             "energy --out is a folder",
             &["energy", "--campaign", M, "--out", "sim/sweeps"],
@@ -933,7 +964,7 @@ fn cases() -> Vec<Case> {
             &["/dev/full", "No space left on device"],
             nothing,
         ),
-        // ---- issue 33: an output that is an input, also one an input names
+        // ---- an output that is an input, also one an input names
         case(
             "energy --out = a hard link of its manifest",
             &["energy", "--campaign", M, "--out", "link.toml"],
@@ -1013,7 +1044,7 @@ fn cases() -> Vec<Case> {
                 std::fs::copy(d.join("poses.csv"), d.join("imp/sweeps.parquet")).unwrap();
             },
         ),
-        // ---- issue 33: sweep files and index entries that are not regular files
+        // ---- sweep files and index entries that are not regular files
         case(
             "sweep file is a FIFO",
             ENERGY,
@@ -1118,7 +1149,7 @@ fn cases() -> Vec<Case> {
                 edit(d, "index.csv", "0,0,0,sim", "0,NaN,0,sim");
             },
         ),
-        // ---- issue 33: sizes bounded
+        // ---- sizes bounded
         case(
             "poses CSV of 10^6 rows",
             IMPORT,
@@ -1163,7 +1194,7 @@ fn cases() -> Vec<Case> {
             &["--simulations", "[20, 100000]"],
             nothing,
         ),
-        // ---- issue 33: values that overflow, calibrations that leave nothing
+        // ---- values that overflow, calibrations that leave nothing
         case(
             "Touchstone value 1e308",
             ENERGY,
@@ -1221,7 +1252,23 @@ fn cases() -> Vec<Case> {
                 toml_set(d, "prior.toml", "ray_decay.interval", v);
             },
         ),
-        // ---- issue 33: a v2 two-port without its data order, energy metadata out of range
+        case(
+            "prior interval beyond the model's range",
+            CALIBRATE_PRIOR,
+            &["prior.toml", "cluster_decay.interval [1, 20000]", "outside"],
+            |d| prior_interval(d, "cluster_decay", 1.0, 2e4),
+        ),
+        case(
+            "prior bound 1e300",
+            CALIBRATE_PRIOR,
+            &[
+                "prior.toml",
+                "cluster_decay.interval [1, 1e300]",
+                "1e300 ns outside",
+            ],
+            |d| prior_interval(d, "cluster_decay", 1.0, 1e300),
+        ),
+        // ---- a v2 two-port without its data order, energy metadata out of range
         case(
             "Touchstone v2 two-port without [Two-Port Data Order]",
             ENERGY,
@@ -1270,7 +1317,7 @@ fn cases() -> Vec<Case> {
             &["e.parquet", "metadata `bin_width_ns` = -0.5", "> 0"],
             |d| energy_meta(d, "bin_width_ns", "-0.5"),
         ),
-        // ---- issue 32: labels, missing sweeps, NaN energies
+        // ---- labels, missing sweeps, NaN energies
         case(
             "manifest labels fewer than the poses",
             ENERGY,
@@ -1321,7 +1368,7 @@ fn cases() -> Vec<Case> {
             &["e.parquet", "lists as `missing`", "NaN expected"],
             |d| energy_meta(d, "missing", "0:0"),
         ),
-        // ---- issue 33: rows out of order, commas in index paths
+        // ---- rows out of order, commas in index paths
         case(
             "Touchstone frequency rows swapped",
             ENERGY,
@@ -1403,7 +1450,7 @@ fn cases() -> Vec<Case> {
                 )
             },
         ),
-        // ---- issue 33: clap's usage errors, one line
+        // ---- clap's usage errors, one line
         case(
             "import with --index and --sweeps",
             &[
@@ -1504,7 +1551,7 @@ fn every_bad_input_is_one_line_exit_1_inputs_unchanged_nothing_written() {
         if err.contains("panicked") {
             why.push("panic".into());
         }
-        // the `error:` line first; an import's problem lines after it (issue 32)
+        // the `error:` line first; an import's problem lines after it
         if lines.len() != 1 + c.problems || !lines[0].starts_with("error: ") {
             why.push(format!("{} lines", lines.len()));
         }
@@ -1565,7 +1612,7 @@ fn run_bounded(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
     (status.code(), err)
 }
 
-/// Issue 33: an output that is a FIFO or a character device is written into (exit 0) and
+/// An output that is a FIFO or a character device is written into (exit 0) and
 /// is still a FIFO or a character device afterwards, never a regular file renamed over it;
 /// `--out /dev/null` discards. The character device is made with `mknod X c 1 3` (the
 /// node of /dev/null) where that is permitted, else that part is skipped with the reason
