@@ -427,9 +427,10 @@ pub fn read_parquet_part(
 }
 
 /// A read error of `path` made plain when it is polars' "cannot create series from
-/// <type>" (a column of a type this build does not load, such as Int8): the column named,
-/// with its type and the types read instead (from the file's `schema`). Any other error
-/// is returned as it is.
+/// <type>" (a column whose Arrow type this build of polars does not load, such as Int8):
+/// the column named, with its type and the types read instead (from the file's `schema`).
+/// Any other error is returned as it is. (The Parquet reader of this build reads an Int8,
+/// Int16 or Date column as its physical Int32, so such a file is read, not refused.)
 fn unreadable_column(path: &Path, schema: &ArrowSchema, e: Error) -> Error {
     let Error::Table { msg, .. } = &e else {
         return e;
@@ -575,4 +576,32 @@ pub fn i64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<i64>> {
         .enumerate()
         .map(|(i, v)| v.ok_or_else(|| Error::input(path, format!("column `{name}` row {i}: null"))))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_column_polars_cannot_load_is_named() {
+        let schema: ArrowSchema = [
+            ArrowField::new("bin".into(), ArrowDataType::Int32, false),
+            ArrowField::new("position".into(), ArrowDataType::Int8, false),
+        ]
+        .into_iter()
+        .collect();
+        let p = Path::new("e.parquet");
+        let e = unreadable_column(
+            p,
+            &schema,
+            Error::table(p, "cannot create series from Int8"),
+        );
+        assert_eq!(
+            e.to_string(),
+            "e.parquet: column `position` is Int8, a type pradar does not read (expected Int32, Int64, UInt32 or UInt64)"
+        );
+        // any other error stands as it is
+        let e = unreadable_column(p, &schema, Error::table(p, "out of spec"));
+        assert_eq!(e.to_string(), "e.parquet: table error: out of spec");
+    }
 }

@@ -714,17 +714,6 @@ fn cases() -> Vec<Case> {
             |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "bin", 5, 1e9)),
         ),
         case(
-            "energy `position` column of Int8",
-            EXTRACT,
-            &["e.parquet", "column `position` is Int8", "expected Int32"],
-            |d| {
-                parquet_edit(d, "e.parquet", |df| {
-                    let c = df.column("position").unwrap().cast(&DataType::Int8);
-                    df.with_column(c.unwrap()).unwrap();
-                })
-            },
-        ),
-        case(
             "one 1e300 energy bin",
             EXTRACT,
             &["e.parquet", "column `energy`", "1e300"],
