@@ -82,3 +82,35 @@ impl Error {
         }
     }
 }
+
+/// A number as a message prints it: as Rust writes it (the shortest text that reads back
+/// the same) for magnitudes in [1e-3, 1e7) and 0, in exponent form otherwise (`1e300`,
+/// not 301 digits; `2.5e-9`), so one line stays one short line whatever a file holds.
+pub fn short(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-3..1e7).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        assert_eq!(short(1e300), "1e300");
+        assert_eq!(short(-1e308), "-1e308");
+        assert_eq!(short(2.5e-9), "2.5e-9");
+        assert_eq!(short(0.5), "0.5");
+        assert_eq!(short(20000.0), "20000");
+        assert_eq!(short(1e7), "1e7");
+        assert_eq!(short(0.0), "0");
+        assert_eq!(short(f64::NAN), "NaN");
+        assert_eq!(short(f64::INFINITY), "inf");
+        // a value read back from its text
+        let v = 1e297f64.sqrt();
+        assert_eq!(short(v).parse::<f64>().unwrap(), v);
+    }
+}

@@ -23,6 +23,7 @@ pub mod params;
 pub mod pipeline;
 pub mod report;
 pub mod simulate;
+pub mod stats;
 pub mod table;
 pub mod units;
 

@@ -359,7 +359,17 @@ fn check_pages_file(path: &Path, file: &File) -> Result<FileMetadataRef> {
 pub fn read_parquet(path: &Path, slice: Option<(usize, usize)>) -> Result<DataFrame> {
     check_pages(path)?;
     let file = open(path)?;
-    let df = guarded(path, || ParquetReader::new(file).with_slice(slice).finish())?;
+    let df =
+        guarded(path, || ParquetReader::new(file).with_slice(slice).finish()).map_err(|e| {
+            // the schema read again only to name a column the reader could not load
+            let schema = open(path)
+                .ok()
+                .and_then(|f| guarded(path, || ParquetReader::new(f).schema()).ok());
+            match schema {
+                Some(schema) => unreadable_column(path, &schema, e),
+                None => e,
+            }
+        })?;
     check_frame(path, &df)?;
     Ok(df)
 }
@@ -410,9 +420,48 @@ pub fn read_parquet_part(
     let cols = columns.iter().map(|c| c.to_string()).collect();
     let df = guarded(path, || {
         r.with_columns(Some(cols)).with_slice(Some(slice)).finish()
-    })?;
+    })
+    .map_err(|e| unreadable_column(path, &schema, e))?;
     check_frame(path, &df)?;
     Ok(df)
+}
+
+/// A read error of `path` made plain when it is polars' "cannot create series from
+/// <type>" (a column whose Arrow type this build of polars does not load, such as Int8):
+/// the column named, with its type and the types read instead (from the file's `schema`).
+/// Any other error is returned as it is. (The Parquet reader of this build reads an Int8,
+/// Int16 or Date column as its physical Int32, so such a file is read, not refused.)
+fn unreadable_column(path: &Path, schema: &ArrowSchema, e: Error) -> Error {
+    let Error::Table { msg, .. } = &e else {
+        return e;
+    };
+    let Some(dtype) = msg
+        .split("cannot create series from ")
+        .nth(1)
+        .map(str::trim)
+    else {
+        return e;
+    };
+    let Some(field) = schema
+        .iter_values()
+        .find(|f| format!("{:?}", f.dtype) == dtype)
+    else {
+        return e;
+    };
+    let expected = if dtype.starts_with("Int") || dtype.starts_with("UInt") {
+        "Int32, Int64, UInt32 or UInt64"
+    } else if dtype.starts_with("Float") {
+        "Float32 or Float64"
+    } else {
+        "Int32, Int64, UInt32, UInt64, Float32, Float64 or String"
+    };
+    Error::input(
+        path,
+        format!(
+            "column `{}` is {dtype}, a type pradar does not read (expected {expected})",
+            field.name
+        ),
+    )
 }
 
 /// Number of rows of a Parquet file.
@@ -527,4 +576,32 @@ pub fn i64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<i64>> {
         .enumerate()
         .map(|(i, v)| v.ok_or_else(|| Error::input(path, format!("column `{name}` row {i}: null"))))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_column_polars_cannot_load_is_named() {
+        let schema: ArrowSchema = [
+            ArrowField::new("bin".into(), ArrowDataType::Int32, false),
+            ArrowField::new("position".into(), ArrowDataType::Int8, false),
+        ]
+        .into_iter()
+        .collect();
+        let p = Path::new("e.parquet");
+        let e = unreadable_column(
+            p,
+            &schema,
+            Error::table(p, "cannot create series from Int8"),
+        );
+        assert_eq!(
+            e.to_string(),
+            "e.parquet: column `position` is Int8, a type pradar does not read (expected Int32, Int64, UInt32 or UInt64)"
+        );
+        // any other error stands as it is
+        let e = unreadable_column(p, &schema, Error::table(p, "out of spec"));
+        assert_eq!(e.to_string(), "e.parquet: table error: out of spec");
+    }
 }

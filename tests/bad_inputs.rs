@@ -375,6 +375,26 @@ const SYNTH: &[&str] = &[
     "s.parquet",
 ];
 
+/// `calibrate` with the prior `prior.toml` (see [`prior_interval`]).
+const CALIBRATE_PRIOR: &[&str] = &[
+    "calibrate",
+    "--energy",
+    "e.parquet",
+    "--campaign",
+    "sim/campaign.toml",
+    "--out",
+    "cal.toml",
+    "--prior",
+    "prior.toml",
+];
+
+/// `prior.toml`: the fitted model with `quantity`'s interval [lo, hi].
+fn prior_interval(dir: &Path, quantity: &str, lo: f64, hi: f64) {
+    std::fs::copy(dir.join("model.toml"), dir.join("prior.toml")).unwrap();
+    let v = toml::Value::Array(vec![lo.into(), hi.into()]);
+    toml_set(dir, "prior.toml", &format!("{quantity}.interval"), v);
+}
+
 const IMPORT: &[&str] = &[
     "import",
     "--poses",
@@ -1234,6 +1254,22 @@ fn cases() -> Vec<Case> {
                 let v = toml::Value::Array(vec![1.0.into(), 2.0.into(), 3.0.into()]);
                 toml_set(d, "prior.toml", "ray_decay.interval", v);
             },
+        ),
+        case(
+            "prior interval beyond the model's range",
+            CALIBRATE_PRIOR,
+            &["prior.toml", "cluster_decay.interval [1, 20000]", "outside"],
+            |d| prior_interval(d, "cluster_decay", 1.0, 2e4),
+        ),
+        case(
+            "prior bound 1e300",
+            CALIBRATE_PRIOR,
+            &[
+                "prior.toml",
+                "cluster_decay.interval [1, 1e300]",
+                "1e300 ns outside",
+            ],
+            |d| prior_interval(d, "cluster_decay", 1.0, 1e300),
         ),
         // ---- a v2 two-port without its data order, energy metadata out of range
         case(

@@ -258,14 +258,9 @@ pub fn median_heuristic(x: &VecSet) -> f64 {
             );
         }
     }
-    if d.is_empty() {
-        return 1.0;
-    }
-    let l = crate::fit::estimators::median(&d);
-    if l > 1e-12 {
-        l
-    } else {
-        1.0
+    match crate::stats::median(&d) {
+        Some(l) if l > 1e-12 => l,
+        _ => 1.0,
     }
 }
 

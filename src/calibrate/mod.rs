@@ -94,14 +94,15 @@ pub mod mmd;
 pub mod params;
 pub mod summaries;
 
-pub use abc::{correlations, weighted_quantile, BoxPrior, Posterior, Ridge};
+pub use abc::{correlations, BoxPrior, Posterior, Ridge};
 pub use params::{CalibrateParams, CalibrateValid, Distance};
 
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
-use crate::error::{Error, Result};
+use crate::error::{short, Error, Result};
 use crate::model::file::{BinSettings, CalibrationMeta, ModelConfig, Quantity};
 use crate::model::EnergySimulator;
+use crate::stats::weighted_quantile;
 use std::path::Path;
 use summaries::SummaryContext;
 
@@ -181,18 +182,22 @@ impl Prior {
     /// The prior of a model template: a free quantity's interval is its range.
     pub fn from_template(mut template: ModelConfig, path: &Path) -> Result<Prior> {
         let (mut free, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new());
+        // the intervals the file gives: (quantity, as printed, ends)
+        let mut given = Vec::new();
         for (name, a, b) in DEFAULT_PRIOR {
             let Some(q) = template.quantity(name) else {
                 continue; // a diffuse or walls quantity without its section
             };
             let (a, b) = match q.interval {
                 Some([x, y]) => {
+                    let range = format!("{name}.interval [{}, {}]", short(x), short(y));
                     if !(x > 0.0 && x <= y && y.is_finite()) {
                         return Err(Error::input(
                             path,
-                            format!("{name}.interval [{x}, {y}]: a prior range needs 0 < lo <= hi"),
+                            format!("{range}: a prior range needs 0 < lo <= hi"),
                         ));
                     }
+                    given.push((name, range, [x, y]));
                     (x, y)
                 }
                 None => (a, b),
@@ -214,6 +219,19 @@ impl Prior {
             hi.push(b);
         }
         template.calibration = None;
+        // the sampler draws up to either end of a range: each must be a value the model
+        // takes (judged on this quantity alone: another's fault is reported below)
+        for (name, range, ends) in given {
+            for end in ends {
+                let mut m = template.clone();
+                m.quantity_mut(name).expect("read above").value = end;
+                if let Err(Error::Param { field, msg }) = m.check() {
+                    if field == format!("{name}.value") {
+                        return Err(Error::input(path, format!("{range}: {msg}")));
+                    }
+                }
+            }
+        }
         template
             .require_estimable(&Default::default())
             .map_err(|e| Error::input(path, e.to_string()))?;
@@ -386,7 +404,7 @@ pub fn calibrate(
         ridge: params.ridge,
     };
     let stat_ctx = crate::check::context(energy);
-    // the default distance: the check statistics' quantiles appended to the pooled summaries
+    // the check statistics' quantiles appended to the pooled summaries
     let quant = params.distance == Distance::SummariesQuantiles;
     let (observed, reference) = if mmd_mode {
         let r = mmd::MmdDistance::new(&stat_ctx, &energy.data);
@@ -428,12 +446,10 @@ pub fn calibrate(
         let x: Vec<f64> = particles.iter().map(|t| t[k]).collect();
         let q = model.quantity_mut(name).expect("a free quantity exists");
         let w = &post.weights;
+        let at = |p: f64| weighted_quantile(&x, w, p).expect("a non-empty population");
         *q = Quantity {
-            value: weighted_quantile(&x, w, 0.5).exp(),
-            interval: Some([
-                weighted_quantile(&x, w, 0.025).exp(),
-                weighted_quantile(&x, w, 0.975).exp(),
-            ]),
+            value: at(0.5).exp(),
+            interval: Some([at(0.025).exp(), at(0.975).exp()]),
             n: Some(w.len()),
             ks: None,
             ks_p: None,
@@ -524,6 +540,21 @@ mod tests {
             e.contains("p.toml") && e.contains("cluster_decay.interval"),
             "{e}"
         );
+        // an end beyond the model's range is the interval's fault, its numbers short
+        for (hi, shown) in [(2e4, "[2, 20000]"), (1e300, "[2, 1e300]")] {
+            let mut m = ModelConfig::table1_defaults();
+            m.cluster_decay.interval = Some([2.0, hi]);
+            let e = Prior::from_template(m, Path::new("p.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("p.toml: cluster_decay.interval ")
+                    && e.contains(shown)
+                    && e.contains("outside")
+                    && e.len() < 160,
+                "{e}"
+            );
+        }
     }
 
     #[test]

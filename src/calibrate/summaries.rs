@@ -42,6 +42,7 @@
 //! spread, share of directions with signal): 7·5 + 2·5 = 45 values, 0 for an empty set.
 
 use crate::campaign::layout::Layout;
+use crate::stats::median;
 use crate::units::C0;
 use geo::Coord;
 
@@ -151,13 +152,6 @@ impl SummaryContext {
             wall_m,
         }
     }
-}
-
-fn median(v: &mut [f64], fallback: f64) -> f64 {
-    if v.is_empty() {
-        return fallback;
-    }
-    crate::fit::estimators::median(v)
 }
 
 fn mean_sd(v: &[f64], fallback: f64) -> (f64, f64) {
@@ -409,7 +403,7 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
             1e-4f64.ln()
         }
     };
-    let mut lngaps: Vec<f64> = gaps.iter().map(|g| g.max(tb).ln()).collect();
+    let lngaps: Vec<f64> = gaps.iter().map(|g| g.max(tb).ln()).collect();
     let gaps2 = if gaps.is_empty() {
         0.0
     } else {
@@ -419,7 +413,7 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
         (total_s / cells / mu + 1e-9).ln(),
         (1.0 + n_det as f64).ln(),
         profiles_det as f64 / (np * nd).max(1) as f64,
-        median(&mut ln_max, 0.0),
+        median(&ln_max).unwrap_or(0.0),
         m_lnm0,
         sd_lnm0,
         m_m1,
@@ -433,20 +427,20 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
         slope,
         icpt,
         env_slope,
-        median(&mut ln_peak, 0.0),
+        median(&ln_peak).unwrap_or(0.0),
         (pairs as f64 / npk + 0.1).ln(),
         frac(p5),
         frac(p15),
         frac(p30),
-        median(&mut dth2, 90.0),
-        median(&mut dtau5, 6.0),
-        median(&mut lngaps, (nb as f64 * tb).ln()),
+        median(&dth2).unwrap_or(90.0),
+        median(&dtau5).unwrap_or(6.0),
+        median(&lngaps).unwrap_or((nb as f64 * tb).ln()),
         gaps2,
     ]);
     out.extend(depth_pow.iter().map(|x| dshare(*x)));
     out.extend([
-        median(&mut depths, 0.0),
-        median(&mut first_depths, 0.0),
+        median(&depths).unwrap_or(0.0),
+        median(&first_depths).unwrap_or(0.0),
         mean_sd(&entropy, 1.0).0,
         if neigh_of > 0 {
             neigh as f64 / neigh_of as f64
@@ -474,13 +468,8 @@ pub fn quantile_summaries(ctx: &crate::check::stats::StatContext, e: &[f64]) -> 
         for k in 0..set.dim {
             let mut v = set.column(k);
             v.sort_by(f64::total_cmp);
-            let n = v.len();
             for q in QUANTILES {
-                out.push(if n == 0 {
-                    0.0
-                } else {
-                    v[((q * (n - 1) as f64).round() as usize).min(n - 1)]
-                });
+                out.push(crate::stats::sorted::quantile_nearest(&v, q).unwrap_or(0.0));
             }
         }
     }

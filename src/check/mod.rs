@@ -261,11 +261,11 @@ pub struct StatResult {
 impl StatResult {
     /// D: the median measured distance.
     pub fn ks(&self) -> f64 {
-        median_of(&self.measured_ks)
+        crate::stats::median(&self.measured_ks).unwrap_or(f64::NAN)
     }
     /// d: the median reference distance.
     pub fn reference(&self) -> f64 {
-        median_of(&self.reference_ks)
+        crate::stats::median(&self.reference_ks).unwrap_or(f64::NAN)
     }
     /// D/d (0 when both are 0, infinite when only d is).
     pub fn ratio(&self) -> f64 {
@@ -389,14 +389,6 @@ impl CheckResult {
     }
 }
 
-/// The median (NaN when empty).
-fn median_of(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    crate::fit::estimators::median(v)
-}
-
 /// The statistics' context of a campaign's energy table.
 pub fn context(energy: &EnergyMatrix) -> StatContext {
     let bin_ns = energy.meta.bin_width_ns;
@@ -481,7 +473,7 @@ pub fn check(
                 measured_ks,
                 reference_ks,
                 measured_median: measured.values[k].median(ctx.bin_ns),
-                draws_median: median_of(&draw_medians),
+                draws_median: crate::stats::median(&draw_medians).unwrap_or(f64::NAN),
             }
         })
         .collect();

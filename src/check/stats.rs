@@ -257,15 +257,7 @@ impl Stat {
     /// `bin_ns`) where the curve's normalised cumulative sum reaches ½. NaN when empty.
     pub fn median(&self, bin_ns: f64) -> f64 {
         match self {
-            Stat::Sample(v) if v.is_empty() => f64::NAN,
-            Stat::Sample(v) => {
-                let n = v.len();
-                if n % 2 == 1 {
-                    v[n / 2]
-                } else {
-                    0.5 * (v[n / 2 - 1] + v[n / 2])
-                }
-            }
+            Stat::Sample(v) => crate::stats::sorted::median(v).unwrap_or(f64::NAN),
             Stat::Curve(c) => {
                 let total: f64 = c.iter().sum();
                 if total <= 0.0 {

@@ -61,15 +61,11 @@ fn exponent(rows: &[Row]) -> std::result::Result<f64, String> {
 
 /// σ′ of `rows` with exponent `n`.
 fn level(rows: &[Row], n: f64) -> Option<f64> {
-    let mut v: Vec<f64> = rows
+    let v: Vec<f64> = rows
         .iter()
         .map(|r| 10f64.powf((r.y - (n - 1.0) * r.x) / 10.0))
         .collect();
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    Some(v[v.len() / 2] / std::f64::consts::LN_2)
+    crate::stats::upper_median(&v).map(|m| m / std::f64::consts::LN_2)
 }
 
 /// The power decay of `rows`, or why not.

@@ -83,18 +83,6 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len() as f64
 }
 
-/// Median (average of the middle pair for even n).
-pub fn median(x: &[f64]) -> f64 {
-    let mut v = x.to_vec();
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Fit `family` to `x` by maximum likelihood.
 pub fn fit(family: Family, x: &[f64]) -> Result<Fitted> {
     let n = x.len();
@@ -139,7 +127,7 @@ pub fn fit(family: Family, x: &[f64]) -> Result<Fitted> {
             (vec![rate], nf * rate.ln() - nf)
         }
         Family::Laplacian => {
-            let loc = median(x);
+            let loc = crate::stats::median(x).expect("at least 2 samples");
             let b = x.iter().map(|v| (v - loc).abs()).sum::<f64>() / nf;
             if b <= 0.0 {
                 return Err(Error::param(family.name(), "zero spread"));
@@ -415,7 +403,7 @@ pub fn bootstrap_groups(
         return None;
     }
     vals.sort_by(f64::total_cmp);
-    let q = |p: f64| vals[((p * (vals.len() - 1) as f64).round() as usize).min(vals.len() - 1)];
+    let q = |p: f64| crate::stats::sorted::quantile_nearest(&vals, p).expect("resamples");
     let (lo, hi) = (q(0.025), q(0.975));
     let all: Vec<f64> = groups.iter().flatten().copied().collect();
     let est = match stat(&all) {

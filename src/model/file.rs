@@ -383,7 +383,11 @@ impl ModelConfig {
                 if !(v.value >= lo && v.value <= hi) {
                     return Err(Error::param(
                         format!("{name}.value"),
-                        format!("{} {} outside [{lo:e}, {hi:e}] ({why})", v.value, v.unit),
+                        format!(
+                            "{} {} outside [{lo:e}, {hi:e}] ({why})",
+                            crate::error::short(v.value),
+                            v.unit
+                        ),
                     ));
                 }
             }

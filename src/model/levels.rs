@@ -73,6 +73,7 @@ use crate::energy::EnergyMatrix;
 use crate::error::Result;
 use crate::model::file::{ModelConfig, Quantity};
 use crate::params::ParamGuard;
+use crate::stats::median;
 use crate::units::wrap_rad;
 use rayon::prelude::*;
 
@@ -126,14 +127,6 @@ fn signal_bins(e: &[f64], nb: usize, first_bin: usize, mu: f64) -> (usize, usize
         })
         .sum();
     (n, profiles)
-}
-
-fn median(v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        None
-    } else {
-        Some(crate::fit::estimators::median(&v))
-    }
 }
 
 /// Estimate `[walls]`, σ′ and σ of `model` from the energy table `em` of campaign `c`
@@ -197,7 +190,8 @@ pub fn fit_levels(
     }
     let specular_pairs = ratios.len();
     let mut out = model.clone();
-    let gamma = median(ratios.iter().map(|r| r.1).collect()).map(|r| r.sqrt().clamp(1e-6, 1.0));
+    let gamma =
+        median(&ratios.iter().map(|r| r.1).collect::<Vec<_>>()).map(|r| r.sqrt().clamp(1e-6, 1.0));
     let mut material_gamma = std::collections::BTreeMap::new();
     let materials: std::collections::BTreeSet<&String> = ratios.iter().map(|r| &r.0).collect();
     if materials.len() > 1 {
@@ -205,7 +199,7 @@ pub fn fit_levels(
             let v: Vec<f64> = ratios.iter().filter(|r| &r.0 == mat).map(|r| r.1).collect();
             let n = v.len();
             if n >= MIN_MATERIAL_PAIRS {
-                let g = median(v).expect("non-empty").sqrt().clamp(1e-6, 1.0);
+                let g = median(&v).expect("non-empty").sqrt().clamp(1e-6, 1.0);
                 material_gamma.insert(
                     mat.clone(),
                     Quantity {
@@ -298,7 +292,7 @@ pub fn fit_levels(
             }
         }
         diffuse_cells = r.len();
-        if let Some(m) = median(r) {
+        if let Some(m) = median(&r) {
             sigma_d = (m / std::f64::consts::LN_2).max(1e-9);
             dm.wall_rcs_per_m = Quantity {
                 value: sigma_d,
@@ -352,7 +346,7 @@ pub fn fit_levels(
         .zip(by_kind)
     {
         let n = samples.len();
-        *slot = median(samples).map(|m| Quantity {
+        *slot = median(&samples).map(|m| Quantity {
             n: Some(n),
             ..Quantity::new(m.max(1e-9), "m2", "constant")
         });

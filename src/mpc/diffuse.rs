@@ -210,12 +210,13 @@ pub(crate) fn label(
             (e1 > 0.0).then(|| (10f64.powf(x.power_db / 10.0) / e1, cell))
         })
         .collect();
-    let mut on: Vec<f64> = rho.iter().flatten().map(|x| x.0).collect();
+    let on: Vec<f64> = rho.iter().flatten().map(|x| x.0).collect();
     // no dense component to read a level from: every MPC stays discrete
-    let level = is_dense(&on).then(|| {
-        on.sort_by(f64::total_cmp);
-        on[on.len() / 2] / std::f64::consts::LN_2
-    });
+    let level = if is_dense(&on) {
+        crate::stats::upper_median(&on).map(|m| m / std::f64::consts::LN_2)
+    } else {
+        None
+    };
     let limit = level.map(|l| l * 10f64.powf(params.discrete_db / 10.0));
     let mut diffuse = 0;
     for (x, r) in mpcs.iter_mut().zip(&rho) {
@@ -245,7 +246,7 @@ fn is_dense(rho: &[f64]) -> bool {
     }
     let mut db: Vec<f64> = rho.iter().map(|r| 10.0 * r.log10()).collect();
     db.sort_by(f64::total_cmp);
-    let q = |f: f64| db[((db.len() - 1) as f64 * f).round() as usize];
+    let q = |f: f64| crate::stats::sorted::quantile_nearest(&db, f).expect("non-empty");
     q(0.75) - q(0.25) <= MAX_IQR_DB
 }
 

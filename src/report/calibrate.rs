@@ -5,9 +5,10 @@
 //! quantity where the chain's value lies outside the credible interval flagged.
 
 use super::{html_escape, plot_err, register_font, Section};
-use crate::calibrate::{weighted_quantile, Calibration};
+use crate::calibrate::Calibration;
 use crate::error::Result;
 use crate::model::file::ModelConfig;
+use crate::stats::weighted_quantile;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -74,9 +75,9 @@ pub fn posterior_plot(path: &Path, cal: &Calibration, chain: Option<&ModelConfig
                 .map_err(|e| plot_err(path, e))?;
             let line =
                 |v: f64, c: RGBColor| PathElement::new(vec![(v, 0.0), (v, top)], c.stroke_width(2));
-            let med = weighted_quantile(&x, w, 0.5);
-            let q0 = weighted_quantile(&x, w, 0.025);
-            let q1 = weighted_quantile(&x, w, 0.975);
+            let med = weighted_quantile(&x, w, 0.5).expect("a non-empty population");
+            let q0 = weighted_quantile(&x, w, 0.025).expect("a non-empty population");
+            let q1 = weighted_quantile(&x, w, 0.975).expect("a non-empty population");
             chart
                 .draw_series([
                     line(med, BLACK),

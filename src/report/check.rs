@@ -15,22 +15,6 @@ use std::path::Path;
 /// Points on each panel's x axis.
 const POINTS: usize = 200;
 
-/// The pointwise q-quantile of column values (NaNs left out).
-fn quantile(col: &mut Vec<f64>, q: f64) -> f64 {
-    col.retain(|v| v.is_finite());
-    if col.is_empty() {
-        return f64::NAN;
-    }
-    col.sort_by(f64::total_cmp);
-    let pos = q * (col.len() - 1) as f64;
-    let (i, f) = (pos.floor() as usize, pos.fract());
-    if i + 1 < col.len() {
-        col[i] * (1.0 - f) + col[i + 1] * f
-    } else {
-        col[i]
-    }
-}
-
 /// The CDF panels (3 per row, 360 × 270 pixels each) into `path` (PNG, atomically).
 pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
     register_font();
@@ -71,12 +55,15 @@ pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
                 .collect();
             let band: Vec<(f64, f64, f64)> = (0..POINTS)
                 .map(|i| {
-                    let mut col: Vec<f64> = curves.iter().map(|c| c[i]).collect();
-                    (
-                        quantile(&mut col, 0.05),
-                        quantile(&mut col, 0.5),
-                        quantile(&mut col, 0.95),
-                    )
+                    // the pointwise quantiles of the finite values (NaN when none)
+                    let mut col: Vec<f64> = curves
+                        .iter()
+                        .map(|c| c[i])
+                        .filter(|v| v.is_finite())
+                        .collect();
+                    col.sort_by(f64::total_cmp);
+                    let q = |q: f64| crate::stats::sorted::quantile(&col, q).unwrap_or(f64::NAN);
+                    (q(0.05), q(0.5), q(0.95))
                 })
                 .collect();
             let meas = r.measured.values[s].cdf_at(&xs, bin_ns);

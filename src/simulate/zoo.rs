@@ -1,4 +1,4 @@
-//! The scene zoo (issue 45, item 5): a seeded generator of physics scenes unlike each other
+//! The scene zoo: a seeded generator of physics scenes unlike each other
 //! and unlike the built-in corridor, the acceptance test of the chain (`pradar zoo`,
 //! `scripts/zoo`, `docs/zoo.md`).
 //!

@@ -36,15 +36,10 @@ pub(crate) struct Component {
     pub(crate) angle: (f64, f64),
 }
 
-/// Median of `v` (sorts it).
+/// Median of non-empty `v` (sorts it: the callers sum over it in that order).
 pub(crate) fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
-    let m = v.len();
-    if m % 2 == 1 {
-        v[m / 2]
-    } else {
-        0.5 * (v[m / 2 - 1] + v[m / 2])
-    }
+    crate::stats::sorted::median(v).expect("a non-empty group")
 }
 
 /// MLE of one component from its members (`raw` = (delay ns, angle deg)); None if empty.
