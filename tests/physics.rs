@@ -391,3 +391,46 @@ fn noise_level_holds_where_far_echoes_alias_into_the_noise_bins() {
         db(hall_mean)
     );
 }
+
+/// The noise level on the scene zoo (`pradar zoo`, seed 1, 20 scenes): every scene's N0
+/// within 1 dB of its noise-only twin's. Ignored (about 10 min on 2 cores: 40
+/// simulations); run with `--ignored`.
+#[test]
+#[ignore = "slow: the scene zoo's 20 scenes and their twins (about 10 min)"]
+fn zoo_noise_level_within_1_db_of_the_twin() {
+    use pradar::simulate::zoo;
+    let tmp = tempfile::tempdir().unwrap();
+    let scenes = zoo::generate(1, 20);
+    let mut worst: (f64, String) = (0.0, String::new());
+    let mut rows = Vec::new();
+    for s in &scenes {
+        let mut n0 = Vec::new();
+        for v in [s.clone(), s.twin()] {
+            let dir = tmp.path().join(&v.name);
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(dir.join("layout.geojson"), &v.layout).unwrap();
+            std::fs::write(dir.join("campaign.toml"), &v.manifest).unwrap();
+            let c = Campaign::load(&dir.join("campaign.toml")).unwrap();
+            let sim =
+                pradar::simulate::simulate(&c, &dir.join("sim"), SweepFormat::Parquet, &|_, _| {})
+                    .unwrap();
+            let sc = Campaign::load(&sim.manifest).unwrap();
+            let r = pradar::energy::run(&sc, &dir.join("energy.parquet"), &|_, _| {}).unwrap();
+            n0.push(r.n0);
+            std::fs::remove_dir_all(dir.join("sim")).unwrap();
+        }
+        let db = 10.0 * (n0[0] / n0[1]).log10();
+        eprintln!("{}: N0 {:+.2} dB from the twin", s.name, db);
+        rows.push((s.name.clone(), db));
+        if db.abs() > worst.0.abs() {
+            worst = (db, s.name.clone());
+        }
+    }
+    let out: Vec<String> = rows
+        .iter()
+        .filter(|(_, db)| db.abs() > 1.0)
+        .map(|(n, db)| format!("{n} {db:+.2} dB"))
+        .collect();
+    eprintln!("worst {:+.2} dB ({})", worst.0, worst.1);
+    assert!(out.is_empty(), "N0 more than 1 dB from the twin: {out:?}");
+}
