@@ -409,7 +409,9 @@ pub struct FitArgs {
     #[arg(long)]
     pub truth: Option<PathBuf>,
     /// The campaign's energy table: read the model's levels from it (the walls' specular
-    /// |Γ|, the diffuse σ′, the clusters' σ; see `model::levels`).
+    /// |Γ|, the diffuse σ′, the clusters' σ; see `model::levels`). Default: the table the
+    /// clusters file names (written by `extract`, passed on by `cluster`); without either
+    /// `fit` refuses.
     #[arg(long)]
     pub energy: Option<PathBuf>,
 }

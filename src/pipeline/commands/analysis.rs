@@ -200,8 +200,9 @@ pub struct Fit {
     /// The campaign's energy table: the model's levels (`[walls]`, σ′, σ) are read from it
     /// ([`crate::model::levels`]). Without it, the table the clusters file names in its
     /// metadata (`energy`, written by `extract` and passed on by `cluster`); without either
-    /// `fit` refuses: the cluster chain's own levels (read from CLEAN peaks) fail the
-    /// predictive check.
+    /// `fit` refuses (the cluster chain's own levels, read from CLEAN peaks, fail the
+    /// predictive check), unless the model is partial (then it is written without levels:
+    /// `synth` and `check` refuse it anyway).
     pub energy: Option<PathBuf>,
     /// Bootstrap resamples and seed.
     pub params: FitParams,
@@ -279,18 +280,25 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     )?;
     let params = cmd.params.check()?;
     let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
-    let energy = energy.ok_or_else(|| {
-        crate::error::Error::param(
-            "--energy",
-            format!(
-                "needed: the model's levels ([walls], σ′, σ) are read from the campaign's energy table, and {} names none that exists",
-                cmd.clusters.display()
-            ),
-        )
-    })?;
-    let em = crate::energy::EnergyMatrix::read(&energy)?;
-    crate::energy::matrix::check_campaign(&c, &em, &energy)?;
-    fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+    match energy {
+        Some(energy) => {
+            let em = crate::energy::EnergyMatrix::read(&energy)?;
+            crate::energy::matrix::check_campaign(&c, &em, &energy)?;
+            fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+        }
+        // a partial model (a quantity not estimable) is written without levels: synth and
+        // check refuse it anyway, naming the quantities
+        None if !fit.model.not_estimable().is_empty() => {}
+        None => {
+            return Err(crate::error::Error::param(
+                "--energy",
+                format!(
+                    "needed: the model's levels ([walls], σ′, σ) are read from the campaign's energy table, and {} names none that exists",
+                    cmd.clusters.display()
+                ),
+            ))
+        }
+    }
     let truth = match &cmd.truth {
         Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),
         None => None,

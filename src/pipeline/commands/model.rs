@@ -150,7 +150,7 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
             crate::report::calibrate::section(r, "posterior.png", &calibration, chain.as_ref())?;
         let mut sections = vec![sec];
         // the predictive check of the calibrated model (and of the chain's), as `pradar
-        // check` gives it: 20 draws, the calibration's seed
+        // check` gives it: its default draws, the calibration's seed
         let check_params = crate::check::CheckParams {
             seed: cmd.params.seed,
             ..Default::default()
