@@ -1,7 +1,7 @@
 //! Parquet output of a clustering (DESIGN §3): the clustered MPC table (the MPC columns plus
 //! `cluster_id`, −1 for diffuse MPCs) and the per-cluster summary `<stem>_summary.parquet`, both with
 //! `schema_version` 1. The clustered table also carries the MPC table's `energy` key (the
-//! energy table it came from, [`ENERGY_KEY`]) when given ([`write_with`]): `fit` reads the
+//! energy table it came from, [`ENERGY_KEY`]) when given ([`write_with()`]): `fit` reads the
 //! model's levels from that table.
 
 use super::Clustering;
@@ -35,7 +35,7 @@ pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
     write_with(path, c, None)
 }
 
-/// [`write`], the clustered table naming the energy table `energy` in its metadata.
+/// [`write()`], the clustered table naming the energy table `energy` in its metadata.
 pub fn write_with(path: &Path, c: &Clustering, energy: Option<&Path>) -> Result<PathBuf> {
     let mut df = crate::mpc::mpc_frame(path, &c.mpcs)?;
     df.with_column(table::col(
