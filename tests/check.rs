@@ -7,7 +7,9 @@
 //! are printed (`cargo test --release --test tests check:: -- --nocapture`).
 //!
 //! The figures (tables per scene, what passes and what misses) are in docs/model.md,
-//! "Issue 29".
+//! "Issue 29". The rule's calibration and power on synth data of known models
+//! (`check_calibration_and_power`, ignored: about 1 h on 2 cores) are in README.md's check
+//! paragraph.
 
 use crate::common;
 use pradar::campaign::manifest::SweepFormat;
@@ -15,6 +17,7 @@ use pradar::campaign::Campaign;
 use pradar::check::{check, CheckParams, CheckResult};
 use pradar::energy::EnergyMatrix;
 use pradar::model::file::ModelConfig;
+use pradar::model::EnergySimulator;
 use pradar::params::ParamGuard;
 use std::path::Path;
 
@@ -88,9 +91,9 @@ fn corridor_fitted_model_passes_check() {
 
 /// Slow (about 4 min on 2 cores): the issue's must-show over the three physics scenes —
 /// each scene's fitted model passes against its own table and against a second
-/// realisation. Measured at this commit (docs/model.md): the corridor's second
-/// realisation misses on first arrival (1.57) and the furnished hall's own table on first
-/// arrival (1.60), so this test fails today; it states the target.
+/// realisation (the rule of [`pradar::check`]: max-T p > 0.05 and the noise floors within
+/// 1 dB). Under the earlier ratio rule (docs/model.md) the corridor's second realisation
+/// and the furnished hall's own table missed on first arrival; not re-run under this rule.
 #[test]
 #[ignore]
 fn three_scenes_pass_and_generalise() {
@@ -173,43 +176,214 @@ fn check_has_power() {
     println!("AoA x0.3: {}", r.verdict());
 }
 
-/// Slow (about 1–2 min): the check is calibrated — the office model against 20 synth
-/// tables of itself (seeds 101–120) passes in at least 90 % of them, and each statistic's
-/// p-value is below 0.05 in at most 15 % of them.
-#[test]
-#[ignore]
-fn check_is_calibrated() {
-    let (dir, c, m) = office_model();
-    let reps = 20;
-    let mut passes = 0;
-    let mut low = [0usize; pradar::check::stats::NAMES.len()];
-    for seed in 101..101 + reps as u64 {
-        let em = synth_table(dir.path(), &c, &m, seed);
-        let path = dir.path().join(format!("synth_{seed}.parquet"));
-        let r = check(
-            &c,
-            &em,
-            &path,
-            &m,
-            &CheckParams::default().check().unwrap(),
-            &|_, _| {},
-        )
-        .unwrap();
-        println!("seed {seed}: {}", r.verdict());
-        passes += r.passes() as usize;
-        for (k, s) in r.stats.iter().enumerate() {
-            low[k] += (s.p_value() < 0.05) as usize;
+/// A copy of `em` whose energies are `model`'s draw at `seed` (as `synth` with that seed
+/// writes them; its metadata `em`'s, which for a synth table of the same campaign is the
+/// one `synth` writes).
+fn drawn_table(
+    sim: &EnergySimulator,
+    em: &EnergyMatrix,
+    model: &ModelConfig,
+    seed: u64,
+) -> EnergyMatrix {
+    let mut t = em.clone();
+    t.data = sim.energies(model, seed).unwrap();
+    t
+}
+
+/// `model` with every level 10 dB up: the clusters' and vertices' σ and the diffuse σ′
+/// ×10, every |Γ| ×√10.
+fn level_up(model: &ModelConfig) -> ModelConfig {
+    let mut m = model.clone();
+    m.cluster_rrcs.value *= 10.0;
+    if let Some(w) = m.walls.as_mut() {
+        // |Γ| ≤ 1 (passive): a wall already near it stays at 1
+        w.specular_gamma.value = (w.specular_gamma.value * 10f64.sqrt()).min(1.0);
+        for q in w.material_gamma.values_mut() {
+            q.value = (q.value * 10f64.sqrt()).min(1.0);
+        }
+        for q in [w.corner_rcs.as_mut(), w.edge_rcs.as_mut()]
+            .into_iter()
+            .flatten()
+        {
+            q.value *= 10.0;
         }
     }
-    println!("passes {passes}/{reps}; p < 0.05 per statistic: {low:?}");
-    assert!(passes * 10 >= reps * 9, "passes {passes}/{reps}");
-    for (k, n) in low.iter().enumerate() {
-        assert!(
-            n * 100 <= reps * 15,
-            "{}: p < 0.05 in {n}/{reps}",
-            pradar::check::stats::NAMES[k].0
+    if let Some(d) = m.diffuse.as_mut() {
+        d.wall_rcs_per_m.value *= 10.0;
+    }
+    m
+}
+
+/// A noise mismatch: the measured table's metadata records an N0 3 dB above what its
+/// bins hold (as an N0 read from aliased echoes did); the check's draws carry the recorded
+/// N0, so the floors differ by 3 dB, and the check fails with one line naming both.
+#[test]
+fn noise_mismatch_fails_with_one_line() {
+    let (dir, c, m) = office_model();
+    let mut em = synth_table(dir.path(), &c, &m, 5);
+    let path = dir.path().join("synth_5.parquet");
+    let params = CheckParams {
+        draws: 9,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
+    let ok = check(&c, &em, &path, &m, &params, &|_, _| {}).unwrap();
+    println!("{}", ok.verdict());
+    assert!(ok.noise.agree(), "{}", ok.noise.line());
+    assert!(ok.noise.offset_db().abs() < 0.3, "{}", ok.noise.line());
+    em.meta.n0 *= 2.0;
+    let r = check(&c, &em, &path, &m, &params, &|_, _| {}).unwrap();
+    println!("{}", r.verdict());
+    assert!(!r.passes());
+    assert!(r.misses().contains(&"noise"));
+    let off = r.noise.offset_db();
+    assert!((off + 3.0).abs() < 0.3, "{off}");
+    let v = r.verdict();
+    assert!(
+        v.starts_with("FAIL: noise: the measured table's floor"),
+        "{v}"
+    );
+    assert_eq!(v.lines().count(), 1);
+}
+
+/// One scene's calibration and power: `reps` synth tables of `model` (seeds 1000 + k, in
+/// memory) checked against `model` (false rejections), and `power_reps` tables each of
+/// the model with levels +10 dB, with 3× the rays per cluster, of `model` with a recorded
+/// N0 3 dB above its bins', and (printed, not asserted) with the intra-cluster AoA std
+/// ×0.3, checked against `model`. Returns the rejection counts
+/// [null, level, rays, noise, aoa] and prints them with the times.
+fn calibration_and_power(
+    name: &str,
+    c: &Campaign,
+    em: &EnergyMatrix,
+    path: &Path,
+    model: &ModelConfig,
+    reps: usize,
+    power_reps: usize,
+) -> [usize; 5] {
+    let sim = EnergySimulator::for_table(c, em, path, 1e-3).unwrap();
+    let params = CheckParams::default().check().unwrap();
+    let run = |table: &EnergyMatrix| check(c, table, path, model, &params, &|_, _| {}).unwrap();
+    let mut out = [0usize; 5];
+    let t0 = std::time::Instant::now();
+    let mut per_stat = [0usize; pradar::check::stats::NAMES.len()];
+    let mut noise_db = Vec::new();
+    for k in 0..reps {
+        let r = run(&drawn_table(&sim, em, model, 1000 + k as u64));
+        noise_db.push(r.noise.offset_db());
+        if !r.passes() {
+            out[0] += 1;
+            println!("{name} null rep {k}: {}", r.verdict());
+        }
+        for (i, s) in r.stats.iter().enumerate() {
+            per_stat[i] += (s.p_value() <= 0.05) as usize;
+        }
+        if (k + 1) % 10 == 0 {
+            println!(
+                "{name}: {} null reps, {} rejected, {:.0} s",
+                k + 1,
+                out[0],
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    }
+    let null_s = t0.elapsed().as_secs_f64();
+    noise_db.sort_by(f64::total_cmp);
+    println!(
+        "{name}: false rejections {}/{reps} ({:.0} %), {:.1} s per check; per statistic p ≤ 0.05: {per_stat:?}; noise floor offsets {:+.2}..{:+.2} dB",
+        out[0],
+        100.0 * out[0] as f64 / reps as f64,
+        null_s / reps.max(1) as f64,
+        noise_db.first().unwrap_or(&f64::NAN),
+        noise_db.last().unwrap_or(&f64::NAN)
+    );
+    let mut rays = model.clone();
+    rays.rays_per_cluster.value *= 3.0;
+    let mut aoa = model.clone();
+    aoa.intra_cluster_aoa.value *= 0.3;
+    let level = level_up(model);
+    for (slot, label, alt) in [
+        (1, "level +10 dB", Some(&level)),
+        (2, "rays per cluster x3", Some(&rays)),
+        (3, "noise: recorded N0 +3 dB", None),
+        (4, "AoA std x0.3", Some(&aoa)),
+    ] {
+        let t0 = std::time::Instant::now();
+        let mut misses = std::collections::BTreeMap::<&str, usize>::new();
+        for k in 0..power_reps {
+            let seed = 2000 + k as u64;
+            let table = match alt {
+                Some(a) => drawn_table(&sim, em, a, seed),
+                None => {
+                    let mut t = drawn_table(&sim, em, model, seed);
+                    t.meta.n0 *= 2.0;
+                    t
+                }
+            };
+            let r = run(&table);
+            out[slot] += (!r.passes()) as usize;
+            for m in r.misses() {
+                *misses.entry(m).or_default() += 1;
+            }
+        }
+        println!(
+            "{name}: {label}: rejected {}/{power_reps} ({:.0} %) in {:.0} s; misses {misses:?}",
+            out[slot],
+            100.0 * out[slot] as f64 / power_reps.max(1) as f64,
+            t0.elapsed().as_secs_f64()
         );
     }
+    out
+}
+
+/// Slow (ignored): the check is calibrated and has power. Per scene — the corridor's
+/// fitted model (the chain's) and the office's model file — `REPS` synth tables of the
+/// model checked against it are rejected at most 10 % of the time, and synth tables with
+/// the level +10 dB, 3× the rays per cluster or a recorded N0 3 dB off are each rejected in
+/// at least 90 % of `POWER_REPS`. The AoA std ×0.3 is printed, not asserted. Figures in
+/// README.md's check paragraph. `PRADAR_CHECK_REPS` / `PRADAR_CHECK_POWER_REPS` override the
+/// counts (defaults 50 and 20), `PRADAR_CHECK_SCENES` the scenes (default `corridor,office`).
+#[test]
+#[ignore]
+fn check_calibration_and_power() {
+    let env = |k: &str, d: usize| {
+        std::env::var(k)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(d)
+    };
+    let reps = env("PRADAR_CHECK_REPS", 50);
+    let power_reps = env("PRADAR_CHECK_POWER_REPS", 20);
+    let scenes = std::env::var("PRADAR_CHECK_SCENES").unwrap_or("corridor,office".into());
+    let mut failed = Vec::new();
+    let mut judge = |name: &str, n: [usize; 5]| {
+        if n[0] * 10 > reps {
+            failed.push(format!("{name}: false rejections {}/{reps}", n[0]));
+        }
+        for (i, what) in [(1, "level +10 dB"), (2, "rays x3"), (3, "noise mismatch")] {
+            if n[i] * 10 < power_reps * 9 {
+                failed.push(format!("{name}: {what} rejected {}/{power_reps}", n[i]));
+            }
+        }
+    };
+    if scenes.contains("corridor") {
+        let dir = tempfile::tempdir().unwrap();
+        let t0 = std::time::Instant::now();
+        let (c, em, model) = fitted(&dir.path().join("a"), &common::corridor());
+        println!("corridor: fitted in {:.0} s", t0.elapsed().as_secs_f64());
+        let path = dir.path().join("a/energy.parquet");
+        let n = calibration_and_power("corridor", &c, &em, &path, &model, reps, power_reps);
+        judge("corridor", n);
+    }
+    if scenes.contains("office") {
+        let (dir, c, m) = office_model();
+        let em = synth_table(dir.path(), &c, &m, 5);
+        let path = dir.path().join("synth_5.parquet");
+        let n = calibration_and_power("office", &c, &em, &path, &m, reps, power_reps);
+        judge("office", n);
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
 /// `pradar check` end to end: the office model against its own synth table exits 0 and
@@ -249,7 +423,7 @@ fn check_command() {
     let csv = std::fs::read_to_string(out.join("check.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + pradar::check::stats::NAMES.len());
     assert!(csv.starts_with(
-        "statistic,unit,measured_median,draws_median,ks,ks_reference,ratio,p_value,verdict"
+        "statistic,unit,measured_median,draws_median,ks,ks_reference,ratio,p_value,p_adjusted,verdict"
     ));
     let mut rays = m.clone();
     rays.rays_per_cluster.value *= 3.0;

@@ -2,9 +2,10 @@
 //! computed the same way on the measured table and on every draw ([`Statistics::of`]).
 //!
 //! A bin is *signal* when it lies after the coupling gate and E > 10·μ (10 dB above the
-//! detector's noise mean μ = N0·TW of the **measured** table: the same threshold for
-//! the measured table and the draws, so a model with the wrong noise level is seen as
-//! such); its signal energy is S = E − μ. With τ_b = b·T_b:
+//! detector's noise mean μ = N0·TW of **the table itself**: the measured table's recorded
+//! N0, a draw's the N0 it was drawn with, which `check` sets to the measured one; whether
+//! the recorded N0 is the one the table's bins hold is the check's noise-floor rule); its
+//! signal energy is S = E − μ. With τ_b = b·T_b:
 //!
 //! * per profile (position, direction) with at least one signal bin: the signal energy
 //!   10·log10 Σ S (dB), the mean delay τ̄ = Σ τ S / Σ S, the RMS delay spread
@@ -52,7 +53,7 @@ pub struct StatContext {
     pub bin_ns: f64,
     /// First bin after the coupling gate.
     pub first_bin: usize,
-    /// Noise mean μ of the measured table (N0·TW).
+    /// Noise mean μ of the table the statistics are of (N0·TW).
     pub mu: f64,
     /// Relative direction angles, degrees.
     pub angles_deg: Vec<f64>,

@@ -260,7 +260,8 @@ pub struct CheckArgs {
     /// Output folder: check.csv, check.md, check_cdfs.png, index.html.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Exit 1 when the Bonferroni-corrected p-value is below P or a KS ratio is over 1.5.
+    /// Exit 1 when the check's max-T p-value is at or below P (the rule: 0.05) or the
+    /// measured noise floor is more than 1 dB from the draws'.
     #[arg(long, value_name = "P", value_parser = ranges::probability)]
     pub fail_below: Option<f64>,
     /// `calibrate`'s posterior CSV (<stem>_posterior.csv): each draw's free quantities
@@ -425,7 +426,9 @@ pub struct FitArgs {
     #[arg(long)]
     pub truth: Option<PathBuf>,
     /// The campaign's energy table: read the model's levels from it (the walls' specular
-    /// |Γ|, the diffuse σ′, the clusters' σ; see `model::levels`).
+    /// |Γ|, the diffuse σ′, the clusters' σ; see `model::levels`). Default: the table the
+    /// clusters file names (written by `extract`, passed on by `cluster`); without either
+    /// `fit` refuses.
     #[arg(long)]
     pub energy: Option<PathBuf>,
 }

@@ -1,6 +1,8 @@
 //! Parquet output of a clustering (DESIGN §3): the clustered MPC table (the MPC columns plus
 //! `cluster_id`, −1 for diffuse MPCs) and the per-cluster summary `<stem>_summary.parquet`, both with
-//! `schema_version` 1.
+//! `schema_version` 1. The clustered table also carries the MPC table's `energy` key (the
+//! energy table it came from, [`ENERGY_KEY`]) when given ([`write_with()`]): `fit` reads the
+//! model's levels from that table.
 
 use super::Clustering;
 use crate::error::{Error, Result};
@@ -16,8 +18,25 @@ pub fn summary_path(path: &Path) -> PathBuf {
     path.with_file_name(format!("{stem}_summary.parquet"))
 }
 
+/// The metadata key naming the energy table an MPC or clustered MPC table came from
+/// (its absolute path).
+pub const ENERGY_KEY: &str = "energy";
+
+/// The energy table an MPC or clustered MPC table names in its metadata (`energy`), if any.
+pub fn energy_of(path: &Path) -> Result<Option<PathBuf>> {
+    Ok(table::parquet_metadata(path)?
+        .into_iter()
+        .find(|(k, _)| k == ENERGY_KEY)
+        .map(|(_, v)| PathBuf::from(v)))
+}
+
 /// Write the clustered MPC table (`path`) and the summary (`<stem>_summary.parquet`).
 pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
+    write_with(path, c, None)
+}
+
+/// [`write()`], the clustered table naming the energy table `energy` in its metadata.
+pub fn write_with(path: &Path, c: &Clustering, energy: Option<&Path>) -> Result<PathBuf> {
     let mut df = crate::mpc::mpc_frame(path, &c.mpcs)?;
     df.with_column(table::col(
         "cluster_id",
@@ -27,7 +46,11 @@ pub fn write(path: &Path, c: &Clustering) -> Result<PathBuf> {
             .collect::<Vec<_>>(),
     ))
     .map_err(|e| Error::table(path, e))?;
-    table::write_parquet(path, &df, vec![("schema_version".into(), "1".into())])?;
+    let mut meta = vec![("schema_version".to_string(), "1".to_string())];
+    if let Some(e) = energy {
+        meta.push((ENERGY_KEY.into(), e.display().to_string()));
+    }
+    table::write_parquet(path, &df, meta)?;
     let spath = summary_path(path);
     let s = &c.summary;
     let f64s = |name: &str, g: fn(&super::ClusterSummary) -> f64| {

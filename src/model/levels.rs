@@ -50,7 +50,8 @@
 //!    bins above the threshold; σ is the value at which the model's draws give the table's
 //!    mean. (The profiles' signal energy was tried first: the geometry sets its median, so
 //!    it pinned σ at its lower end and left the clusters' delay spread out; docs/model.md.)
-//!    The draws are ⌈384 / poses⌉ `synth` draws (4 to 8) at fixed seeds (common random
+//!    The draws carry the table's recorded N0 (as `check`'s draws do) and are
+//!    ⌈384 / poses⌉ `synth` draws (4 to 8) at fixed seeds (common random
 //!    numbers, so the mean moves monotonically with σ), σ found by regula falsi (Illinois) in ln σ on
 //!    [1e-6, 10] m², stopped within 0.1 % of the table's mean or after
 //!    16 steps; at either end the end is kept and the report says so.
@@ -136,7 +137,17 @@ pub fn fit_levels(
     em: &EnergyMatrix,
     model: &ModelConfig,
 ) -> Result<(ModelConfig, LevelReport)> {
-    let sim = EnergySimulator::new(c, &SynthParams::default().check()?)?;
+    // the draws carry the table's own noise (as `check`'s), so their signal bins are
+    // counted against the threshold the table's are
+    let n0 = Some(em.meta.n0).filter(|n| n.is_finite() && *n > 0.0);
+    let sim = EnergySimulator::new(
+        c,
+        &SynthParams {
+            n0,
+            ..Default::default()
+        }
+        .check()?,
+    )?;
     let layout = sim.layout().clone();
     let (np, nd, nb) = (em.positions, em.directions(), em.bins);
     let mu = em.meta.noise_mean();

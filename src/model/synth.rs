@@ -8,8 +8,9 @@
 //! E_s (mean of |h|² over the bin's L samples), and the detector's draw
 //! E = N0/(2N_p)·[χ²(2TW·N_p − 1) + (Z + √(2N_p·E_s/N0))²] (mean N0·TW + E_s, variance
 //! (N0²·TW + 2·N0·E_s)/N_p, DESIGN §2). N0 comes from the campaign's `[noise]` floor
-//! through the window (as the energy stage's N0), TW from the window; neighbouring bins are
-//! drawn independently. The noise streams are keyed by (seed, position, direction), so the
+//! through the window (as the energy stage's N0) unless [`SynthParams::n0`] gives it (`check`
+//! and `calibrate` give the measured table's: [`EnergySimulator::for_table`]), TW from the
+//! window; neighbouring bins are drawn independently. The noise streams are keyed by (seed, position, direction), so the
 //! bytes do not depend on the thread count.
 
 use super::channel::{ChannelModel, RaySource, SeenRay};
@@ -112,7 +113,7 @@ pub fn synth_channel(
     let m = &c.manifest;
     let layout = Layout::load(&c.layout_path())?;
     let seed = params.seed.unwrap_or(m.seed);
-    let resp = Response::new(c, params.cull)?;
+    let resp = Response::new(c, params.cull, params.n0)?;
     let walls = match &channel.config.diffuse {
         Some(d) => Some(DiffuseWalls::draw(&layout, d, m.band.bandwidth_hz(), seed)?),
         None => None,
@@ -194,7 +195,7 @@ impl EnergySimulator {
         let m = &c.manifest;
         Ok(EnergySimulator {
             layout: Layout::load(&c.layout_path())?,
-            resp: Response::new(c, params.cull)?,
+            resp: Response::new(c, params.cull, params.n0)?,
             headings_deg: m.poses.iter().map(|p| p.heading_deg).collect(),
             poses: m
                 .poses
@@ -334,8 +335,10 @@ impl EnergySimulator {
     /// The simulator to compare with the measured table `energy` (read from
     /// `energy_path`) of campaign `c`, at ray cull `cull`: the table is first checked
     /// against the campaign (poses, directions, noise) and then refused when its shape is
-    /// not the one this simulator draws (other processing settings). What `check` and
-    /// `calibrate` set up before drawing.
+    /// not the one this simulator draws (other processing settings). Its draws carry the
+    /// table's recorded noise level N0 (metadata `n0`), not the manifest's `[noise]` floor:
+    /// the model is a model of this campaign's system. What `check` and `calibrate` set up
+    /// before drawing.
     pub fn for_table(
         c: &Campaign,
         energy: &crate::energy::EnergyMatrix,
@@ -348,6 +351,7 @@ impl EnergySimulator {
             c,
             &SynthParams {
                 cull,
+                n0: Some(energy.meta.n0),
                 ..Default::default()
             }
             .check()?,
@@ -450,7 +454,8 @@ struct Response {
 }
 
 impl Response {
-    fn new(c: &Campaign, cull: f64) -> Result<Response> {
+    /// The campaign's response; `n0` overrides the noise level of its `[noise]` floor.
+    fn new(c: &Campaign, cull: f64, n0: Option<f64>) -> Result<Response> {
         let m = &c.manifest;
         let proc = EnergyProcessor::new(m.band, m.processing)
             .map_err(|e| Error::input(&c.path, e.to_string()))?;
@@ -476,7 +481,7 @@ impl Response {
         } else {
             0.0
         };
-        let n0 = proc.noise_per_sample(m.noise.s21_variance()) / proc.tw();
+        let n0 = n0.unwrap_or_else(|| proc.noise_per_sample(m.noise.s21_variance()) / proc.tw());
         let noise_mean = n0 * proc.tw();
         let pulses = m.pulses as f64;
         let dof = 2.0 * proc.tw() * pulses - 1.0;

@@ -64,7 +64,10 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
     let clustering = cluster::cluster(&mpcs, &headings, &params.check()?)?;
     let cp = work.join("clusters.parquet");
-    cluster::write(&cp, &clustering)?;
+    // `fit` reads the levels from the energy table beside the work folder's clusters
+    let energy = work.join("energy.parquet");
+    let energy = std::path::absolute(&energy).ok().filter(|e| e.is_file());
+    cluster::io::write_with(&cp, &clustering, energy.as_deref())?;
     timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());

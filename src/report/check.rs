@@ -71,10 +71,10 @@ pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
             let mut chart = ChartBuilder::on(&areas[s])
                 .caption(
                     format!(
-                        "{} (KS {:.2}, ratio {:.1})",
+                        "{} (KS {:.2}, adjusted p {:.3})",
                         res.name,
                         res.ks(),
-                        res.ratio()
+                        res.adjusted_p
                     ),
                     ("sans-serif", 13),
                 )
@@ -136,10 +136,12 @@ pub fn cdf_plot(path: &Path, r: &CheckResult) -> Result<()> {
 /// corridor".
 pub fn section(title: &str, what: &str, r: &CheckResult, png: &str) -> Section {
     let html = format!(
-        "<p>{}: {} draws of <code>synth</code> (seeds from {}), statistics of \
-         <code>pradar check</code> (signal = bins 10 dB above the measured noise mean). \
-         KS measured↔draws is the median over draws; draw↔draw the median over pairs; \
-         p = share of draw↔draw distances ≥ it. Pass: every ratio ≤ 1.5 and min p × {} ≥ 0.05.</p>\n\
+        "<p>{}: {} draws of <code>synth</code> (seeds from {}, carrying the measured table's \
+         N0), statistics of <code>pradar check</code> (signal = bins 10 dB above each table's \
+         own noise mean). KS measured↔draws is the median over draws; draw↔draw the median \
+         over pairs; p = the measured table's rank among the draws' leave-one-out distances; \
+         adjusted p = Westfall–Young max-T over the {} statistics. Fail: the check's p ≤ {} \
+         or the measured noise floor more than {} dB from the draws'.</p>\n\
          <p><b>{}</b></p>\n{}\
          <p>Measured CDF (black) in the draws' 5–95 % band (shaded; median blue).</p>\n\
          <p><img src=\"{}\" alt=\"check CDFs\"></p>\n",
@@ -147,6 +149,8 @@ pub fn section(title: &str, what: &str, r: &CheckResult, png: &str) -> Section {
         r.draws.len(),
         r.seed,
         r.stats.len(),
+        crate::check::ALPHA,
+        crate::check::MAX_NOISE_DB,
         html_escape(&r.verdict()),
         html_table(&r.table()),
         html_escape(png)

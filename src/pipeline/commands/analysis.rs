@@ -72,6 +72,13 @@ pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
         "diffuse_level_m2_per_m".into(),
         format!("{:.17e}", diffuse.level_m2_per_m),
     ));
+    // the energy table, for `fit`'s levels (through `cluster`)
+    if let Ok(abs) = std::path::absolute(&cmd.energy) {
+        meta.push((
+            crate::cluster::io::ENERGY_KEY.into(),
+            abs.display().to_string(),
+        ));
+    }
     crate::mpc::write_mpcs(&cmd.out, &mpcs, meta)?;
     Ok(ExtractSummary {
         mpcs: mpcs.len(),
@@ -164,7 +171,9 @@ pub fn cluster(cmd: &Cluster) -> Result<ClusterSummary> {
     let sector = crate::mpc::read_sector_deg(&cmd.mpcs)?.unwrap_or(180.0);
     let params = cmd.params.sector_deg(sector);
     let c = crate::cluster::cluster(&m, &pose_headings(&m), &params.check()?)?;
-    let summary = crate::cluster::write(&cmd.out, &c)?;
+    // the energy table the MPCs came from goes on to `fit`
+    let energy = crate::cluster::io::energy_of(&cmd.mpcs)?;
+    let summary = crate::cluster::io::write_with(&cmd.out, &c, energy.as_deref())?;
     Ok(ClusterSummary {
         clusters: c.summary.len(),
         positions: c.positions.len(),
@@ -188,8 +197,12 @@ pub struct Fit {
     pub table: PathBuf,
     /// A simulator's `truth/` folder: the same estimators on its true clusters.
     pub truth: Option<PathBuf>,
-    /// The campaign's energy table: the model's levels (`[walls]`, σ′, σ) are then read
-    /// from it ([`crate::model::levels`]); without it they are the cluster chain's.
+    /// The campaign's energy table: the model's levels (`[walls]`, σ′, σ) are read from it
+    /// ([`crate::model::levels`]). Without it, the table the clusters file names in its
+    /// metadata (`energy`, written by `extract` and passed on by `cluster`); without either
+    /// `fit` refuses (the cluster chain's own levels, read from CLEAN peaks, fail the
+    /// predictive check), unless the model is partial (then it is written without levels:
+    /// `synth` and `check` refuse it anyway).
     pub energy: Option<PathBuf>,
     /// Bootstrap resamples and seed.
     pub params: FitParams,
@@ -247,7 +260,14 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     if let Some(dir) = &cmd.truth {
         inputs.push((dir.join("rays.parquet"), "--truth"));
     }
-    if let Some(e) = &cmd.energy {
+    // the energy table: --energy, else the one the clusters file names
+    let energy = cmd.energy.clone().or_else(|| {
+        crate::cluster::io::energy_of(&cmd.clusters)
+            .ok()
+            .flatten()
+            .filter(|e| e.is_file())
+    });
+    if let Some(e) = &energy {
         inputs.push((e.clone(), "--energy"));
     }
     refuse(
@@ -260,10 +280,24 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     )?;
     let params = cmd.params.check()?;
     let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
-    if let Some(e) = &cmd.energy {
-        let em = crate::energy::EnergyMatrix::read(e)?;
-        crate::energy::matrix::check_campaign(&c, &em, e)?;
-        fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+    match energy {
+        Some(energy) => {
+            let em = crate::energy::EnergyMatrix::read(&energy)?;
+            crate::energy::matrix::check_campaign(&c, &em, &energy)?;
+            fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+        }
+        // a partial model (a quantity not estimable) is written without levels: synth and
+        // check refuse it anyway, naming the quantities
+        None if !fit.model.not_estimable().is_empty() => {}
+        None => {
+            return Err(crate::error::Error::param(
+                "--energy",
+                format!(
+                    "needed: the model's levels ([walls], σ′, σ) are read from the campaign's energy table, and {} names none that exists",
+                    cmd.clusters.display()
+                ),
+            ))
+        }
     }
     let truth = match &cmd.truth {
         Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),

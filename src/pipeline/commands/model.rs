@@ -150,7 +150,7 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
             crate::report::calibrate::section(r, "posterior.png", &calibration, chain.as_ref())?;
         let mut sections = vec![sec];
         // the predictive check of the calibrated model (and of the chain's), as `pradar
-        // check` gives it: 20 draws, the calibration's seed
+        // check` gives it: its default draws, the calibration's seed
         let check_params = crate::check::CheckParams {
             seed: cmd.params.seed,
             ..Default::default()
@@ -269,11 +269,12 @@ impl fmt::Display for CheckSummary {
 
 impl CheckSummary {
     /// The check against `check --fail-below P`: the message the command fails with when
-    /// the corrected p-value is below `fail_below` or a ratio exceeds
-    /// [`crate::check::MAX_RATIO`], `None` when it passes.
+    /// the check's p-value is at or below `fail_below` (the rule's P is
+    /// [`crate::check::ALPHA`]) or the noise floors differ by more than
+    /// [`crate::check::MAX_NOISE_DB`], `None` when it passes.
     pub fn failure(&self, fail_below: f64) -> Option<String> {
         let r = &self.result;
-        (r.corrected_p() < fail_below || r.max_ratio() > crate::check::MAX_RATIO)
+        (r.joint_p <= fail_below || !r.noise.agree())
             .then(|| format!("check failed (--fail-below {fail_below}): {}", r.verdict()))
     }
 }
