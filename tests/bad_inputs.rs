@@ -1271,6 +1271,18 @@ fn cases() -> Vec<Case> {
             ],
             |d| prior_interval(d, "cluster_decay", 1.0, 1e300),
         ),
+        case(
+            "energy table whose position column is Int8",
+            EXTRACT,
+            &["e.parquet", "column `position` is Int8", "expected Int32"],
+            |d| {
+                // written by pyarrow (data/tests/energy_int8_position.parquet: 16 rows of the
+                // corridor's table, `position` cast to int8): polars keeps the Int8 from
+                // the Arrow schema pyarrow stores
+                let fixture = crate::common::root().join("data/tests/energy_int8_position.parquet");
+                std::fs::copy(fixture, d.join("e.parquet")).unwrap();
+            },
+        ),
         // ---- a v2 two-port without its data order, energy metadata out of range
         case(
             "Touchstone v2 two-port without [Two-Port Data Order]",
