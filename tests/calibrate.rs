@@ -431,7 +431,7 @@ fn report_has_the_check() {
         "check_chain.png",
         "(posterior predictive)",
         "check_posterior.png",
-        "Bonferroni",
+        "Westfall–Young",
         "width / prior",
     ] {
         assert!(html.contains(want), "{want} missing from the page");
