@@ -214,7 +214,7 @@ pub fn run(
     })?;
     computed?;
     let writer = writer?;
-    let est = noise.estimate(proc.tw(), m.pulses);
+    let est = noise.estimate(proc.tw(), m.pulses, noise::bin_law_median(&proc, m.pulses));
     let n0 = est.map_or(f64::NAN, |e| e.n0);
     if !(n0 > 0.0 && n0.is_finite()) {
         // the bins read as signal-free hold nothing: every energy is zero too, or the

@@ -141,6 +141,27 @@ impl EnergyProcessor {
     pub fn enbw(&self) -> f64 {
         self.enbw
     }
+    /// The complex correlation of the CIR noise between samples `d` apart, d = 0..L−1:
+    /// ρ(d) = Σ w_k² e^{j2πkd/N} / Σ w_k² (ρ(0) = 1, ρ(−d) = ρ(d)*); the L samples of a bin
+    /// have the Hermitian Toeplitz correlation matrix R_nm = ρ(n − m).
+    pub fn bin_correlation(&self) -> Vec<Complex64> {
+        let w2: f64 = self.win.iter().map(|w| w * w).sum();
+        (0..self.proc.oversample)
+            .map(|d| {
+                self.win
+                    .iter()
+                    .enumerate()
+                    .map(|(k, w)| {
+                        Complex64::from_polar(
+                            w * w,
+                            2.0 * PI * k as f64 * d as f64 / self.nfft as f64,
+                        )
+                    })
+                    .sum::<Complex64>()
+                    / w2
+            })
+            .collect()
+    }
     /// Per-sample CIR noise mean N0_h for S21 noise variance `sigma2`.
     pub fn noise_per_sample(&self, sigma2: f64) -> f64 {
         sigma2 * self.win.iter().map(|w| w * w).sum::<f64>() / (self.wsum * self.wsum)
