@@ -469,10 +469,11 @@ impl Layout {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    const SQUARE: &str = r#"{"type":"FeatureCollection","features":[
+    /// A 4 × 2 m concrete room with a 0.2 m pillar (also the reference raster's tests').
+    pub(crate) const SQUARE: &str = r#"{"type":"FeatureCollection","features":[
       {"type":"Feature","properties":{"role":"perimeter","material":"concrete"},
        "geometry":{"type":"Polygon","coordinates":[[[0,0],[0,2],[4,2],[4,0],[0,0]]]}},
       {"type":"Feature","properties":{"role":"obstacle","name":"pillar"},

@@ -45,8 +45,10 @@
 //!   1963; Besag & Clifford 1989): the rank is exact, not a large-sample approximation.
 //!   The per-statistic p-value p_s = (1 + #{i : D_i ≥ D_obs}) / (R + 1) (shown).
 //! * **Rule** (Westfall & Young 1993, single-step max-T, calibrated on the same R + 1
-//!   tables): per statistic the R + 1 distances are standardised by their median and
-//!   MAD, z_t,s = (D_t,s − med_s) / (1.4826·MAD_s); each table's score is
+//!   tables): per statistic the R + 1 distances are standardised by their median and a
+//!   scale σ_s = max(1.4826·MAD_s, mean absolute deviation_s), z_t,s = (D_t,s − med_s) /
+//!   σ_s (the same scale for every table, so the scores stay exchangeable); each table's
+//!   score is
 //!   T_t = max_s z_t,s. The adjusted p-value of statistic s is
 //!   p̃_s = (1 + #{i : T_i ≥ z_obs,s}) / (R + 1) and the check's p = min_s p̃_s =
 //!   (1 + #{i : T_i ≥ T_obs}) / (R + 1). The check **fails** when p ≤ α = [`ALPHA`]
@@ -366,7 +368,8 @@ pub fn max_t(obs: &[f64], draws: &[Vec<f64>]) -> (Vec<f64>, f64) {
         let all: Vec<f64> = std::iter::once(*o).chain(d.iter().copied()).collect();
         let centre = crate::stats::median(&all).unwrap_or(f64::NAN);
         let dev: Vec<f64> = all.iter().map(|v| (v - centre).abs()).collect();
-        // 1.4826·MAD; when more than half of the tables tie, the mean absolute deviation
+        // the larger of 1.4826·MAD and the mean absolute deviation (a scale remains when
+        // more than half of the tables tie and the MAD is 0)
         let scale = (1.4826 * crate::stats::median(&dev).unwrap_or(f64::NAN))
             .max(dev.iter().sum::<f64>() / dev.len() as f64)
             .max(1e-12);
@@ -420,13 +423,6 @@ impl NoiseFloors {
 /// The quantile of the noise floor's estimator ([`noise_floor`]).
 pub const FLOOR_QUANTILE: f64 = 0.25;
 
-/// The q-quantile of Gamma(k, rate k) (mean 1), the law of a noise bin over its mean
-/// (1 for a degenerate k).
-fn law_quantile(shape: f64, q: f64) -> f64 {
-    use statrs::distribution::{ContinuousCDF, Gamma};
-    Gamma::new(shape, shape).map_or(1.0, |g| g.inverse_cdf(q))
-}
-
 /// The noise floor N̂0 of energies `e` read from its own bins: the lower quartile of the
 /// bins after the coupling gate (NaN profiles left out) over TW · q_k, q_k the lower
 /// quartile of the detector's Gamma(k, k) law, k = TW·N_p (NaN without a bin).
@@ -442,7 +438,7 @@ pub fn noise_floor(ctx: &StatContext, e: &[f64], tw: f64, pulses: usize) -> f64 
     }
     let i = ((v.len() - 1) as f64 * FLOOR_QUANTILE).round() as usize;
     let (_, q, _) = v.select_nth_unstable_by(i, f64::total_cmp);
-    *q / (tw * law_quantile(tw * pulses as f64, FLOOR_QUANTILE))
+    *q / (tw * crate::energy::noise::law_quantile(tw * pulses as f64, FLOOR_QUANTILE))
 }
 
 /// The result of a check: per statistic, plus the measured and drawn statistics (for the

@@ -39,6 +39,9 @@ pub const MAX_SAMPLES: usize = 1 << 22;
 /// The estimator's name written to the table's metadata (`n0_estimator`).
 pub const ESTIMATOR: &str = "median";
 
+/// The `n0_estimator` of a table drawn with a known N0 ([`NoiseEstimate::of_law`]).
+pub const GIVEN: &str = "given";
+
 /// Collects the noise bins' energies (every `stride`-th, in table order).
 #[derive(Debug, Clone)]
 pub struct NoiseSampler {
@@ -60,6 +63,8 @@ pub struct NoiseEstimate {
     pub bin_median: f64,
     /// Shape k = TW·N_p of the noise bins' law.
     pub shape: f64,
+    /// How N0 was obtained: [`ESTIMATOR`] or [`GIVEN`] (metadata `n0_estimator`).
+    pub estimator: &'static str,
 }
 
 impl NoiseSampler {
@@ -91,15 +96,12 @@ impl NoiseSampler {
     /// over its mean has the median `law_median` ([`bin_law_median`]); `None` when no bin was
     /// pushed.
     pub fn estimate(mut self, tw: f64, pulses: usize, law_median: f64) -> Option<NoiseEstimate> {
-        if self.kept.is_empty() {
-            return None;
-        }
         self.kept.sort_unstable_by(f64::total_cmp);
-        let n = self.kept.len();
-        let bin_median = 0.5 * (self.kept[(n - 1) / 2] + self.kept[n / 2]);
+        let bin_median = crate::stats::sorted::median(&self.kept)?;
         let shape = tw * pulses as f64;
         Some(NoiseEstimate {
             n0: bin_median / (tw * law_median),
+            estimator: ESTIMATOR,
             bin_mean: self.sum / self.count as f64,
             bin_median,
             shape,
@@ -117,6 +119,7 @@ impl NoiseEstimate {
             bin_mean: n0 * tw,
             bin_median: n0 * tw * law_median(shape),
             shape,
+            estimator: GIVEN,
         }
     }
 }
@@ -151,18 +154,19 @@ pub fn bin_law_median(proc: &super::EnergyProcessor, pulses: usize) -> f64 {
         .map(|_| mu.iter().map(|m| m * g.sample(&mut rng)).sum())
         .collect();
     draws.sort_unstable_by(f64::total_cmp);
-    let n = draws.len();
-    0.5 * (draws[(n - 1) / 2] + draws[n / 2])
+    crate::stats::sorted::median(&draws).unwrap_or(1.0)
 }
 
 /// Median of Gamma(k, rate k) (mean 1): the two-moment approximation of the noise bin's
 /// median over its mean (used for a table drawn with a known N0).
 pub fn law_median(shape: f64) -> f64 {
-    match Gamma::new(shape, shape) {
-        Ok(g) => g.inverse_cdf(0.5),
-        // k is TW·N_p ≥ 1 for every window; a degenerate k falls back to the mean
-        Err(_) => 1.0,
-    }
+    law_quantile(shape, 0.5)
+}
+
+/// The q-quantile of Gamma(k, rate k) (mean 1), the two-moment law of a noise bin over its
+/// mean. k is TW·N_p ≥ 1 for every window; a degenerate k gives 1 (the mean).
+pub fn law_quantile(shape: f64, q: f64) -> f64 {
+    Gamma::new(shape, shape).map_or(1.0, |g| g.inverse_cdf(q))
 }
 
 #[cfg(test)]

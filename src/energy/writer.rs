@@ -57,7 +57,7 @@ pub fn table_metadata(
             "noise_bin_median".into(),
             format!("{:.17e}", noise.bin_median),
         ),
-        ("n0_estimator".into(), super::noise::ESTIMATOR.to_string()),
+        ("n0_estimator".into(), noise.estimator.to_string()),
         ("campaign".into(), m.name.clone()),
         (
             "band".into(),

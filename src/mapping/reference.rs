@@ -211,11 +211,7 @@ mod tests {
     use super::*;
     use std::path::Path;
 
-    const SQUARE: &str = r#"{"type":"FeatureCollection","features":[
-      {"type":"Feature","properties":{"role":"perimeter","material":"concrete"},
-       "geometry":{"type":"Polygon","coordinates":[[[0,0],[0,2],[4,2],[4,0],[0,0]]]}},
-      {"type":"Feature","properties":{"role":"obstacle","name":"pillar"},
-       "geometry":{"type":"Polygon","coordinates":[[[1.9,0.9],[2.1,0.9],[2.1,1.1],[1.9,1.1],[1.9,0.9]]]}}]}"#;
+    use crate::campaign::layout::tests::SQUARE;
 
     #[test]
     fn raster_classes() {

@@ -157,10 +157,8 @@ pub fn synth_channel(
     write_truth(&truth_dir, channel)?;
     let noise = energy::noise::NoiseEstimate::of_law(resp.n0, resp.proc.tw(), m.pulses);
     let mut meta = energy::table_metadata(m, &resp.proc, &noise);
-    // the model gives every profile, also where the measured campaign has no sweep; its
-    // N0 is given, not estimated
-    meta.retain(|(k, _)| k != "missing" && k != "n0_estimator");
-    meta.push(("n0_estimator".into(), "given".into()));
+    // the model gives every profile, also where the measured campaign has no sweep
+    meta.retain(|(k, _)| k != "missing");
     meta.push(("source".into(), "synth".into()));
     meta.push(("seed".into(), seed.to_string()));
     energy::write_table(out, m, nb, &energies, meta)?;
