@@ -118,6 +118,25 @@ fn three_scenes_pass_and_generalise() {
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
+/// A zoo scene simulated into `dir` (Parquet sweeps), its energy table and the chain's
+/// fitted model (with its levels), as `reproduce` runs them.
+fn zoo_fitted(
+    dir: &Path,
+    scene: &pradar::simulate::zoo::ZooScene,
+) -> (Campaign, EnergyMatrix, ModelConfig) {
+    let input = dir.join("in");
+    pradar::simulate::zoo::write(&input, std::slice::from_ref(scene)).unwrap();
+    let c = Campaign::load(&input.join(&scene.name).join("campaign.toml")).unwrap();
+    let sim =
+        pradar::simulate::simulate(&c, &dir.join("sim"), SweepFormat::Parquet, &|_, _| {}).unwrap();
+    let sc = Campaign::load(&sim.manifest).unwrap();
+    let e = dir.join("energy.parquet");
+    pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
+    let em = EnergyMatrix::read(&e).unwrap();
+    let a = pradar::pipeline::analyse(&sc, &em, dir, false).unwrap();
+    (sc, em, a.fit.unwrap().model)
+}
+
 /// The office's fitted model (`data/tests/office_model.toml`: the chain's model of the
 /// office, walls and vertices included) and the office campaign.
 fn office_model() -> (tempfile::TempDir, Campaign, ModelConfig) {
@@ -343,7 +362,9 @@ fn calibration_and_power(
 /// the level +10 dB, 3× the rays per cluster or a recorded N0 3 dB off are each rejected in
 /// at least 90 % of `POWER_REPS`. The AoA std ×0.3 is printed, not asserted. Figures in
 /// README.md's check paragraph. `PRADAR_CHECK_REPS` / `PRADAR_CHECK_POWER_REPS` override the
-/// counts (defaults 50 and 20), `PRADAR_CHECK_SCENES` the scenes (default `corridor,office`).
+/// counts (defaults 50 and 20), `PRADAR_CHECK_SCENES` the scenes (default `corridor,office`;
+/// zoo scenes by name, e.g. `corridor,office,z06-hall,z10-l-hall`: the two of the zoo with
+/// the fewest sweeps among the halls, picked for time, run with the chain's fitted model).
 #[test]
 #[ignore]
 fn check_calibration_and_power() {
@@ -382,6 +403,22 @@ fn check_calibration_and_power() {
         let path = dir.path().join("synth_5.parquet");
         let n = calibration_and_power("office", &c, &em, &path, &m, reps, power_reps);
         judge("office", n);
+    }
+    // zoo scenes (`pradar zoo --seed 1`), named in the list: the chain's fitted model of
+    // the physics scene, checked against synth tables of itself
+    let zoo = pradar::simulate::zoo::generate(1, 20);
+    for name in scenes.split(',').filter(|s| s.starts_with('z')) {
+        let scene = zoo
+            .iter()
+            .find(|z| z.name == name)
+            .unwrap_or_else(|| panic!("no zoo scene {name}"));
+        let dir = tempfile::tempdir().unwrap();
+        let t0 = std::time::Instant::now();
+        let (c, em, model) = zoo_fitted(dir.path(), scene);
+        println!("{name}: fitted in {:.0} s", t0.elapsed().as_secs_f64());
+        let path = dir.path().join("energy.parquet");
+        let n = calibration_and_power(name, &c, &em, &path, &model, reps, power_reps);
+        judge(name, n);
     }
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }

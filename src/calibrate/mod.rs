@@ -25,7 +25,7 @@
 //!
 //! **Prior**: independent log-uniform, p(θ_k) ∝ 1/θ_k on [a_k, b_k]. Defaults
 //! ([`DEFAULT_PRIOR`], wide for indoor mm-wave): λ 0.05–3 /ns, AoA 2–60°, d_c 0.3–20 m,
-//! d_p 0.05–1.5 m (synth caps offsets at 1.5 m), Γ 2–60 ns, γ 0.5–20 ns, σ 1e-4–1 m²,
+//! d_p 0.05–1.5 m (synth caps offsets at 1.5 m), Γ 2–60 ns (2 ns–10 µs for the excess decay of a schema-2 model, [`EXCESS_DECAY_PRIOR`]), γ 0.5–20 ns, σ 1e-4–1 m²,
 //! rays 1–20; σ′ 1e-3–1 m²/m, Lambert n 0.2–10. `--prior FILE` (model schema): a free
 //! quantity's `interval = [a, b]` is its prior range (a > 0); `a = b` holds it fixed at a;
 //! no interval keeps the default range. `--walls` (no prior file,
@@ -124,6 +124,13 @@ pub const DEFAULT_PRIOR: [(&str, f64, f64); 13] = [
     ("walls.edge_rcs", 1e-4, 10.0),
 ];
 
+/// The excess cluster decay's default prior range in a schema-2 model (`cluster_decay`
+/// is then the decay beyond each cluster's own r⁻⁴, and its schema bound 10 µs is no
+/// excess decay over any indoor profile): 2 ns to 10 µs, log-uniform. A prior file's
+/// interval whose upper end is `inf` (what `fit` writes when the data show no excess
+/// decay) takes this upper end.
+pub const EXCESS_DECAY_PRIOR: (f64, f64) = (2.0, 1e4);
+
 /// A free quantity whose 95 % interval spans at least this share of its prior range in
 /// ln units is reported as not informed by the data ([`Calibration::width_share`]).
 pub const UNINFORMED_SHARE: f64 = 0.9;
@@ -143,7 +150,8 @@ pub struct Prior {
 }
 
 impl Prior {
-    /// The default prior ([`DEFAULT_PRIOR`] over `table1_defaults`, no `[diffuse]`).
+    /// The default prior ([`DEFAULT_PRIOR`] over `table1_defaults`, a schema-2 model: Γ the
+    /// excess decay over [`EXCESS_DECAY_PRIOR`]; no `[diffuse]`).
     pub fn default_prior() -> Prior {
         Prior::from_template(ModelConfig::table1_defaults(), Path::new("(default prior)"))
             .expect("the default prior is valid")
@@ -184,11 +192,25 @@ impl Prior {
         let (mut free, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new());
         // the intervals the file gives: (quantity, as printed, ends)
         let mut given = Vec::new();
+        let excess = template.schema_version >= 2;
         for (name, a, b) in DEFAULT_PRIOR {
             let Some(q) = template.quantity(name) else {
                 continue; // a diffuse or walls quantity without its section
             };
-            let (a, b) = match q.interval {
+            let (a, b) = if excess && name == "cluster_decay" {
+                EXCESS_DECAY_PRIOR
+            } else {
+                (a, b)
+            };
+            // a schema-2 excess decay open upwards (no excess decay in the data's
+            // bootstrap) reaches the schema's bound
+            let interval = match q.interval {
+                Some([x, y]) if excess && name == "cluster_decay" && y == f64::INFINITY => {
+                    Some([x.min(EXCESS_DECAY_PRIOR.1), EXCESS_DECAY_PRIOR.1])
+                }
+                i => i,
+            };
+            let (a, b) = match interval {
                 Some([x, y]) => {
                     let range = format!("{name}.interval [{}, {}]", short(x), short(y));
                     if !(x > 0.0 && x <= y && y.is_finite()) {
@@ -517,8 +539,26 @@ mod tests {
         let w = Prior::default_with_walls();
         assert_eq!(w.free.len(), 13);
         for (k, (name, a, b)) in DEFAULT_PRIOR.iter().enumerate() {
-            assert_eq!((w.free[k].as_str(), w.lo[k], w.hi[k]), (*name, *a, *b));
+            // a schema-2 template's Γ is the excess decay, over its own range
+            let (a, b) = if *name == "cluster_decay" {
+                EXCESS_DECAY_PRIOR
+            } else {
+                (*a, *b)
+            };
+            assert_eq!((w.free[k].as_str(), w.lo[k], w.hi[k]), (*name, a, b));
         }
+        // a schema-1 template keeps the total decay's range, and a fitted schema-2 file's
+        // interval open upwards reaches the excess range's end
+        let mut v1 = ModelConfig::table1_defaults();
+        v1.schema_version = 1;
+        let p1 = Prior::from_template(v1, Path::new("p.toml")).unwrap();
+        let k = p1.free.iter().position(|f| f == "cluster_decay").unwrap();
+        assert_eq!((p1.lo[k], p1.hi[k]), (2.0, 60.0));
+        let mut open = ModelConfig::table1_defaults();
+        open.cluster_decay.value = f64::INFINITY;
+        open.cluster_decay.interval = Some([30.0, f64::INFINITY]);
+        let po = Prior::from_template(open, Path::new("p.toml")).unwrap();
+        assert_eq!((po.lo[k], po.hi[k]), (30.0, EXCESS_DECAY_PRIOR.1));
         assert_eq!((d.lo[0], d.hi[0]), (0.05, 3.0));
         let mut m = ModelConfig::table1_defaults();
         m.ray_decay.interval = Some([1.0, 8.0]);

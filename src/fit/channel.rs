@@ -30,9 +30,13 @@
 //!   for the families, the KS test, the plots and the std. Reported in m and as ns one-way
 //!   (m/c) and round-trip (2m/c);
 //! * Γ, γ: decay = −10·log10(e)/slope of power (dB) against delay.
-//!   - Γ: least-squares line (slope and intercept) of the clusters' total power against
-//!     their first arrival, both relative to the position's first cluster. Cluster powers
-//!     scatter both ways (log-normal σ, range), so least squares.
+//!   - Γ, the *excess* cluster decay (model schema 2: each cluster at its own range):
+//!     least-squares line of the clusters' range-corrected total power
+//!     P_l + 40·log10 r_l (r_l = c·T_l/2, T_l the cluster's first arrival) against T_l,
+//!     both relative to the position's first cluster. The radar equation's r⁻⁴ is the
+//!     model's own, so what is left is the decay beyond it; no decaying trend is Γ = ∞
+//!     (a value, not a refusal). Cluster powers scatter both ways (log-normal σ), so
+//!     least squares.
 //!   - γ: least-absolute-deviation line through the origin of the rays' power relative to
 //!     their cluster's first ray against excess delay (the x-weighted median of y/x). The
 //!     line passes through the first ray by construction, and the errors are one-sided:
@@ -46,13 +50,14 @@
 //! parametric-bootstrap p-value, and the candidate families ranked by AIC.
 //!
 //! Partial fits. A quantity these data cannot give is marked not estimable, with the
-//! reason in one short line, in the model file (`not_estimable = "<reason>"`, no value)
-//! and in Table 1 ("not estimable: <reason>"), and the others are fitted and written:
+//! reason in one short line, in the model file (`not_estimable = "<reason>"` beside the
+//! stated value synth draws, [`ModelConfig::with_stated_values`]) and in Table 1 ("not
+//! estimable: <reason>; drawn at <value>"), and the others are fitted and written:
 //! * what marks a quantity: fewer than 2 samples (Λ with fewer than 2 clusters at every
 //!   position, λ and the AoA with single-ray clusters, d_p with fewer than 2 clusters in
 //!   the interior), a family that does not fit the samples or a value that is not finite
 //!   and positive, no cluster on the observed perimeter (d_c), no decaying trend or fewer
-//!   than 3 powers (Γ, γ), no clusters (the means). Too few positions for the bootstrap
+//!   than 3 powers (γ), fewer than 3 powers (Γ), no clusters (the means). Too few positions for the bootstrap
 //!   only leave the interval out; too few complete gaps only d_c's families and KS.
 //! * what stays an error: bad input — an unreadable or malformed table, negative position
 //!   or cluster ids, a position outside the campaign, a delay or angle that is not finite,
@@ -73,8 +78,8 @@ use crate::fit::geometry::{
     Interior, OBSERVED_STEP_M,
 };
 use crate::fit::quantities::{
-    decay, decay_lad0, decay_quantity, fit_arrivals, fit_offset, fit_spacing, mean_quantity,
-    Groups, PairGroups, Resampling,
+    decay_lad0, decay_quantity, excess_decay_quantity, fit_arrivals, fit_offset, fit_spacing,
+    mean_quantity, Groups, PairGroups, Resampling,
 };
 use crate::model::file::{BinSettings, ModelConfig};
 use crate::table;
@@ -131,6 +136,7 @@ pub fn fit_channel(clusters: &Path, c: &Campaign, p: &FitValid) -> Result<Channe
         block: bootstrap_block(&c.manifest),
     };
     f.model.diffuse = crate::fit::diffuse::fit_diffuse_table(clusters, c.manifest.positions(), &r)?;
+    f.model = f.model.with_stated_values();
     f.model.check()?;
     Ok(f)
 }
@@ -247,13 +253,13 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         "perimeter_spacing".to_string(),
         fit_spacing(&s.dc, &s.exposure, &r),
     );
-    let cluster_decay = decay_quantity(&s.cluster_pairs(), "cluster", 6, decay, &r);
+    let cluster_decay = excess_decay_quantity(&s.cluster_pairs(), 6, &r);
     let ray_decay = decay_quantity(&s.ray_decay, "ray", 9, decay_lad0, &r);
     let rays_per_cluster = mean_quantity(&s.members, "count", "poisson", 7, &r);
     let cluster_rrcs = mean_quantity(&s.sigma, "m2", "lognormal", 8, &r);
     let q = |k: &str| details[k].q.clone();
     let model = ModelConfig {
-        schema_version: 1,
+        schema_version: crate::model::file::SCHEMA_VERSION,
         array: Some(m.array),
         band: Some(m.band),
         bins: Some(BinSettings {
@@ -275,6 +281,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
     };
     model.check()?;
     nothing_estimable(clusters, rays.len(), &model)?;
+    let model = model.with_stated_values();
     Ok(ChannelFit {
         model,
         dc_m: details
@@ -429,7 +436,7 @@ struct Samples {
     exposure: Groups,
     /// Rays per cluster.
     members: Groups,
-    /// (first arrival ns, total power dB) per cluster.
+    /// (first arrival ns, total power dB + 40·log10 of its range) per cluster.
     cl_power: PairGroups,
     /// (excess delay ns, power relative to the cluster's first ray dB) per ray.
     ray_decay: PairGroups,
@@ -506,7 +513,9 @@ impl Samples {
                 .map(|r| 10f64.powf(r.power_db / 10.0))
                 .sum::<f64>()
                 .log10();
-        self.cl_power[pos].push((d[0], total));
+        // range-corrected: the model's own r⁻⁴ at the cluster's first arrival removed
+        let r0 = range_m(d[0]).max(1e-3);
+        self.cl_power[pos].push((d[0], total + 40.0 * r0.log10()));
         let first_ray = rs
             .iter()
             .min_by(|a, b| a.delay_ns.total_cmp(&b.delay_ns))
@@ -539,7 +548,8 @@ impl Samples {
         }
     }
 
-    /// The clusters' (first arrival, total power) relative to the position's first cluster.
+    /// The clusters' (first arrival, range-corrected total power) relative to the
+    /// position's first cluster.
     fn cluster_pairs(&self) -> PairGroups {
         self.cl_power
             .iter()
@@ -671,8 +681,15 @@ mod tests {
             && r == "no intra-cluster gaps (every cluster has a single ray)"));
         assert!(f.details["inter_cluster_rate"].samples.is_empty());
         let rows = crate::fit::table1::rows(&f, Some(&f));
-        assert!(rows[0].value.is_nan());
-        assert!(rows[0].value_shown.starts_with("not estimable: "));
+        // flagged, with the stated value synth draws (the paper's Λ)
+        assert_eq!(rows[0].value, 0.21);
+        assert!(
+            rows[0].value_shown.starts_with("not estimable: ")
+                && rows[0].value_shown.ends_with("drawn at 0.21 1/ns (stated)"),
+            "{}",
+            rows[0].value_shown
+        );
+        f.model.require_estimable(&Default::default()).unwrap();
         assert_eq!(rows[0].truth_shown(), rows[0].value_shown);
     }
 

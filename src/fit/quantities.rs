@@ -8,8 +8,9 @@
 //!   plots from the offsets folded at the wall.
 //! * d_c: the censored estimate Σ L / Σ k and its interval; the families, KS and plots
 //!   from the complete gaps (none when fewer than two).
-//! * Γ: least-squares decay; γ: least-absolute-deviation decay through the origin (see
-//!   [`channel`](super::channel) for why).
+//! * Γ: least-squares excess decay of the range-corrected cluster powers, ∞ without an
+//!   excess ([`excess_decay_quantity`]); γ: least-absolute-deviation decay through the
+//!   origin (see [`channel`](super::channel) for why).
 //!
 //! Every resampling stream is keyed by the seed and the quantity's own offset, so the
 //! quantities do not depend on the order they are fitted in.
@@ -356,6 +357,68 @@ pub(super) fn decay_quantity(
     }
 }
 
+/// Excess decay rates below this (1/ns; Γ above 10 µs, the schema's bound) are no excess
+/// decay (Γ = ∞): over an indoor profile of a few hundred ns they change no power by
+/// more than a few percent.
+pub const NO_EXCESS_RATE_PER_NS: f64 = 1e-4;
+
+/// The excess cluster decay Γ (model schema 2) from (excess delay ns, range-corrected
+/// relative power dB) pairs per position: the least-squares slope s (dB/ns) as a rate
+/// k = max(−s/(10·log10 e), 0) (1/ns), Γ = 1/k, and Γ = ∞ (no excess decay) where
+/// k < [`NO_EXCESS_RATE_PER_NS`]. The interval bootstraps the rate (finite, so every
+/// resample counts) and inverts its ends, the upper one ∞ when the rate's lower end is 0;
+/// none when the whole rate interval is 0. Not estimable with fewer than 3 powers (the
+/// stated value ∞ is then drawn).
+pub(super) fn excess_decay_quantity(
+    pairs: &[Vec<(f64, f64)>],
+    seed: u64,
+    r: &Resampling,
+) -> Quantity {
+    let rate = |p: &[(f64, f64)]| -> Option<f64> {
+        if p.len() < 3 {
+            return None;
+        }
+        let (slope, _) = ls_line(p)?;
+        Some((-slope / (10.0 * std::f64::consts::LOG10_E)).max(0.0))
+    };
+    let decay_of = |k: f64| {
+        if k >= NO_EXCESS_RATE_PER_NS {
+            1.0 / k
+        } else {
+            f64::INFINITY
+        }
+    };
+    let all: Vec<(f64, f64)> = pairs.iter().flatten().copied().collect();
+    let Some(k) = rate(&all) else {
+        return Quantity {
+            n: Some(all.len()),
+            ..Quantity::not_estimable(
+                "ns",
+                "exponential",
+                format!("{} cluster powers, at least 3 needed", all.len()),
+            )
+        };
+    };
+    let enc: Groups = pairs
+        .iter()
+        .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
+        .collect();
+    let iv = bootstrap_groups(
+        &enc,
+        |s| rate(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
+        r.bootstrap,
+        r.seed ^ seed,
+        r.block,
+    )
+    .filter(|[_, hi]| *hi >= NO_EXCESS_RATE_PER_NS)
+    .map(|[lo, hi]| [decay_of(hi), decay_of(lo.max(0.0))]);
+    Quantity {
+        interval: iv,
+        n: Some(all.len()),
+        ..Quantity::new(decay_of(k), "ns", "exponential")
+    }
+}
+
 /// The mean of the samples with its position-bootstrap interval (rays per cluster, σ); not
 /// estimable without clusters (or when the mean is not finite and positive).
 pub(super) fn mean_quantity(
@@ -383,7 +446,9 @@ pub(super) fn mean_quantity(
     }
 }
 
-/// Least-squares decay constant from (delay, dB) pairs: −10·log10(e)/slope.
+/// Least-squares decay constant from (delay, dB) pairs: −10·log10(e)/slope (the tests'
+/// foil for [`decay_lad0`]).
+#[cfg(test)]
 pub(super) fn decay(pairs: &[(f64, f64)]) -> Option<f64> {
     if pairs.len() < 3 {
         return None;
@@ -434,6 +499,55 @@ pub(super) fn decay_lad0(pairs: &[(f64, f64)]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn excess_decay_is_infinite_without_a_trend_and_the_rate_inverse_with_one() {
+        let r = Resampling {
+            bootstrap: 200,
+            seed: 3,
+            block: 1,
+        };
+        let k = 10.0 * std::f64::consts::LOG10_E;
+        // 8 positions, clusters on a 25 ns excess decay with ±2 dB alternating scatter
+        let decaying: Vec<Vec<(f64, f64)>> = (0..8)
+            .map(|p| {
+                (0..6)
+                    .map(|i| {
+                        let t = 7.0 * i as f64 + p as f64;
+                        (t, -k * t / 25.0 + if (i + p) % 2 == 0 { 2.0 } else { -2.0 })
+                    })
+                    .collect()
+            })
+            .collect();
+        let q = excess_decay_quantity(&decaying, 6, &r);
+        assert!((q.value - 25.0).abs() < 2.0, "Γ {}", q.value);
+        let [lo, hi] = q.interval.expect("interval");
+        assert!(lo < q.value && q.value < hi && hi.is_finite(), "{lo} {hi}");
+        // flat (range-corrected powers that only scatter): Γ = ∞, a value, not a refusal
+        let flat: Vec<Vec<(f64, f64)>> = (0..8)
+            .map(|p| {
+                (0..6)
+                    .map(|i| {
+                        (
+                            7.0 * i as f64 + p as f64,
+                            if (i + p) % 2 == 0 { 1.5 } else { -1.5 },
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        let q = excess_decay_quantity(&flat, 6, &r);
+        assert!(q.is_estimable() && q.value == f64::INFINITY, "{q:?}");
+        if let Some([lo, hi]) = q.interval {
+            assert!(lo.is_finite() && hi == f64::INFINITY, "{lo} {hi}");
+        }
+        // rising powers are no excess decay either; two powers are not enough
+        let rising = vec![vec![(0.0, 0.0), (5.0, 3.0), (9.0, 6.0)]];
+        assert_eq!(excess_decay_quantity(&rising, 6, &r).value, f64::INFINITY);
+        let two = vec![vec![(0.0, 0.0), (5.0, -3.0)]];
+        let q = excess_decay_quantity(&two, 6, &r);
+        assert!(!q.is_estimable() && q.value.is_nan());
+    }
 
     #[test]
     fn lad_decay_ignores_one_sided_contamination() {

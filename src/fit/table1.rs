@@ -187,7 +187,8 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
         value: q.value,
         unit: q.unit.clone(),
         value_shown: match &q.not_estimable {
-            Some(reason) => not_estimable_shown(reason),
+            Some(reason) => stated_shown(reason, q),
+            None if q.value == f64::INFINITY => "∞ (no excess decay)".to_string(),
             None => format!("{:.3} {}", q.value, q.unit),
         },
         interval: q.interval,
@@ -235,7 +236,7 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
             None,
         ),
         row(
-            "cluster power decay Γ",
+            "cluster power decay Γ (beyond r⁻⁴)",
             &m.cluster_decay,
             String::new(),
             None,
@@ -289,16 +290,27 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
     rows
 }
 
-/// A value cell's text when the quantity is not estimable.
-fn not_estimable_shown(reason: &str) -> String {
-    format!("not estimable: {reason}")
+/// A value cell's text when the quantity is not estimable: the reason, and the stated value
+/// synth draws in its place (schema 2; none in a schema-1 model).
+fn stated_shown(reason: &str, q: &Quantity) -> String {
+    if q.value.is_nan() {
+        format!("not estimable: {reason}")
+    } else if q.value == f64::INFINITY {
+        format!("not estimable: {reason}; drawn at ∞ (stated)")
+    } else {
+        format!(
+            "not estimable: {reason}; drawn at {} {} (stated)",
+            crate::error::short(q.value),
+            q.unit
+        )
+    }
 }
 
 /// d_c as shown: the mean spacing (the model value, the censored estimate) in m and ns
 /// one-way / round-trip, and the std of the complete gaps.
 fn spacing_shown(f: &ChannelFit) -> String {
     if let Some(reason) = &f.model.perimeter_spacing.not_estimable {
-        return not_estimable_shown(reason);
+        return stated_shown(reason, &f.model.perimeter_spacing);
     }
     let dc = &f.dc_m;
     let n = dc.len().max(1) as f64;

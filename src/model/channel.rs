@@ -13,9 +13,17 @@
 //!   r − m, m the members' mean extra depth c·τ_k/2, so the fitted centroid (the members'
 //!   mean position) is the drawn one. A cluster is seen when the segment pose → centroid
 //!   crosses no wall.
-//! * Powers: |A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} / ((4π)³ d_0⁴), T_0 the first
-//!   arrival of the first visible cluster in the scanned half-plane at range d_0: the first
-//!   cluster follows the radar equation exactly, later ones decay with Γ and γ.
+//! * Powers (model schema 2): every cluster at its own range,
+//!   |A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} / ((4π)³ r_l⁴), r_l = c·T_l/2 the range
+//!   of the cluster's first arrival and T_0 the first arrival of the first visible cluster
+//!   in the scanned half-plane: each cluster follows the radar equation (a point target
+//!   of σ_l at r_l, as `simulate`'s clutter), and Γ is the decay *in excess* of it
+//!   (Γ = ∞: none). Why: anchoring every cluster of a pose at the first cluster's range
+//!   d_0 (schema 1, below) lets one cluster 0.3 m from a pose lift all of that pose's
+//!   clusters by (r_l/d_0)⁴, so draws of one model differed wildly (the check rejected
+//!   its own model's data 8 times in 20) and Γ had to stand in for the path loss.
+//! * Schema 1 files keep their meaning: |A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} /
+//!   ((4π)³ d_0⁴), d_0 = c·T_0/2, Γ the total decay.
 //!
 //! ```
 //! use pradar::campaign::layout::Layout;
@@ -153,12 +161,19 @@ impl ChannelModel {
             return Vec::new();
         };
         let d0 = crate::units::range_from_delay_s(t0);
-        let re = 1.0 / ((4.0 * PI).powi(3) * d0.powi(4));
+        let own_range = self.config.schema_version >= 2;
+        let radar = |d: f64| 1.0 / ((4.0 * PI).powi(3) * d.powi(4));
         let gamma_c = self.config.cluster_decay.value * 1e-9;
         let gamma_r = self.config.ray_decay.value;
         let mut out = Vec::new();
         for (l, t, th) in seen {
             let c = &self.clusters[l];
+            let re = radar(if own_range {
+                crate::units::range_from_delay_s(t)
+            } else {
+                d0
+            });
+            // Γ = ∞ (schema 2): no excess decay, e^{−x/∞} = 1
             let pc = c.sigma_m2 * (-(t - t0).max(0.0) / gamma_c).exp() * re;
             for r in &c.rays {
                 let tau = t + r.excess_ns * 1e-9;
@@ -210,4 +225,68 @@ pub struct SeenRay {
     /// Phase of the scatterer's complex amplitude, rad, added to the path phase
     /// −2πf_c(τ + τ_g): 0 for cluster rays, uniform for diffuse points (complex Gaussian).
     pub phase: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two one-ray clusters of σ = 1 m² straight ahead of a pose at the origin of the
+    /// 16 m × 10 m hall, at 2 m and 6 m.
+    fn two_clusters(config: ModelConfig) -> (Layout, ChannelModel) {
+        let p = concat!(env!("CARGO_MANIFEST_DIR"), "/data/tests/hall.geojson");
+        let layout = Layout::load(std::path::Path::new(p)).unwrap();
+        let cluster = |x: f64| ModelCluster {
+            centre: Coord { x, y: 0.0 },
+            arc_m: 0.0,
+            offset_m: 0.3,
+            sigma_m2: 1.0,
+            rays: vec![ModelRay {
+                excess_ns: 0.0,
+                aoa_rad: 0.0,
+            }],
+            mean_depth_m: 0.0,
+        };
+        let model = ChannelModel {
+            config,
+            clusters: vec![cluster(2.0), cluster(6.0)],
+        };
+        (layout, model)
+    }
+
+    #[test]
+    fn each_cluster_follows_the_radar_equation_at_its_own_range() {
+        let radar = |d: f64| 1.0 / ((4.0 * PI).powi(3) * d.powi(4));
+        // schema 2 with no excess decay: each cluster is a point target at its range
+        let mut m = ModelConfig::table1_defaults();
+        assert_eq!(m.schema_version, 2);
+        m.cluster_decay.value = f64::INFINITY;
+        m.check().unwrap();
+        let (layout, ch) = two_clusters(m.clone());
+        let rays = ch.rays_from(&layout, Coord { x: 0.0, y: 0.0 }, 0.0);
+        assert_eq!(rays.len(), 2);
+        for (ray, d) in rays.iter().zip([2.0, 6.0]) {
+            assert!(
+                (ray.amp2 / radar(d) - 1.0).abs() < 1e-9,
+                "{} at {d} m",
+                ray.amp2
+            );
+        }
+        // a finite excess decay multiplies the farther one by e^{−ΔT/Γ}
+        m.cluster_decay.value = 10.0;
+        let (layout, ch) = two_clusters(m);
+        let rays = ch.rays_from(&layout, Coord { x: 0.0, y: 0.0 }, 0.0);
+        let dt_ns = crate::units::delay_ns(6.0) - crate::units::delay_ns(2.0);
+        let want = radar(6.0) * (-dt_ns / 10.0).exp();
+        assert!((rays[1].amp2 / want - 1.0).abs() < 1e-9);
+        // schema 1 keeps its meaning: both anchored at the first cluster's range
+        let v1 = ModelConfig {
+            schema_version: 1,
+            ..ModelConfig::table1_defaults()
+        };
+        let (layout, ch) = two_clusters(v1);
+        let rays = ch.rays_from(&layout, Coord { x: 0.0, y: 0.0 }, 0.0);
+        let want = radar(2.0) * (-dt_ns / 12.0).exp();
+        assert!((rays[1].amp2 / want - 1.0).abs() < 1e-9);
+    }
 }

@@ -29,15 +29,34 @@
 //!   follows from the layout (an input) once |Γ| is known, so a model with it is
 //!   quasi-deterministic (geometry rays plus stochastic clusters).
 //!
-//! A quantity the fit could not estimate (too few clusters, no decaying trend) carries
-//! `not_estimable = "<reason>"` and no `value` (read back as NaN); [`ModelConfig::check`]
-//! accepts it, and [`ModelConfig::require_estimable`] — what `synth` calls — refuses it,
-//! naming it, unless a value is supplied.
+//! **Schema versions.** `schema_version = 2` (what this build writes, [`SCHEMA_VERSION`]):
+//! * the cluster law puts every cluster at its own range: ray k of cluster l has
+//!   |A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} / ((4π)³ r_l⁴), r_l = c·T_l/2 the range of
+//!   the cluster's first arrival and T_0 the pose's first visible cluster (`model::channel`),
+//!   so `cluster_decay` Γ is the *excess* decay on top of the radar equation's r⁻⁴, and
+//!   `value = inf` (no excess decay: the radar equation alone) is legal, as is an
+//!   `interval` whose upper end is `inf`;
+//! * a quantity the data cannot inform carries `not_estimable = "<reason>"` *and* a stated,
+//!   drawable `value` ([`ModelConfig::with_stated_values`]: the paper's Table 1 where it
+//!   gives one, the documented defaults elsewhere, Γ = ∞), so `synth`, `check`,
+//!   `calibrate --prior` and the experiments accept every file `fit` writes as it is, and
+//!   Table 1 says which values are stated rather than estimated.
+//!
+//! `schema_version = 1` (files written before) is read with its old meaning: every cluster
+//! of a pose is anchored at the range d_0 of the pose's first visible cluster
+//! (|A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} / ((4π)³ d_0⁴), Γ the total decay, path
+//! loss included, finite), and a not-estimable quantity has no `value` (read back as NaN):
+//! [`ModelConfig::check`] accepts it, and [`ModelConfig::require_estimable`] — what `synth`
+//! calls — refuses it, naming it, unless a value is supplied with `--set`.
 
 use crate::campaign::manifest::{one_line, ArrayConfig, Band};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+
+/// The model schema version this build writes (older versions are read with their meaning:
+/// module docs).
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// The comment block every saved model file opens with: each quantity's meaning and
 /// estimator (the module docs of `fit`, `model::levels` and `calibrate` have the equations).
@@ -47,8 +66,10 @@ pub const HEADER: &str = "\
 # From the clustered MPCs (`fit`): inter_cluster_rate Λ (1/ns, informational: synth derives
 #   it from d_c), intra_cluster_rate λ (1/ns), intra_cluster_aoa (deg, Laplacian std of the
 #   rays' angle offsets), perimeter_offset d_p (m), perimeter_spacing d_c (m), cluster_decay
-#   Γ and ray_decay γ (ns), rays_per_cluster (mean); [diffuse] lambert_exponent, power_share,
-#   decay.
+#   Γ (ns, the excess decay of cluster power beyond each cluster's own r⁻⁴; inf = none) and
+#   ray_decay γ (ns), rays_per_cluster (mean); [diffuse] lambert_exponent, power_share, decay.
+# A quantity with not_estimable = \"<reason>\" was not informed by these data: its value is
+#   a stated default that synth draws from (schema_version 2), not an estimate.
 # Levels read from the energy table through the model's own forward response
 #   (`fit --energy`, `reproduce`; model::levels): walls.specular_gamma and
 #   walls.material_gamma.<material> (|Γ| at normal incidence: sqrt of the median ratio of the
@@ -96,12 +117,18 @@ fn two_bounds<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>
 
 /// The fit's diagnostics of a quantity, when present: a finite, ordered interval, a KS
 /// statistic and p-value in [0, 1].
-fn check_diagnostics(name: &str, q: &Quantity) -> Result<()> {
+fn check_diagnostics(name: &str, q: &Quantity, infinite_ok: bool) -> Result<()> {
     if let Some([lo, hi]) = q.interval {
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+        let hi_ok = hi.is_finite() || (infinite_ok && hi == f64::INFINITY);
+        if !(lo.is_finite() && hi_ok && lo <= hi) {
+            let what = if infinite_ok {
+                "must be finite (the upper end may be inf) with lo <= hi"
+            } else {
+                "must be finite with lo <= hi"
+            };
             return Err(Error::param(
                 format!("{name}.interval"),
-                format!("[{lo}, {hi}] must be finite with lo <= hi"),
+                format!("[{lo}, {hi}] {what}"),
             ));
         }
     }
@@ -122,7 +149,8 @@ fn check_diagnostics(name: &str, q: &Quantity) -> Result<()> {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Quantity {
-    /// Estimate (or true value); NaN (absent from the file) when not estimable.
+    /// Estimate (or true value); when not estimable, the stated value drawn from (schema 2)
+    /// or NaN (absent from the file; schema 1).
     #[serde(default = "nan", skip_serializing_if = "is_nan")]
     pub value: f64,
     /// Unit.
@@ -147,7 +175,8 @@ pub struct Quantity {
     /// Sample size.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub n: Option<usize>,
-    /// Why the quantity could not be estimated (its value is then NaN).
+    /// Why the quantity could not be estimated (its value is then a stated default, or NaN
+    /// in a schema-1 file).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub not_estimable: Option<String>,
 }
@@ -176,9 +205,15 @@ impl Quantity {
         }
     }
 
-    /// Whether the quantity has a value.
+    /// Whether the quantity was estimated (not flagged not estimable).
     pub fn is_estimable(&self) -> bool {
         self.not_estimable.is_none()
+    }
+
+    /// Whether a generator can draw from it: it has a value (estimated, or stated for a
+    /// flagged quantity).
+    pub fn is_drawable(&self) -> bool {
+        !self.value.is_nan()
     }
 }
 
@@ -237,7 +272,7 @@ pub struct BinSettings {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelConfig {
-    /// Schema version (1).
+    /// Schema version: [`SCHEMA_VERSION`] (2), or 1 read with its old meaning (module docs).
     pub schema_version: u32,
     /// Array the data came from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -302,10 +337,11 @@ pub struct CalibrationMeta {
 impl ModelConfig {
     /// Defaults: Table 1 of the source paper where it gives a value (Λ 0.21/ns, λ 0.43/ns,
     /// AoA std 16.9°, perimeter distance 5.02 ns read one-way → d_c = 1.505 m), and stated
-    /// choices elsewhere (d_p 0.3 m, Γ 12 ns, γ 3 ns, 6 rays per cluster, σ 0.01 m²).
+    /// choices elsewhere (d_p 0.3 m, Γ 12 ns of excess decay, γ 3 ns, 6 rays per cluster,
+    /// σ 0.01 m²); schema [`SCHEMA_VERSION`].
     pub fn table1_defaults() -> Self {
         ModelConfig {
-            schema_version: 1,
+            schema_version: SCHEMA_VERSION,
             array: None,
             band: None,
             bins: None,
@@ -328,12 +364,16 @@ impl ModelConfig {
     /// and positive, every value must lie in the range the schema gives its quantity
     /// (with its reason), and the family must be one of [`FAMILIES`].
     pub fn check(&self) -> Result<()> {
-        if self.schema_version != 1 {
+        if !(1..=SCHEMA_VERSION).contains(&self.schema_version) {
             return Err(Error::param(
                 "schema_version",
-                format!("unsupported {}", self.schema_version),
+                format!(
+                    "unsupported {} (this build reads 1 to {SCHEMA_VERSION})",
+                    self.schema_version
+                ),
             ));
         }
+        let v2 = self.schema_version >= 2;
         for (name, v, unit) in self.quantities() {
             if v.unit != unit {
                 return Err(Error::param(
@@ -351,14 +391,21 @@ impl ModelConfig {
                     ),
                 ));
             }
-            check_diagnostics(name, v)?;
+            // the excess cluster decay of schema 2 may be infinite (no excess decay)
+            let infinite_ok = v2 && name == "cluster_decay";
+            check_diagnostics(name, v, infinite_ok)?;
             if let Some(reason) = &v.not_estimable {
-                if !v.value.is_nan() {
+                if v.value.is_nan() {
+                    continue;
+                }
+                if !v2 {
                     return Err(Error::param(
                         format!("{name}.value"),
                         format!("given although marked not estimable ({reason})"),
                     ));
                 }
+            }
+            if infinite_ok && v.value == f64::INFINITY {
                 continue;
             }
             if name == "diffuse.lambert_exponent" {
@@ -401,7 +448,7 @@ impl ModelConfig {
                         format!("`{}` (expected `1`)", q.unit),
                     ));
                 }
-                check_diagnostics(&name, q)?;
+                check_diagnostics(&name, q, false)?;
                 if !(q.value > 0.0 && q.value <= 1.0) {
                     return Err(Error::param(format!("{name}.value"), "must be in (0, 1]"));
                 }
@@ -491,9 +538,10 @@ impl ModelConfig {
         v
     }
 
-    /// The model with every not-estimable quantity given a value from `supplied` (name →
-    /// value, names as in the file); an error naming the first one left without a value.
-    /// What a generator (`synth`) calls before drawing.
+    /// The model with the values `supplied` (name → value, names as in the file; a supplied
+    /// quantity is no longer flagged); an error naming the first quantity left without a
+    /// value (a not-estimable one of a schema-1 file). What a generator (`synth`) calls
+    /// before drawing; a schema-2 file's flagged quantities carry their stated values.
     pub fn require_estimable(
         &self,
         supplied: &std::collections::BTreeMap<String, f64>,
@@ -506,7 +554,12 @@ impl ModelConfig {
             q.value = *v;
             q.not_estimable = None;
         }
-        if let Some((name, reason)) = m.not_estimable().into_iter().next() {
+        let undrawable = m
+            .quantities()
+            .into_iter()
+            .find(|(_, q, _)| !q.is_drawable())
+            .map(|(n, q, _)| (n.to_string(), q.not_estimable.clone().unwrap_or_default()));
+        if let Some((name, reason)) = undrawable {
             return Err(Error::param(
                 name.clone(),
                 format!(
@@ -516,6 +569,45 @@ impl ModelConfig {
         }
         m.check()?;
         Ok(m)
+    }
+
+    /// The value a schema-2 file states for quantity `name` when the data cannot inform
+    /// it (module docs): the paper's Table 1 where it gives one (λ 0.43/ns, AoA 16.9°,
+    /// d_c 1.505 m, Λ 0.21/ns), Γ = ∞ (no excess decay: the radar equation alone), the
+    /// documented defaults elsewhere ([`ModelConfig::table1_defaults`]: d_p 0.3 m, γ 3 ns,
+    /// 6 rays, σ 0.01 m²; the diffuse walls' σ′ 0.05 m²/m, n 1, share 0.5, decay 10 ns;
+    /// |Γ| 0.4, about concrete's at normal incidence at 60 GHz; corners and edges σ 0.1 m²).
+    pub fn stated_value(name: &str) -> Option<f64> {
+        let d = ModelConfig::table1_defaults();
+        Some(match name {
+            "cluster_decay" => f64::INFINITY,
+            "diffuse.wall_rcs_per_m" => 0.05,
+            "diffuse.lambert_exponent" => 1.0,
+            "diffuse.power_share" => 0.5,
+            "diffuse.decay" => 10.0,
+            "walls.specular_gamma" => 0.4,
+            "walls.corner_rcs" | "walls.edge_rcs" => 0.1,
+            _ => d.quantity(name)?.value,
+        })
+    }
+
+    /// The model as schema [`SCHEMA_VERSION`] writes it: every quantity flagged not
+    /// estimable and without a value gets its [`stated value`](Self::stated_value) (the
+    /// flag and reason stay). What `fit` and the level fit return.
+    pub fn with_stated_values(mut self) -> ModelConfig {
+        self.schema_version = self.schema_version.max(SCHEMA_VERSION);
+        let names: Vec<String> = self
+            .quantities()
+            .into_iter()
+            .filter(|(_, q, _)| !q.is_drawable())
+            .map(|(n, _, _)| n.to_string())
+            .collect();
+        for name in names {
+            if let (Some(v), Some(q)) = (Self::stated_value(&name), self.quantity_mut(&name)) {
+                q.value = v;
+            }
+        }
+        self
     }
 
     /// The quantity called `name` (as in the file; `diffuse.` prefix for the dense
@@ -606,8 +698,74 @@ mod tests {
     }
 
     #[test]
+    fn schema_2_files_carry_stated_values_and_an_infinite_excess_decay() {
+        let mut m = ModelConfig::table1_defaults().with_stated_values();
+        assert_eq!(m.schema_version, SCHEMA_VERSION);
+        m.cluster_decay = Quantity {
+            interval: Some([40.0, f64::INFINITY]),
+            ..Quantity::new(f64::INFINITY, "ns", "exponential")
+        };
+        m.intra_cluster_aoa = Quantity::not_estimable("deg", "laplacian", "single-ray clusters");
+        m.diffuse = Some(DiffuseModel {
+            wall_rcs_per_m: Quantity::new(0.1, "m2/m", "constant"),
+            lambert_exponent: Quantity::not_estimable("1", "constant", "no diffuse rows"),
+            power_share: Quantity::new(0.5, "1", "constant"),
+            decay: Quantity::new(10.0, "ns", "exponential"),
+        });
+        let m = m.with_stated_values();
+        assert_eq!(m.intra_cluster_aoa.value, 16.9);
+        assert_eq!(m.diffuse.as_ref().unwrap().lambert_exponent.value, 1.0);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("v2.toml");
+        m.save(&p).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(
+            text.contains("value = inf") && text.contains("interval = [40.0, inf]"),
+            "{text}"
+        );
+        let back = ModelConfig::load(&p).unwrap();
+        assert_eq!(back, m);
+        // drawable as it is: flagged, with the value synth draws
+        let drawn = back.require_estimable(&Default::default()).unwrap();
+        assert!(!drawn.intra_cluster_aoa.is_estimable());
+        assert_eq!(drawn.intra_cluster_aoa.value, 16.9);
+        // schema 1 keeps its meaning: no infinite decay, no value beside the flag
+        let mut v1 = back.clone();
+        v1.schema_version = 1;
+        let e = v1.check().unwrap_err().to_string();
+        assert!(
+            e.contains("intra_cluster_aoa.value") && e.contains("not estimable"),
+            "{e}"
+        );
+        v1.intra_cluster_aoa = Quantity::new(16.9, "deg", "laplacian");
+        v1.diffuse = None;
+        let e = v1.check().unwrap_err().to_string();
+        assert!(e.contains("cluster_decay.interval"), "{e}");
+        v1.cluster_decay.interval = None;
+        let e = v1.check().unwrap_err().to_string();
+        assert!(e.contains("cluster_decay.value"), "{e}");
+        // an infinite value of another quantity is refused in either schema
+        let mut bad = back;
+        bad.ray_decay.value = f64::INFINITY;
+        assert!(bad
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("ray_decay.value"));
+        let mut v3 = ModelConfig::table1_defaults();
+        v3.schema_version = 3;
+        assert!(v3
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("schema_version"));
+    }
+
+    #[test]
     fn not_estimable_round_trip_and_gate() {
+        // a schema-1 file: a flagged quantity has no value
         let mut m = ModelConfig::table1_defaults();
+        m.schema_version = 1;
         let reason = "no inter-cluster gaps (fewer than 2 clusters at every position)";
         m.inter_cluster_rate = Quantity {
             n: Some(0),

@@ -464,6 +464,7 @@ pub fn fit_levels(
         // without them), not one that synth would refuse for a missing |Γ|
         out.walls = None;
     }
+    let out = out.with_stated_values();
     out.check()?;
     Ok((
         out,

@@ -24,13 +24,15 @@
 //!   the first arrival is at range r − m, m = mean_k(c·τ_k/2) (the members' mean extra
 //!   depth), and ray k arrives at T + τ_k, T = 2(r − m)/c, from θ + φ_k (θ the bearing of
 //!   the centroid). A cluster is seen when the segment pose → centroid crosses no wall;
-//! * **powers** (a Saleh–Valenzuela profile anchored by the radar equation): at each pose
-//!   let T_0 be the first arrival of the first visible cluster in the scanned half-plane,
-//!   at range d_0 = c·T_0/2. Ray k of cluster l has
-//!   |A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} / ((4π)³ d_0⁴), σ_l = `cluster_rrcs` ×
-//!   log-normal shadowing (3 dB, as the simulator's clutter). So the first cluster follows
-//!   the radar equation exactly (a single scatterer is `simulate`'s point target) and later
-//!   clusters and rays decay with Γ and γ — the slopes `fit` measures, path loss included;
+//! * **powers** (a Saleh–Valenzuela profile on top of the radar equation): at each pose
+//!   let T_0 be the first arrival of the first visible cluster in the scanned half-plane.
+//!   Ray k of cluster l, first arrival T_l at range r_l = c·T_l/2, has
+//!   |A|² = σ_l · e^{−(T_l − T_0)/Γ} · e^{−τ_k/γ} / ((4π)³ r_l⁴), σ_l = `cluster_rrcs` ×
+//!   log-normal shadowing (3 dB, as the simulator's clutter). So every cluster follows
+//!   the radar equation at its own range (a single scatterer is `simulate`'s point
+//!   target), Γ is the decay in excess of it (∞: none) and rays decay with γ — the slopes
+//!   `fit` measures. A schema-1 model file keeps its meaning: every cluster at the first
+//!   cluster's range d_0 = c·T_0/2, Γ the total decay ([`file`] module docs);
 //! * **diffuse walls** (when the model has `[diffuse]`; [`diffuse`]): one point scatterer
 //!   per range cell c/(2B) of every wall, uniform in its cell, complex Gaussian with
 //!   E|x|² = `wall_rcs_per_m` × cell length and a uniform phase; seen from the free side

@@ -650,7 +650,8 @@ fn run_experiments(
     let not_run = match (job.model, fit) {
         (Some(_), _) => None,
         (None, Err(e)) => Some(page::experiments_not_run(e)),
-        (None, Ok(f)) if !f.model.not_estimable().is_empty() => {
+        // a schema-1 style partial model (no stated values) cannot be drawn from
+        (None, Ok(f)) if f.model.require_estimable(&Default::default()).is_err() => {
             Some(page::experiments_not_run_partial(&f.model.not_estimable()))
         }
         (None, Ok(_)) => None,

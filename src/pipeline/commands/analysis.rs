@@ -219,10 +219,18 @@ pub struct FitSummary {
 
 impl FitSummary {
     /// One line per quantity of the fit that is not estimable (the command line prints each
-    /// after `warning: `): "`<quantity>` not estimable: `<reason>`".
+    /// after `warning: `): "`<quantity>` not estimable: `<reason>`; drawn at its stated
+    /// value `<v>`".
     pub fn warnings(&self) -> Vec<String> {
-        (self.fit.model.not_estimable().into_iter())
-            .map(|(q, r)| format!("{q} not estimable: {r}"))
+        let m = &self.fit.model;
+        (m.not_estimable().into_iter())
+            .map(|(q, r)| match m.quantity(&q).map(|x| x.value) {
+                Some(v) if !v.is_nan() => format!(
+                    "{q} not estimable: {r}; drawn at its stated value {}",
+                    crate::error::short(v)
+                ),
+                _ => format!("{q} not estimable: {r}"),
+            })
             .collect()
     }
 }
@@ -286,9 +294,6 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
             crate::energy::matrix::check_campaign(&c, &em, &energy)?;
             fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
         }
-        // a partial model (a quantity not estimable) is written without levels: synth and
-        // check refuse it anyway, naming the quantities
-        None if !fit.model.not_estimable().is_empty() => {}
         None => {
             return Err(crate::error::Error::param(
                 "--energy",
