@@ -331,14 +331,36 @@ fn energy_parquet_is_read_by_pandas() {
     }
 }
 
-/// A point-target room: the fit leaves quantities not estimable, so the experiments do not
-/// run, and the sweeps `reproduce` makes for them beside the fit are removed again.
+/// The point-target room: the fit leaves quantities not estimable and writes their stated
+/// values, so the experiments run on the model as it is and Table 1 says which values are
+/// stated. The same room with nothing in it: no quantity can be fitted, so the experiments
+/// do not run, and the sweeps `reproduce` makes for them beside the fit are removed again.
 #[test]
 fn reproduce_without_experiments_leaves_no_experiment_files() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("rep");
     let m = concat!(env!("CARGO_MANIFEST_DIR"), "/data/tests/point_target.toml");
-    let o = run(&["reproduce", "--out", s(&out), "--campaign", m], None);
+    let o = run(
+        &[
+            "reproduce",
+            "--out",
+            s(&out),
+            "--campaign",
+            m,
+            "--seeds",
+            "1",
+        ],
+        None,
+    );
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("(stated)"), "Table 1 names the stated values");
+    assert!(out.join("experiments").is_dir(), "the experiments run");
+    let mut empty = fixture("tests/point_target.toml");
+    empty["scene"].as_table_mut().unwrap().remove("targets");
+    let m = write_campaign(&tmp.path().join("empty"), &empty);
+    let out = tmp.path().join("rep_empty");
+    let o = run(&["reproduce", "--out", s(&out), "--campaign", s(&m)], None);
     assert_eq!(o.code, 0, "{}", o.stderr);
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(

@@ -174,19 +174,41 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
     let cl = tmp.path().join("clusters.parquet");
     write_clusters(&cl, mpcs, |m| m.position);
     let (model, table) = (tmp.path().join("partial.toml"), tmp.path().join("t1.md"));
-    let (code, err) = pradar(&[
-        "fit",
-        "--clusters",
-        s(&cl),
-        "--campaign",
-        s(&man),
-        "--out",
-        s(&model),
-        "--table",
-        s(&table),
-        "--bootstrap",
-        "50",
-    ]);
+    // the campaign's energy table (here a synth table of the paper's model): `fit` reads
+    // the levels from it, and refuses to write a model without them
+    let energy = tmp.path().join("energy.parquet");
+    let c = pradar::campaign::Campaign::load(&man).unwrap();
+    pradar::model::synth(
+        &c,
+        &pradar::model::file::ModelConfig::table1_defaults(),
+        &energy,
+        &pradar::params::ParamGuard::check(&pradar::model::SynthParams::default()).unwrap(),
+        &|_, _| {},
+    )
+    .unwrap();
+    let fit_args = |energy: Option<&Path>| {
+        let mut a = vec![
+            "fit",
+            "--clusters",
+            s(&cl),
+            "--campaign",
+            s(&man),
+            "--out",
+            s(&model),
+            "--table",
+            s(&table),
+            "--bootstrap",
+            "50",
+        ];
+        if let Some(e) = energy {
+            a.extend(["--energy", s(e)]);
+        }
+        pradar(&a)
+    };
+    let (code, err) = fit_args(None);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--energy") && !model.exists(), "{err}");
+    let (code, err) = fit_args(Some(&energy));
     assert_eq!(code, 0, "{err}");
     assert!(
         err.lines().any(|l| l.starts_with(
@@ -198,13 +220,17 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
     let text = std::fs::read_to_string(&model).unwrap();
     let toml: toml::Table = toml::from_str(&text).unwrap();
     let lambda_big = toml["inter_cluster_rate"].as_table().unwrap();
+    // flagged, with the stated value (the paper's Λ) that synth draws
     assert!(
-        lambda_big.contains_key("not_estimable") && !lambda_big.contains_key("value"),
+        lambda_big.contains_key("not_estimable") && lambda_big["value"].as_float() == Some(0.21),
         "{text}"
     );
     assert!(!text.to_lowercase().contains("nan"), "{text}");
     let m = pradar::model::file::ModelConfig::load(&model).unwrap();
     assert!(!m.inter_cluster_rate.is_estimable());
+    // accepted as it is by synth and as a calibrate prior
+    m.require_estimable(&Default::default()).unwrap();
+    pradar::calibrate::Prior::load(&model).unwrap();
     for q in [&m.intra_cluster_rate, &m.intra_cluster_aoa, &m.ray_decay] {
         assert!(q.is_estimable() && q.value > 0.0, "{q:?}");
     }
@@ -215,7 +241,7 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
     let md = std::fs::read_to_string(&table).unwrap();
     let row = md.lines().find(|l| l.contains("Λ")).unwrap();
     assert!(
-        row.contains("not estimable: no inter-cluster gaps"),
+        row.contains("not estimable: no inter-cluster gaps") && row.contains("drawn at 0.21"),
         "{row}"
     );
     let csv = std::fs::read_to_string(table.with_extension("csv")).unwrap();

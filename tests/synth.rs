@@ -363,13 +363,17 @@ fn synth_digest(em: &EnergyMatrix, truth_rays: &std::path::Path) -> (u64, usize)
 #[test]
 fn synth_without_diffuse_is_unchanged() {
     // a model without [diffuse] gives the values it gave before the diffuse walls existed
-    // (digest recorded from the code before issue 16: corridor, N = 100, seed 3)
+    // (digest recorded from the code before issue 16: corridor, N = 100, seed 3), and a
+    // schema-1 file keeps its cluster law (every cluster at the first cluster's range)
     let root = common::root();
     let mut c = Campaign::load(&root.join("data/corridor/campaign.toml")).unwrap();
     c.set_elements(100).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("a.parquet");
-    let m = ModelConfig::table1_defaults();
+    let m = ModelConfig {
+        schema_version: 1,
+        ..ModelConfig::table1_defaults()
+    };
     assert!(m.diffuse.is_none());
     synth(
         &c,

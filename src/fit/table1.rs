@@ -20,8 +20,10 @@
 //!   edges' σ and the clusters' σ follow the others.
 //! * With a `[diffuse]` section the dense component's four quantities follow the discrete
 //!   clusters' rows (σ′, the Lambert exponent, the power share, the decay).
-//! * A quantity the fit could not estimate shows "not estimable: <reason>" in the value
-//!   cell (and "—" for its interval and KS p); its CSV value, lo, hi and ks_p are empty.
+//! * A quantity the fit could not estimate shows "not estimable: <reason>; drawn at <v>
+//!   (stated)" in the value cell, v the stated value of the model file (and "—" for its
+//!   interval and KS p); its CSV value, lo, hi and ks_p are empty (a stated value is not
+//!   an estimate).
 //!   The same holds for the truth column.
 //!
 //! [`ModelConfig::table1_defaults`]: crate::model::file::ModelConfig::table1_defaults
@@ -184,7 +186,8 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
     };
     let row = |parameter, q: &Quantity, best_aic: String, paper| Table1Row {
         parameter,
-        value: q.value,
+        // a stated value is not an estimate: the CSV's value stays empty
+        value: if q.is_estimable() { q.value } else { f64::NAN },
         unit: q.unit.clone(),
         value_shown: match &q.not_estimable {
             Some(reason) => stated_shown(reason, q),
