@@ -24,7 +24,7 @@ use std::path::Path;
 /// The scene `t` simulated into `dir`, its energy table and the chain's fitted model.
 fn fitted(dir: &Path, t: &toml::Table) -> (Campaign, EnergyMatrix, ModelConfig) {
     let (sc, em) = common::chain(dir, t, SweepFormat::Parquet);
-    let a = pradar::pipeline::analyse(&sc, &em, dir, false).unwrap();
+    let a = pradar::pipeline::analyse(&sc, &em, &dir.join("energy.parquet"), dir, false).unwrap();
     (sc, em, a.fit.unwrap().model)
 }
 

@@ -359,7 +359,7 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
                 let _ = to_side.send(s.campaign.path.clone());
             }
             drop(to_side);
-            let mut a = analyse(&s.campaign, &s.em, work, true)?;
+            let mut a = analyse(&s.campaign, &s.em, &s.energy_path, work, true)?;
             timings.0.append(&mut a.timings);
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
