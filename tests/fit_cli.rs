@@ -366,7 +366,10 @@ fn fit_finds_the_energy_table_of_a_moved_project() {
     };
     let before = fit(&old, &old, 0);
     let text = String::from_utf8(before.clone()).unwrap();
-    assert!(text.contains("[walls]"), "no levels in the model:\n{text}");
+    assert!(
+        text.contains("[walls.specular_gamma]"),
+        "no levels in the model:\n{text}"
+    );
     let moved = tmp.path().join("moved");
     std::fs::rename(&old, &moved).unwrap();
     assert!(
