@@ -120,12 +120,12 @@ fn run(cli: Cli) -> Result<()> {
         }
         Cmd::Check(a) => check(a, quiet)?,
         Cmd::Report(a) => {
-            let index = pradar::pipeline::report(&a.into_options()?, &stages)?;
-            report(quiet, format_args!("report: {}", index.display()))
+            let done = pradar::pipeline::report(&a.into_options()?, &stages)?;
+            report_done(quiet, &done)
         }
         Cmd::Reproduce(a) => {
-            let index = pradar::pipeline::reproduce(&a.into_options()?, &stages)?;
-            report(quiet, format_args!("report: {}", index.display()))
+            let done = pradar::pipeline::reproduce(&a.into_options()?, &stages)?;
+            report_done(quiet, &done)
         }
         Cmd::Experiment(a) => report(quiet, commands::experiments(&a.into_command(), &stages)?),
         Cmd::Zoo(a) => report(
@@ -145,6 +145,15 @@ fn report(quiet: bool, summary: impl std::fmt::Display) {
     if !quiet {
         println!("{summary}");
     }
+}
+
+/// `report` and `reproduce`: their stages' warnings (as the stage's own command prints
+/// them), then the page's path.
+fn report_done(quiet: bool, done: &pradar::pipeline::ReportOutput) {
+    for w in &done.warnings {
+        eprintln!("warning: {w}");
+    }
+    report(quiet, format_args!("report: {}", done.index.display()))
 }
 
 fn bar(quiet: bool, label: &str, total: usize) -> ProgressBar {

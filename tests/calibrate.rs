@@ -855,7 +855,7 @@ fn physics_predictive(
         .to_vec();
         if chain_prior {
             let em = pradar::energy::EnergyMatrix::read(&e).unwrap();
-            let a = pradar::pipeline::analyse(&c, &em, &dir.join("a"), false).unwrap();
+            let a = pradar::pipeline::analyse(&c, &em, &e, &dir.join("a"), false).unwrap();
             let mut m = a.fit.unwrap().model;
             for (q, _, _) in pradar::calibrate::DEFAULT_PRIOR {
                 if let Some(x) = m.quantity_mut(q) {

@@ -24,7 +24,7 @@ use std::path::Path;
 /// The scene `t` simulated into `dir`, its energy table and the chain's fitted model.
 fn fitted(dir: &Path, t: &toml::Table) -> (Campaign, EnergyMatrix, ModelConfig) {
     let (sc, em) = common::chain(dir, t, SweepFormat::Parquet);
-    let a = pradar::pipeline::analyse(&sc, &em, dir, false).unwrap();
+    let a = pradar::pipeline::analyse(&sc, &em, &dir.join("energy.parquet"), dir, false).unwrap();
     (sc, em, a.fit.unwrap().model)
 }
 
@@ -242,7 +242,7 @@ fn noise_mismatch_fails_with_one_line() {
     let mut em = synth_table(dir.path(), &c, &m, 5);
     let path = dir.path().join("synth_5.parquet");
     let params = CheckParams {
-        draws: 9,
+        draws: pradar::check::MIN_DRAWS,
         ..Default::default()
     }
     .check()
@@ -425,7 +425,8 @@ fn check_calibration_and_power() {
 
 /// `pradar check` end to end: the office model against its own synth table exits 0 and
 /// writes the table (CSV/Markdown/HTML) and the CDF panels; with `--fail-below`, the model
-/// with three times the rays exits 1 with one line; a `--draws` of 1 is refused.
+/// with three times the rays exits 1 with one line; a `--draws` of 18 (too few for the
+/// p-value to reach α) is refused, saying why.
 #[test]
 fn check_command() {
     let (dir, c, m) = office_model();
@@ -470,9 +471,14 @@ fn check_command() {
     let o = common::pradar_quiet(&a.iter().map(String::as_str).collect::<Vec<_>>());
     common::assert_one_line_error(&o, "check failed");
     let mut a = args(&model, &dir.path().join("check_one"));
-    a.extend(["--draws".into(), "1".into()]);
+    a.extend(["--draws".into(), "18".into()]);
     let o = common::pradar_quiet(&a.iter().map(String::as_str).collect::<Vec<_>>());
     common::assert_one_line_error(&o, "--draws");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("must be in [19, 1000]") && err.contains("cannot reach α = 0.05"),
+        "{err}"
+    );
     // --posterior: each draw's rays per cluster from a particle; a good sample around the
     // model's value passes as the model does, a bad file or a quantity the model file
     // lacks is one line naming it

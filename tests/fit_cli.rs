@@ -59,6 +59,20 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
         assert_eq!(&png[1..4], b"PNG");
     }
     let work = rep.join("work");
+    // its MPC and clustered tables name the energy table as `extract` and `cluster` do:
+    // relative to their folder, so `cluster` and `fit` on them find it
+    for t in ["mpcs.parquet", "clusters.parquet"] {
+        let meta = pradar::table::parquet_metadata(&work.join(t)).unwrap();
+        let key = meta.iter().find(|(k, _)| k == "energy");
+        assert_eq!(key.map(|(_, v)| v.as_str()), Some("energy.parquet"), "{t}");
+        let e = pradar::cluster::io::energy_of(&work.join(t))
+            .unwrap()
+            .unwrap();
+        assert!(
+            e.is_file() && e.ends_with("work/energy.parquet"),
+            "{t}: {e:?}"
+        );
+    }
     let sim_manifest = work.join("simulated/campaign.toml");
     // the same manifest without [scene] and [clutter]
     let text = std::fs::read_to_string(&sim_manifest).unwrap();
@@ -321,4 +335,79 @@ fn zero_bootstrap_is_one_clear_line() {
     // refused while the flags are parsed (src/cli/ranges.rs), before any file is read
     let want = "'--bootstrap <BOOTSTRAP>': must be in [40, 100000]";
     fit_fails_with_one_line(tmp.path(), &cl, &man, &["--bootstrap", "0"], want);
+}
+
+/// The `energy` key of the MPC and clustered tables names the energy table relative to the
+/// table's folder: a project folder moved whole still gives `fit` its levels (an absolute
+/// key named the old place, and `fit` refused or wrote a model without levels), and a copy
+/// of the tables reads the copy's energy table, not the original's.
+#[test]
+fn fit_finds_the_energy_table_of_a_moved_project() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = corridor();
+    set(&mut t, "band.points", 401i64);
+    set(&mut t, "processing.max_delay_ns", 45.0);
+    set(&mut t, "processing.noise_from_ns", 50.0);
+    let old = tmp.path().join("project");
+    common::chain(&old, &t, pradar::campaign::manifest::SweepFormat::Parquet);
+    let man = |p: &Path| p.join("sim/campaign.toml");
+    let work = old.join("work");
+    let (code, err) = pradar(&[
+        "extract",
+        "--energy",
+        s(&old.join("energy.parquet")),
+        "--campaign",
+        s(&man(&old)),
+        "--out",
+        s(&work.join("mpcs.parquet")),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = pradar(&[
+        "cluster",
+        "--mpcs",
+        s(&work.join("mpcs.parquet")),
+        "--out",
+        s(&work.join("clusters.parquet")),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // `fit` without --energy, its model's bytes
+    let fit = |tables: &Path, campaign: &Path, i: usize| -> Vec<u8> {
+        let model = tmp.path().join(format!("model{i}.toml"));
+        let (code, err) = pradar(&[
+            "fit",
+            "--clusters",
+            s(&tables.join("work/clusters.parquet")),
+            "--campaign",
+            s(&man(campaign)),
+            "--out",
+            s(&model),
+            "--table",
+            s(&tmp.path().join(format!("table{i}.md"))),
+            "--bootstrap",
+            "50",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.is_empty(), "{err}");
+        std::fs::read(&model).unwrap()
+    };
+    let before = fit(&old, &old, 0);
+    let text = String::from_utf8(before.clone()).unwrap();
+    assert!(
+        text.contains("[walls.specular_gamma]"),
+        "no levels in the model:\n{text}"
+    );
+    let moved = tmp.path().join("moved");
+    std::fs::rename(&old, &moved).unwrap();
+    assert!(
+        before == fit(&moved, &moved, 1),
+        "the moved project's fit changed"
+    );
+    // the tables copied, the original energy table spoiled: the copy reads its own
+    let copy = tmp.path().join("copy");
+    std::fs::create_dir_all(copy.join("work")).unwrap();
+    for f in ["energy.parquet", "work/clusters.parquet"] {
+        std::fs::copy(moved.join(f), copy.join(f)).unwrap();
+    }
+    std::fs::write(moved.join("energy.parquet"), b"not a table").unwrap();
+    assert!(before == fit(&copy, &moved, 2), "the copy's fit changed");
 }

@@ -175,3 +175,55 @@ fn failed_report_leaves_nothing_behind() {
         .collect();
     assert_eq!(left, vec![std::ffi::OsString::from("notes.txt")]);
 }
+
+/// The energy stage's `[noise]` warning (the manifest's floor implying an N0 more than 3 dB
+/// from the data's) is printed by `report` as `energy` prints it, one line, and shown on
+/// the page beside N0.
+#[test]
+fn report_prints_and_shows_the_energy_noise_warning() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = measured_corridor(tmp.path());
+    // the same sweeps, the manifest's floor 10 dB above what they hold
+    let mut t: toml::Table = toml::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    let floor = t["noise"]["floor_dbm"].as_float().unwrap();
+    set(&mut t, "noise.floor_dbm", floor + 10.0);
+    let off = m.with_file_name("floor_off.toml");
+    std::fs::write(&off, toml::to_string(&t).unwrap()).unwrap();
+    let warnings = |o: &std::process::Output| -> Vec<String> {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (String::from_utf8_lossy(&o.stderr).lines())
+            .filter(|l| l.starts_with("warning: "))
+            .map(String::from)
+            .collect()
+    };
+    let e = tmp.path().join("energy.parquet");
+    let energy = warnings(&pradar_quiet(&[
+        "energy",
+        "--campaign",
+        s(&off),
+        "--out",
+        s(&e),
+    ]));
+    assert_eq!(energy.len(), 1, "{energy:?}");
+    assert!(
+        energy[0].contains("dB from the") && energy[0].contains("[noise] floor_dbm"),
+        "{energy:?}"
+    );
+    let out = tmp.path().join("report");
+    let o = pradar_quiet(&[
+        "report",
+        "--campaign",
+        s(&off),
+        "--skip-experiments",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(warnings(&o), energy, "report's warning is energy's");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let row = format!("<tr><th>N0 warning</th><td>{}</td></tr>", energy[0]);
+    let n0 = html.find("<th>N0 (estimated)</th>").expect("the N0 row");
+    let at = html
+        .find(&row)
+        .unwrap_or_else(|| panic!("no warning row:\n{html}"));
+    assert!(at > n0, "the warning follows N0");
+}

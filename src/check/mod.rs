@@ -109,7 +109,7 @@ pub const DEFAULT_DRAWS: usize = 39;
 /// Options of a check.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckParams {
-    /// Draws R, in [2, 1000] (default [`DEFAULT_DRAWS`]).
+    /// Draws R, in [`DRAWS_RANGE`] (default [`DEFAULT_DRAWS`]).
     pub draws: usize,
     /// Seed (default: the campaign's).
     pub seed: Option<u64>,
@@ -121,9 +121,31 @@ pub struct CheckParams {
     pub posterior: Option<PosteriorSample>,
 }
 
-/// The draw counts [`CheckParams`]'s check accepts (`--draws`): the reference
-/// distribution needs at least one draw↔draw pair.
-pub const DRAWS_RANGE: std::ops::RangeInclusive<usize> = 2..=1000;
+/// The fewest draws R at which the check can fail on its statistics: the smallest R with
+/// 1/(R + 1) ≤ [`ALPHA`] (19 at α = 0.05). The Monte Carlo p-value (1 + k)/(R + 1) is at
+/// least 1/(R + 1), so with fewer draws it never reaches α.
+pub const MIN_DRAWS: usize = min_draws(ALPHA);
+
+/// The smallest R ≥ 1 with 1/(R + 1) ≤ `alpha` (`alpha` in (0, 1)).
+const fn min_draws(alpha: f64) -> usize {
+    let mut r = 1;
+    while 1.0 / ((r + 1) as f64) > alpha {
+        r += 1;
+    }
+    r
+}
+
+/// The draw counts [`CheckParams`]'s check accepts (`--draws`): from [`MIN_DRAWS`] (with
+/// fewer the p-value cannot reach α) to 1000.
+pub const DRAWS_RANGE: std::ops::RangeInclusive<usize> = MIN_DRAWS..=1000;
+
+/// Why `--draws` has [`DRAWS_RANGE`]'s lower end (the one-line error says it): "with fewer
+/// than 19 draws the p-value (1 + k)/(R + 1) cannot reach α = 0.05".
+pub fn draws_why() -> String {
+    format!(
+        "with fewer than {MIN_DRAWS} draws the p-value (1 + k)/(R + 1) cannot reach α = {ALPHA}"
+    )
+}
 
 impl Default for CheckParams {
     fn default() -> Self {
@@ -272,7 +294,13 @@ impl ParamGuard for CheckParams {
         if !DRAWS_RANGE.contains(&self.draws) {
             return Err(Error::param(
                 "--draws",
-                format!("must be in [2, 1000], got {}", self.draws),
+                format!(
+                    "must be in [{}, {}] ({}), got {}",
+                    DRAWS_RANGE.start(),
+                    DRAWS_RANGE.end(),
+                    draws_why(),
+                    self.draws
+                ),
             ));
         }
         if !(0.0..1.0).contains(&self.cull) {
@@ -888,13 +916,22 @@ mod tests {
 
     #[test]
     fn params_checked() {
-        assert!(CheckParams {
-            draws: 1,
+        let with = |draws: usize| CheckParams {
+            draws,
             ..Default::default()
-        }
-        .check()
-        .is_err());
+        };
+        assert!(with(1).check().is_err());
         assert!(CheckParams::default().check().is_ok());
+        // the fewest draws whose p-value can reach α: 1/(R + 1) ≤ 0.05 first at R = 19
+        assert_eq!(MIN_DRAWS, 19);
+        assert!(1.0 / (MIN_DRAWS as f64 + 1.0) <= ALPHA);
+        assert!(1.0 / (MIN_DRAWS as f64) > ALPHA);
+        assert!(with(19).check().is_ok());
+        let e = with(18).check().unwrap_err().to_string();
+        assert!(
+            e.contains("[19, 1000]") && e.contains("cannot reach α = 0.05") && e.contains("18"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -78,10 +78,11 @@ pub fn population(s: &str) -> Result<usize, String> {
     )
 }
 
-/// `check --draws`: in [`pradar::check::DRAWS_RANGE`] (`CheckParams` draws).
+/// `check --draws`: in [`pradar::check::DRAWS_RANGE`] (`CheckParams` draws; below it the
+/// p-value cannot reach α, [`pradar::check::draws_why`]).
 pub fn draws(s: &str) -> Result<usize, String> {
     let r = pradar::check::DRAWS_RANGE;
-    whole_in(s, *r.start(), *r.end(), "synth draws of the model")
+    whole_in(s, *r.start(), *r.end(), &pradar::check::draws_why())
 }
 
 /// `check --fail-below`: in [0, 1] (a p-value).
@@ -195,7 +196,7 @@ mod tests {
             })
             .is_ok()
         };
-        for n in [0, 1, 2, 20, 1000, 1001] {
+        for n in [0, 1, 2, 18, 19, 20, 1000, 1001] {
             assert_eq!(draws(&n.to_string()).is_ok(), check(n), "--draws {n}");
         }
         let calibrate = |n: usize| {

@@ -30,7 +30,8 @@
 //! move it; the bins stop `gate_ns` + 2 ns before the end of the span (those bins hold
 //! negative delays of the circular IFFT, where the coupling's kernel tail wraps to). When
 //! the manifest's `[noise]` floor implies an N0 more than 3 dB from the data's, `energy`
-//! warns with both values.
+//! warns with both values ([`EnergyReport::warnings`]; `report` and `reproduce` print the
+//! same line and show it on the page beside N0).
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 //!
 //! Refused, naming the manifest and the step: an energy that is not finite (a calibration

@@ -31,32 +31,40 @@ pub struct Analysis {
 }
 
 /// Run CLEAN (default parameters), K-means (default criterion, the campaign's sector) and
-/// the channel fit (default bootstrap) on an energy table of campaign `sc`, writing
-/// `work/clusters.parquet` and `work/clusters_summary.parquet` (and `work/mpcs.parquet` when
-/// `keep_mpcs`). Extraction or clustering errors are returned; a failed fit is kept in
-/// [`Analysis::fit`].
+/// the channel fit (default bootstrap) on an energy table `em` of campaign `sc` (read from
+/// `energy`), writing `work/clusters.parquet` and `work/clusters_summary.parquet` (and
+/// `work/mpcs.parquet` when `keep_mpcs`); both tables name `energy` in their metadata, as
+/// `extract` and `cluster` do, so `fit` on them finds the levels' table. Extraction or
+/// clustering errors are returned; a failed fit is kept in [`Analysis::fit`].
 ///
 /// ```no_run
 /// use pradar::campaign::manifest::Campaign;
 /// use pradar::energy::EnergyMatrix;
 /// use std::path::Path;
 /// let sc = Campaign::load(Path::new("work/simulated/campaign.toml"))?;
-/// let em = EnergyMatrix::read(Path::new("work/energy.parquet"))?;
-/// let a = pradar::pipeline::analyse(&sc, &em, Path::new("work"), true)?;
+/// let energy = Path::new("work/energy.parquet");
+/// let em = EnergyMatrix::read(energy)?;
+/// let a = pradar::pipeline::analyse(&sc, &em, energy, Path::new("work"), true)?;
 /// println!("{} MPCs in {} clusters", a.mpcs.len(), a.clustering.summary.len());
 /// # Ok::<(), pradar::error::Error>(())
 /// ```
-pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -> Result<Analysis> {
+pub fn analyse(
+    sc: &Campaign,
+    em: &EnergyMatrix,
+    energy: &Path,
+    work: &Path,
+    keep_mpcs: bool,
+) -> Result<Analysis> {
     let mut timings = Vec::new();
     let t = Instant::now();
     let xp = mpc::ExtractParams::default();
     let mpcs = mpc::extract(em, sc, &xp.check()?)?;
     if keep_mpcs {
-        mpc::write_mpcs(
-            &work.join("mpcs.parquet"),
-            &mpcs,
-            mpc::table_metadata(em, sc, &xp),
-        )?;
+        // `fit` (through `cluster`) reads the levels from the energy table the MPCs name
+        let mp = work.join("mpcs.parquet");
+        let mut meta = mpc::table_metadata(em, sc, &xp);
+        meta.extend(cluster::io::energy_entry(&mp, energy));
+        mpc::write_mpcs(&mp, &mpcs, meta)?;
     }
     timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
@@ -64,10 +72,7 @@ pub fn analyse(sc: &Campaign, em: &EnergyMatrix, work: &Path, keep_mpcs: bool) -
     let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
     let clustering = cluster::cluster(&mpcs, &headings, &params.check()?)?;
     let cp = work.join("clusters.parquet");
-    // `fit` reads the levels from the energy table beside the work folder's clusters
-    let energy = work.join("energy.parquet");
-    let energy = std::path::absolute(&energy).ok().filter(|e| e.is_file());
-    cluster::io::write_with(&cp, &clustering, energy.as_deref())?;
+    cluster::io::write_with(&cp, &clustering, Some(energy))?;
     timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());

@@ -15,6 +15,10 @@
 //!   manifest as `simulate` writes it) whose fit succeeds; the check, the K_max table and
 //!   the experiments need a model; a failed map says so. Extraction and clustering errors
 //!   are errors of the data and stop the job.
+//! * **Warnings**: the energy stage's (the manifest's `[noise]` floor implying an N0 more
+//!   than 3 dB from the data's) is returned ([`ReportOutput::warnings`]) for the command
+//!   line to print as `energy` does, and shown on the page beside N0 (a given energy table
+//!   has none: the stage did not run).
 //! * **`--model M`** is the model the check and the experiments' model data use (a
 //!   calibrated model, say); Table 1 and `fitted_model.toml` are still fitted from the
 //!   campaign. Without it both use the fitted model.
@@ -120,7 +124,19 @@ pub(crate) fn refuse_inside(out: &Path, inputs: &[(PathBuf, &str)]) -> Result<()
     Ok(())
 }
 
-/// The report of a campaign's sweeps (or of its energy table); returns the index path.
+/// What `report` and `reproduce` made: the page, and the warnings their stages gave (the
+/// energy stage's `[noise]` floor far from the data's N0, [`energy::EnergyReport::warnings`],
+/// also shown on the page beside N0) for the command line to print.
+#[derive(Debug, Clone)]
+pub struct ReportOutput {
+    /// The page, `out/index.html`.
+    pub index: PathBuf,
+    /// One line each, printed after `warning: `.
+    pub warnings: Vec<String>,
+}
+
+/// The report of a campaign's sweeps (or of its energy table); returns the index path and
+/// the warnings ([`ReportOutput`]).
 ///
 /// ```no_run
 /// use pradar::params::ParamGuard;
@@ -137,11 +153,11 @@ pub(crate) fn refuse_inside(out: &Path, inputs: &[(PathBuf, &str)]) -> Result<()
 /// }
 /// .check()?;
 /// let progress = |_: &str, _: usize| -> Box<dyn Fn(usize, usize)> { Box::new(|_, _| {}) };
-/// let index = report(&opts, &progress)?;
-/// println!("report: {}", index.display());
+/// let done = report(&opts, &progress)?;
+/// println!("report: {}", done.index.display());
 /// # Ok::<(), pradar::error::Error>(())
 /// ```
-pub fn report(opts: &ReportValid, progress: Progress) -> Result<PathBuf> {
+pub fn report(opts: &ReportValid, progress: Progress) -> Result<ReportOutput> {
     let c = Campaign::load(&opts.campaign)?;
     let truth = match &opts.truth {
         Some(t) => Some(t.clone()),
@@ -230,6 +246,8 @@ struct Data {
     energy_path: PathBuf,
     /// Where the energy table came from, for the summary.
     energy_shown: String,
+    /// The energy stage's warnings when it ran here (none for a given table).
+    energy_warnings: Vec<String>,
     /// The energy table.
     em: EnergyMatrix,
 }
@@ -301,15 +319,15 @@ impl Drop for OutGuard {
 
 /// The page's one code path: obtain the energy table from `source`, analyse it, and write
 /// every section into `job.out`; returns the index path. A failure removes what it made.
-pub(crate) fn run(job: &Job, source: Source) -> Result<PathBuf> {
+pub(crate) fn run(job: &Job, source: Source) -> Result<ReportOutput> {
     let guard = OutGuard::begin(job.out)?;
-    let index = run_inner(job, source)?;
+    let done = run_inner(job, source)?;
     guard.done();
-    Ok(index)
+    Ok(done)
 }
 
 /// [`run`] without the guard (`reproduce` holds its own, made before it writes its input).
-pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
+pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
     let (out, progress) = (job.out, job.progress);
     let work = out.join("work");
     std::fs::create_dir_all(&work).map_err(|e| Error::io(&work, e))?;
@@ -359,7 +377,7 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
                 let _ = to_side.send(s.campaign.path.clone());
             }
             drop(to_side);
-            let mut a = analyse(&s.campaign, &s.em, work, true)?;
+            let mut a = analyse(&s.campaign, &s.em, &s.energy_path, work, true)?;
             timings.0.append(&mut a.timings);
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
@@ -413,7 +431,10 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
         wall_s: started.elapsed().as_secs_f64(),
     };
     page::write_index(&index, &report_page)?;
-    Ok(index)
+    Ok(ReportOutput {
+        index,
+        warnings: s.energy_warnings,
+    })
 }
 
 /// The energy table of the source: simulated then computed, computed from the campaign's
@@ -421,13 +442,14 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<PathBuf> {
 fn obtain(job: &Job, source: &Source, work: &Path, timings: &mut Timings) -> Result<Data> {
     let progress = job.progress;
     let energy_path = work.join("energy.parquet");
-    let compute = |c: &Campaign, timings: &mut Timings| -> Result<()> {
+    // the energy stage's warnings go on to the page and the command line
+    let compute = |c: &Campaign, timings: &mut Timings| -> Result<Vec<String>> {
         timings.time("energy", || {
             let cb = progress("energy", c.manifest.positions());
-            energy::run(c, &energy_path, &*cb).map(|_| ())
+            energy::run(c, &energy_path, &*cb).map(|r| r.warnings)
         })
     };
-    let (campaign, sim, truth, energy_path, energy_shown) = match source {
+    let (campaign, sim, truth, energy_path, energy_shown, energy_warnings) = match source {
         Source::Simulate(c) => {
             let dir = work.join("simulated");
             let sim = timings.time("simulate", || {
@@ -435,7 +457,7 @@ fn obtain(job: &Job, source: &Source, work: &Path, timings: &mut Timings) -> Res
                 simulate(c, &dir, SweepFormat::Touchstone, &*cb)
             })?;
             let sc = Campaign::load(&sim.manifest)?;
-            compute(&sc, timings)?;
+            let warnings = compute(&sc, timings)?;
             let truth = Some(dir.join("truth"));
             (
                 sc,
@@ -443,6 +465,7 @@ fn obtain(job: &Job, source: &Source, work: &Path, timings: &mut Timings) -> Res
                 truth,
                 energy_path,
                 "work/energy.parquet".into(),
+                warnings,
             )
         }
         Source::Campaign { campaign, energy } => {
@@ -450,12 +473,19 @@ fn obtain(job: &Job, source: &Source, work: &Path, timings: &mut Timings) -> Res
             match energy {
                 Some(e) => {
                     let shown = format!("{} (given)", e.display());
-                    (c, None, job.truth.clone(), e.to_path_buf(), shown)
+                    (
+                        c,
+                        None,
+                        job.truth.clone(),
+                        e.to_path_buf(),
+                        shown,
+                        Vec::new(),
+                    )
                 }
                 None => {
-                    compute(&c, timings)?;
+                    let warnings = compute(&c, timings)?;
                     let shown = "work/energy.parquet (computed from the sweeps)".into();
-                    (c, None, job.truth.clone(), energy_path, shown)
+                    (c, None, job.truth.clone(), energy_path, shown, warnings)
                 }
             }
         }
@@ -468,6 +498,7 @@ fn obtain(job: &Job, source: &Source, work: &Path, timings: &mut Timings) -> Res
         truth,
         energy_path,
         energy_shown,
+        energy_warnings,
         em,
     })
 }
@@ -798,6 +829,10 @@ fn campaign_summary(s: &Data) -> Vec<(String, String)> {
             format!("{:.3e} ({:.1} dB)", em.meta.n0, 10.0 * em.meta.n0.log10()),
         ),
     ]);
+    // the energy stage's warning (the manifest's [noise] floor far from N0), as printed
+    rows.extend(
+        (s.energy_warnings.iter()).map(|w| ("N0 warning".to_string(), format!("warning: {w}"))),
+    );
     if s.sim.is_some() {
         rows.push((
             "noise floor (configured)".into(),

@@ -32,7 +32,7 @@ pub(crate) fn geometry_only_table(
     let cb = progress("energy (geometry only)", np);
     energy::run(&sc, &e, &*cb)?;
     let em = EnergyMatrix::read(&e)?;
-    let a = analyse(&sc, &em, dir, false)?;
+    let a = analyse(&sc, &em, &e, dir, false)?;
     let note = report::reproduce::k_cap_note(&a.clustering, a.cluster_params.k_max);
     let (mpcs, clustering, f) = (a.mpcs, a.clustering, a.fit?);
     let name = format!("{} without clutter (geometry only)", c.manifest.name);

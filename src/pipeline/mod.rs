@@ -23,7 +23,7 @@ mod kmax;
 mod reproduce;
 
 pub use analysis::{analyse, Analysis};
-pub use campaign_report::{report, ReportOptions, ReportValid, DEFAULT_REPORT_OUT};
+pub use campaign_report::{report, ReportOptions, ReportOutput, ReportValid, DEFAULT_REPORT_OUT};
 pub use reproduce::{reproduce, ReproduceOptions, ReproduceValid, DEFAULT_REPRODUCE_OUT};
 
 /// The built-in corridor manifest.

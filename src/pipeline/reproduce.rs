@@ -8,7 +8,7 @@
 //! `[scene]` is refused before anything is written (it is a measured campaign: `pradar
 //! report` takes it). A failed run leaves nothing behind, as `report`'s.
 
-use super::campaign_report::{run_inner, Job, OutGuard, Source};
+use super::campaign_report::{run_inner, Job, OutGuard, ReportOutput, Source};
 use super::experiment::ExperimentValid;
 use super::{write_builtin_corridor, Progress};
 use crate::campaign::manifest::Campaign;
@@ -72,11 +72,11 @@ impl ParamGuard for ReproduceOptions {
 /// }
 /// .check()?;
 /// let progress = |_: &str, _: usize| -> Box<dyn Fn(usize, usize)> { Box::new(|_, _| {}) };
-/// let index = reproduce(&opts, &progress)?;
-/// println!("report: {}", index.display());
+/// let done = reproduce(&opts, &progress)?;
+/// println!("report: {}", done.index.display());
 /// # Ok::<(), pradar::error::Error>(())
 /// ```
-pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
+pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<ReportOutput> {
     if let Some(p) = &opts.campaign {
         let c = Campaign::load(p)?;
         if !has_scene(&c)? {
@@ -96,9 +96,9 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<PathBuf> {
         experiments: opts.experiments.then_some(&opts.experiment_params),
         progress,
     };
-    let index = run_inner(&job, Source::Simulate(&c))?;
+    let done = run_inner(&job, Source::Simulate(&c))?;
     guard.done();
-    Ok(index)
+    Ok(done)
 }
 
 /// The campaign (the built-in corridor unless `--campaign`, written into `work/input`) with

@@ -72,13 +72,8 @@ pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
         "diffuse_level_m2_per_m".into(),
         format!("{:.17e}", diffuse.level_m2_per_m),
     ));
-    // the energy table, for `fit`'s levels (through `cluster`)
-    if let Ok(abs) = std::path::absolute(&cmd.energy) {
-        meta.push((
-            crate::cluster::io::ENERGY_KEY.into(),
-            abs.display().to_string(),
-        ));
-    }
+    // the energy table, for `fit`'s levels (through `cluster`), relative to the output's folder
+    meta.extend(crate::cluster::io::energy_entry(&cmd.out, &cmd.energy));
     crate::mpc::write_mpcs(&cmd.out, &mpcs, meta)?;
     Ok(ExtractSummary {
         mpcs: mpcs.len(),

@@ -102,7 +102,7 @@ fn fit_model(campaign: &Path, energy: &Path, work: &Path) -> Result<PathBuf> {
     let em = EnergyMatrix::read(energy)?;
     let dir = work.join("analysis");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let fit = analyse(&sc, &em, &dir, false)?.fit?;
+    let fit = analyse(&sc, &em, energy, &dir, false)?.fit?;
     let m = work.join("fitted_model.toml");
     fit.model.save(&m)?;
     Ok(m)
