@@ -133,7 +133,7 @@ fn zoo_fitted(
     let e = dir.join("energy.parquet");
     pradar::energy::run(&sc, &e, &|_, _| {}).unwrap();
     let em = EnergyMatrix::read(&e).unwrap();
-    let a = pradar::pipeline::analyse(&sc, &em, dir, false).unwrap();
+    let a = pradar::pipeline::analyse(&sc, &em, &e, dir, false).unwrap();
     (sc, em, a.fit.unwrap().model)
 }
 
