@@ -209,8 +209,7 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub prior: Option<PathBuf>,
     /// Without `--prior`: free the clusters' eight quantities only, no `[diffuse]` or
-    /// `[walls]` (for a table drawn from a model without them; each simulation several
-    /// times cheaper).
+    /// `[walls]` (for a table drawn from a model without them; each simulation cheaper).
     #[arg(long, conflicts_with = "prior")]
     pub no_walls: bool,
     /// Simulation budget (at least the population).
