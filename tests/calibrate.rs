@@ -75,8 +75,11 @@ fn synth(dir: &Path, cpath: &Path, model: &ModelConfig, seed: u64) -> PathBuf {
     e
 }
 
-/// `calibrate` of `energy` (budget `sims`, population `pop`, seed `seed`, `--distance
-/// distance` unless None: the default) into `out`.
+/// `calibrate --no-walls` of `energy` (budget `sims`, population `pop`, seed `seed`,
+/// `--distance distance` unless None: the default) into `out`. `--no-walls`: the tables
+/// these closed loops calibrate are `synth` draws of models without `[diffuse]` and
+/// `[walls]`, so the matching prior frees the eight cluster quantities only (the default
+/// prior also frees the layout's parts, which such a table has none of).
 #[allow(clippy::too_many_arguments)]
 fn calibrate(
     energy: &Path,
@@ -102,6 +105,7 @@ fn calibrate(
         &pop.to_string(),
         "--seed",
         &seed.to_string(),
+        "--no-walls",
     ]
     .map(String::from)
     .into();
@@ -116,11 +120,11 @@ fn calibrate(
     ModelConfig::load(out).unwrap()
 }
 
-/// `pradar check` (20 draws, its default seed) of `model` against `energy`: whether it
-/// passes, and its largest KS ratio.
+/// `pradar check` (its default draws and seed) of `model` against `energy`, plug-in (every
+/// draw the model file's): whether it passes, and its max-T p-value.
 fn check(model: &Path, cpath: &Path, energy: &Path) -> (bool, f64) {
-    let (pass, ratio, _) = check_verdict(model, cpath, energy);
-    (pass, ratio)
+    let (pass, p, _) = check_verdict(model, cpath, energy);
+    (pass, p)
 }
 
 /// [`check`], with its verdict line.
@@ -128,7 +132,7 @@ fn check_verdict(model: &Path, cpath: &Path, energy: &Path) -> (bool, f64, Strin
     check_verdict_with(model, cpath, energy, &[])
 }
 
-/// [`check_verdict`] with extra flags (`--posterior FILE`).
+/// [`check_verdict`] with extra flags (`--posterior FILE`): pass, max-T p, the verdict line.
 fn check_verdict_with(
     model: &Path,
     cpath: &Path,
@@ -159,13 +163,26 @@ fn check_verdict_with(
         .lines()
         .find(|l| l.starts_with("PASS:") || l.starts_with("FAIL:"))
         .unwrap_or_else(|| panic!("no verdict in {text}"));
-    let ratio: f64 = line
-        .split("largest KS ratio ")
+    let p: f64 = line
+        .split("max-T p = ")
         .nth(1)
         .and_then(|r| r.split_whitespace().next())
         .and_then(|r| r.parse().ok())
-        .unwrap_or(f64::NAN);
-    (line.starts_with("PASS:"), ratio, line.to_string())
+        .unwrap_or_else(|| panic!("no max-T p in {line}"));
+    (line.starts_with("PASS:"), p, line.to_string())
+}
+
+/// The posterior predictive check (`pradar check --posterior <stem>_posterior.csv`, its
+/// default draws and seed) of the calibrated model `cal` against `energy`: what "a
+/// calibrated model passes the check" means. Pass, max-T p, the verdict line.
+fn predictive(cal: &Path, cpath: &Path, energy: &Path) -> (bool, f64, String) {
+    let post = pradar::pipeline::commands::posterior_csv(cal);
+    check_verdict_with(
+        cal,
+        cpath,
+        energy,
+        &["--posterior", common::path_str(&post)],
+    )
 }
 
 /// Print each quantity (posterior median, interval, truth, error); return those of the
@@ -233,12 +250,13 @@ struct Scored {
     err: Vec<f64>,
     /// Per quantity: the interval's hi/lo.
     hilo: Vec<f64>,
-    /// `pradar check` of the calibrated model against the environment: pass, largest ratio.
+    /// The calibrated model's posterior predictive check (`check --posterior`) against the
+    /// environment: pass, max-T p.
     check: (bool, f64),
 }
 
 /// `synth` of `truth` on `cpath` at `synth_seed` into `dir`, calibrated (`sims`, `pop`,
-/// `seed`, `distance`), scored and checked.
+/// `seed`, `distance`), scored and checked (posterior predictive).
 #[allow(clippy::too_many_arguments)]
 fn environment(
     dir: &Path,
@@ -270,7 +288,8 @@ fn environment(
     let check = if no_check() {
         (false, f64::NAN)
     } else {
-        check(&out, cpath, &e)
+        let (pass, p, _) = predictive(&out, cpath, &e);
+        (pass, p)
     };
     Scored {
         covered,
@@ -285,7 +304,8 @@ fn environment(
 /// seeds 21, 22, 23, never tuned: the thresholds below come from the 20 environments of
 /// `corridor_coverage`, seeds 1000–1019), each calibrated with the default distance
 /// (`summaries-quantiles` since issue 30's second session) and ridge (`cv` since 5 Dec
-/// 2026) at 600 simulations (population 200, seed = the synth seed), default prior.
+/// 2026) at 600 simulations (population 200, seed = the synth seed), `--no-walls` (the
+/// model has no `[diffuse]`/`[walls]`: the matching prior, [`calibrate`]).
 ///
 /// Asserted, properties that hold over environments rather than medians at chosen seeds
 /// (issue 30 item 5; the bounds hold in every one of `corridor_coverage`'s 20
@@ -296,25 +316,25 @@ fn environment(
 ///   before: 10 at 8/8, 4 at 7/8, 6 at 6/8, 144 of 160, where three environments total
 ///   ≤ 19 with probability ≈ 8 %; with `--distance summaries` 157 of 160, where the bound
 ///   was 21);
-/// * contraction: the intervals' width as a share of the prior's in ln units,
-///   c = mean over λ, d_c and Γ of ln(hi/lo) / ln(prior hi/lo) (prior hi/lo 60, 66.7, 30;
-///   1 = the prior, 0 = a point), is at most 0.75 in every environment and at most 0.65
-///   in the mean over the three (20 environments: 0.37–0.65, mean 0.49, sd 0.067, so the
-///   mean of three reaches 0.65 at 4 standard errors; the fixed ridge 0.29–0.60, mean 0.41;
-///   with `--distance summaries` 0.40–0.69, mean 0.52; with `--distance mmd` 0.70–0.88,
-///   which would fail): the data informed them;
 /// * determinism: 1 and 2 threads give the same model file and posterior bytes, for both
 ///   distances (a small budget).
 ///
-/// Not asserted: the predictive check of the calibrated model. It passed in 15 of the 20
-/// environments, and the drawn model itself passes in 15 of 20 too: on the corridor's
-/// 12 poses the check's ratio rule fails a true model about one time in four.
+/// Printed as reference, not a target: the intervals' width as a share of the prior's in
+/// ln units, c = mean over λ, d_c and Γ of ln(hi/lo) / ln(prior hi/lo) (1 = the prior,
+/// 0 = a point; 20 environments: 0.37–0.65, mean 0.49). Issue 45 item 6 withdrew issue
+/// 30's "sharper" and "contraction" targets (12–24-pose campaigns do not carry that
+/// information, docs/calibrate.md), so the bounds c ≤ 0.75 and mean ≤ 0.65 this test
+/// asserted until then are no longer asserted. Also printed, not asserted: the calibrated
+/// model's posterior predictive check (`check --posterior`, max-T p).
 ///
 /// Measured (cross-validated ridge, 5 Dec 2026): 8/8, 7/8, 8/8 covered (σ at seed 22);
-/// hi/lo λ 13.9/27.7/10.0, d_c 4.6/7.1/3.7, Γ 6.6/9.8/6.4; c 0.521/0.650/0.472; check 2
-/// of 3; the whole `calibrate::` group 49 s on idle cores. With the fixed ridge: 7/8,
-/// 7/8, 7/8 covered (Γ at seed 21, σ at 22 and 23); hi/lo λ 10.0/6.6/3.6, d_c
-/// 5.3/4.8/5.0, Γ 3.6/8.5/2.7; c 0.444/0.487/0.331; check 2 of 3.
+/// hi/lo λ 13.9/27.7/10.0, d_c 4.6/7.1/3.7, Γ 6.6/9.8/6.4; c 0.521/0.650/0.472; the
+/// whole `calibrate::` group 49 s on idle cores. With the fixed ridge: 7/8, 7/8, 7/8
+/// covered (Γ at seed 21, σ at 22 and 23); hi/lo λ 10.0/6.6/3.6, d_c 5.3/4.8/5.0, Γ
+/// 3.6/8.5/2.7; c 0.444/0.487/0.331. With `--no-walls` (issue 45, 6 Dec 2026, after the
+/// draws at the measured N0): the same covered counts, hi/lo and c as the cross-validated
+/// figures above; the posterior predictive check passes 3 of 3 (max-T p 1.0, 0.575,
+/// 0.9); the three calibrations 176 s at load 3–8.
 ///
 /// Runtime (release): the three calibrations 195 s with load average 6–7 on the 2 shared
 /// cores (beside a 20-environment run); 128 s and 147 s for the whole test with
@@ -326,7 +346,6 @@ fn corridor_closed_loop() {
     let truth = ModelConfig::table1_defaults();
     let t = Instant::now();
     let mut total_covered = 0;
-    let mut shares = Vec::new();
     for seed in [21u64, 22, 23] {
         let dir = tmp.path().join(format!("s{seed}"));
         let r = environment(&dir, &cpath, &truth, seed, 600, 200, seed, None);
@@ -338,25 +357,15 @@ fn corridor_closed_loop() {
             .sum::<f64>()
             / 3.0;
         eprintln!(
-            "synth seed {seed}: {k}/8 covered, hi/lo λ {:.1} d_c {:.1} Γ {:.1}, width share {c:.3}, check {:?}",
+            "synth seed {seed}: {k}/8 covered, hi/lo λ {:.1} d_c {:.1} Γ {:.1}, width share {c:.3} (reference, not a target), posterior predictive check {:?}",
             r.hilo[0], r.hilo[2], r.hilo[4], r.check
         );
         assert!(
             k >= 6,
             "synth seed {seed}: {k}/8 intervals cover the model value"
         );
-        assert!(
-            c <= 0.75,
-            "synth seed {seed}: width share {c:.3} of the prior's (λ, d_c, Γ): not contracted"
-        );
-        shares.push(c);
         assert!(dir.join("cal_posterior.csv").is_file());
     }
-    let mean = shares.iter().sum::<f64>() / 3.0;
-    assert!(
-        mean <= 0.65,
-        "mean width share {mean:.3} over the environments"
-    );
     assert!(total_covered >= 20, "{total_covered}/24 intervals cover");
     eprintln!("three environments: {:.1} s", t.elapsed().as_secs_f64());
     // determinism over threads, at a small budget, both distances
@@ -595,10 +604,11 @@ fn hall_sets() {
 
 /// Credible-interval coverage and width over environments: the corridor, Table 1 model,
 /// 20 environments (synth seeds 1000..=1019), each calibrated with `distance` at 600
-/// simulations (population 200, seed = the repetition), default prior, then checked
-/// (`pradar check`, 20 draws); the model itself checked against each environment as the
-/// reference. Prints per environment and per quantity: coverage, median |error| of the
-/// median, median and largest interval hi/lo; and the check's pass count. Measurement
+/// simulations (population 200, seed = the repetition), `--no-walls` (the model has no
+/// `[diffuse]`/`[walls]`), then the calibrated model's posterior predictive check
+/// (`check --posterior`); the model itself checked (plug-in) against each environment as
+/// the reference. Prints per environment and per quantity: coverage, median |error| of the
+/// median, median and largest interval hi/lo; and the checks' pass counts. Measurement
 /// switches (environment): `PRADAR_COVERAGE_ENVS=5` the first 5 environments (the
 /// proxy; 0 stops the test with a message), `PRADAR_COVERAGE_NO_CHECK=1` no `pradar
 /// check`, `PRADAR_COVERAGE_SIMS` and `PRADAR_COVERAGE_POP` another budget and population
@@ -640,7 +650,6 @@ fn coverage(distance: &str) {
     let t = Instant::now();
     let mut all = Vec::new();
     let mut truth_pass = 0;
-    let mut predictive = Vec::new();
     for r in 0..reps {
         let dir = tmp.path().join(format!("r{r}"));
         let sc = environment(
@@ -653,19 +662,15 @@ fn coverage(distance: &str) {
             r as u64,
             Some(distance),
         );
-        let ((tp, tr), pp) = if no_check() {
-            ((false, f64::NAN), (false, f64::NAN))
+        // the model drawn from, checked (plug-in: it is the model) as the reference
+        let (tp, tr) = if no_check() {
+            (false, f64::NAN)
         } else {
-            // the calibrated model's posterior predictive check (`--posterior`)
-            let (cal, e) = (dir.join("cal.toml"), dir.join("e.parquet"));
-            let post = pradar::pipeline::commands::posterior_csv(&cal);
-            let (p, ratio, _) = check_verdict_with(&cal, &cpath, &e, &["--posterior", &s(&post)]);
-            (check(&dir.join("model.toml"), &cpath, &e), (p, ratio))
+            check(&dir.join("model.toml"), &cpath, &dir.join("e.parquet"))
         };
         truth_pass += usize::from(tp);
-        predictive.push(pp);
         eprintln!(
-            "ENV {distance} {r}: covered {}/8, hi/lo {:.1?}, check {:?}, posterior predictive {pp:?}, truth's check ({tp}, {tr:.2})",
+            "ENV {distance} {r}: covered {}/8, hi/lo {:.1?}, posterior predictive check {:?}, truth's check ({tp}, p {tr:.3})",
             sc.covered.iter().filter(|c| **c).count(),
             sc.hilo,
             sc.check,
@@ -696,9 +701,8 @@ fn coverage(distance: &str) {
         );
     }
     let passes = all.iter().filter(|a| a.check.0).count();
-    let predictive = predictive.iter().filter(|p| p.0).count();
     eprintln!(
-        "SUMMARY {distance} | check of the calibrated model passes {passes}/{reps} (posterior predictive {predictive}/{reps}); of the model itself {truth_pass}/{reps}"
+        "SUMMARY {distance} | the calibrated model passes the posterior predictive check {passes}/{reps}; the model itself (plug-in) {truth_pass}/{reps}"
     );
 }
 
@@ -706,8 +710,9 @@ fn coverage(distance: &str) {
 /// pooled statistics and the check statistics' quantiles) and the default `--ridge cv`.
 ///
 /// Measured (5 Dec 2026, idle, 244 s): covered 20/20 λ, AoA, d_p, γ, σ; 19/20 d_c, rays;
-/// 18/20 Γ; median hi/lo λ 8.3, AoA 6.7, d_c 5.2, Γ 5.6 (the must-show's halves,
-/// 4.9/3.2/3.0/3.6, not reached); check of the calibrated model passes 14/20, the
+/// 18/20 Γ; median hi/lo λ 8.3, AoA 6.7, d_c 5.2, Γ 5.6 (issue 30's halves,
+/// 4.9/3.2/3.0/3.6, were not reached; that "sharper" target is withdrawn, issue 45 item
+/// 6); under the check's former ratio rule the calibrated model passed 14/20 plug-in, the
 /// posterior predictive check (`--posterior`) 18/20, the drawn model itself 15/20. With
 /// `PRADAR_TEST_RIDGE=fixed` (the default until then; 345 s): covered 16/20 d_c and rays,
 /// 17/20 Γ, 18/20 λ (below 85 % for d_c and the rays), median hi/lo 5.6 / 4.5 / 4.4 / 4.0;
@@ -781,28 +786,40 @@ fn in_memory_simulator_is_synth() {
     }
 }
 
-/// A scene's name and its checks (pass, largest KS ratio): own table, second realisation.
+/// A scene's name and its calibrated model's posterior predictive checks (`check
+/// --posterior`; pass, max-T p): own table, second realisation.
 type SceneChecks = (String, (bool, f64), (bool, f64));
+
+/// The prior [`physics_predictive`] calibrates with.
+#[derive(Clone, Copy, PartialEq)]
+enum PhysicsPrior {
+    /// The CLI's default prior: every quantity of the model free, the layout's parts
+    /// (`[diffuse]`, `[walls]`) included, 13 quantities.
+    Default,
+    /// `calibrate --no-walls`: the eight cluster quantities only (the default until issue
+    /// 45 item 6).
+    NoWalls,
+    /// The cluster chain's model of the scene (`pipeline::analyse`, what `reproduce` runs:
+    /// it has `[diffuse]` and `[walls]`) with every interval removed, so the default ranges
+    /// apply to its 13 free quantities.
+    Chain,
+}
 
 /// The physics scenes of the predictive check (issue 29, `tests/check.rs`): the corridor,
 /// the office and the furnished hall (48 poses). Each is simulated by the physics simulator
 /// (`simulate` → `energy`, its manifest's seed) and at the next seed (a second
-/// realisation); the first is calibrated with the CLI defaults (`calibrate --seed 5`:
-/// 3000 simulations, population 400, the default prior, `summaries-quantiles`), and the
-/// calibrated model is checked (`pradar check`, 20 draws, its pass rule) against the scene
-/// and against the second realisation. Calibrate reads only the energy table and the
-/// campaign (never the `[scene]` or `[clutter]` truth). With `chain_prior`, the prior is
-/// instead the cluster chain's model of the scene (`pipeline::analyse`, what `reproduce`
-/// runs: it has `[diffuse]` and `[walls]`) with every interval removed, so the default
-/// ranges apply to its 13 free quantities (docs/calibrate.md, "The physics corridor with
-/// `[walls]` free"); with `walls` (and not `chain_prior`) the default prior with the
-/// layout's parts free (`calibrate --walls`). Only the scenes named in `scenes` are run.
-/// Returns per scene (name, own check, second check).
+/// realisation); the first is calibrated (`calibrate --seed 5`, `sims` simulations,
+/// population `pop`, the default distance, `prior`), and the calibrated model passes when
+/// its posterior predictive check (`pradar check --posterior <stem>_posterior.csv`, the
+/// check's default draws and rule) passes, against the scene and against the second
+/// realisation. The plug-in check (every draw the posterior medians) and the realisations'
+/// distance ([`realisations_apart`]) are printed as reference. Calibrate reads only the
+/// energy table and the campaign (never the `[scene]` or `[clutter]` truth). Only the
+/// scenes named in `scenes` are run. Returns per scene (name, own check, second check).
 fn physics_predictive(
     sims: usize,
     pop: usize,
-    chain_prior: bool,
-    walls: bool,
+    prior: PhysicsPrior,
     scenes: &[&str],
 ) -> Vec<SceneChecks> {
     use pradar::campaign::manifest::SweepFormat;
@@ -853,48 +870,45 @@ fn physics_predictive(
         ]
         .map(String::from)
         .to_vec();
-        if chain_prior {
-            let em = pradar::energy::EnergyMatrix::read(&e).unwrap();
-            let a = pradar::pipeline::analyse(&c, &em, &e, &dir.join("a"), false).unwrap();
-            let mut m = a.fit.unwrap().model;
-            for (q, _, _) in pradar::calibrate::DEFAULT_PRIOR {
-                if let Some(x) = m.quantity_mut(q) {
-                    x.interval = None;
+        match prior {
+            PhysicsPrior::Default => {}
+            PhysicsPrior::NoWalls => args.push("--no-walls".to_string()),
+            PhysicsPrior::Chain => {
+                let em = pradar::energy::EnergyMatrix::read(&e).unwrap();
+                let a = pradar::pipeline::analyse(&c, &em, &e, &dir.join("a"), false).unwrap();
+                let mut m = a.fit.unwrap().model;
+                for (q, _, _) in pradar::calibrate::DEFAULT_PRIOR {
+                    if let Some(x) = m.quantity_mut(q) {
+                        x.interval = None;
+                    }
                 }
+                let pp = dir.join("prior.toml");
+                m.save(&pp).unwrap();
+                args.extend(["--prior".to_string(), s(&pp)]);
             }
-            let pp = dir.join("prior.toml");
-            m.save(&pp).unwrap();
-            args.extend(["--prior".to_string(), s(&pp)]);
-            run(&args, None);
-        } else if walls {
-            args.push("--walls".to_string());
-            run(&args, None);
-        } else {
-            calibrate(&e, &c.path, &cal, sims, pop, 5, None, None);
         }
+        run(&args, None);
         let cal_s = t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
-        let (p1, r1, v1) = check_verdict(&cal, &c.path, &e);
-        let (p2, r2, v2) = check_verdict(&cal, &c2.path, &e2);
+        let (p1, q1, v1) = predictive(&cal, &c.path, &e);
+        let (p2, q2, v2) = predictive(&cal, &c2.path, &e2);
         eprintln!(
-            "== {name} ({} poses): simulate ×2 {sim_s:.0} s, calibrate {cal_s:.0} s, check ×2 {:.0} s\n   own scene:         {v1}\n   second realisation: {v2}",
+            "== {name} ({} poses): simulate ×2 {sim_s:.0} s, calibrate {cal_s:.0} s, posterior predictive check ×2 {:.0} s\n   own scene:          {v1}\n   second realisation: {v2}",
             c.manifest.poses.len(),
             t2.elapsed().as_secs_f64()
         );
         eprintln!("{}", std::fs::read_to_string(&cal).unwrap());
+        // reference: the plug-in check (the posterior medians) and the realisations' distance
+        let (_, _, w1) = check_verdict(&cal, &c.path, &e);
+        let (_, _, w2) = check_verdict(&cal, &c2.path, &e2);
+        eprintln!("   plug-in check (reference), own scene: {w1}\n   plug-in check, second realisation: {w2}");
         realisations_apart(&c.path, &e, &e2, &cal);
-        // the posterior predictive: each draw's free quantities from a particle
-        let post = dir.join("cal_posterior.csv");
-        let pa = ["--posterior", common::path_str(&post)];
-        let (_, _, w1) = check_verdict_with(&cal, &c.path, &e, &pa);
-        let (_, _, w2) = check_verdict_with(&cal, &c2.path, &e2, &pa);
-        eprintln!("   posterior predictive (--posterior), own scene: {w1}\n   posterior predictive, second realisation: {w2}");
-        out.push((name.to_string(), (p1, r1), (p2, r2)));
+        out.push((name.to_string(), (p1, q1), (p2, q2)));
     }
-    eprintln!("SUMMARY scene | own check (largest KS ratio) | second realisation");
+    eprintln!("SUMMARY scene | own scene (posterior predictive, max-T p) | second realisation");
     for (n, a, b) in &out {
         eprintln!(
-            "SUMMARY {n} | {} ({:.2}) | {} ({:.2})",
+            "SUMMARY {n} | {} ({:.3}) | {} ({:.3})",
             if a.0 { "PASS" } else { "FAIL" },
             a.1,
             if b.0 { "PASS" } else { "FAIL" },
@@ -904,65 +918,80 @@ fn physics_predictive(
     out
 }
 
-/// Issue 30's predictive must-show on the physics scenes with the default distance: the
-/// calibrated model of each scene (corridor, office, furnished hall; CLI defaults) passes
-/// `pradar check` against its scene and against the scene at another seed
-/// ([`physics_predictive`]). `cargo test --release --test tests --
-/// calibrate::physics_scenes_predictive --ignored --nocapture`.
+/// Issue 45 item 6's predictive must-show on the physics scenes: the calibrated model of
+/// each scene (corridor, office, furnished hall; CLI defaults: 3000 simulations,
+/// population 400, the default prior with every quantity free, the layout's parts
+/// included) passes the posterior predictive check (`check --posterior`) against its
+/// scene and against the scene at another seed ([`physics_predictive`]). `cargo test
+/// --release --test tests -- calibrate::physics_scenes_predictive --exact --ignored
+/// --nocapture`.
 ///
-/// Measured (issue 30, default prior; 2 threads at load 7–9): corridor calibrate 353 s,
-/// check FAIL vs its scene (largest KS ratio 2.97) and vs seed + 1 (3.03); office 339 s,
-/// FAIL (4.05) and FAIL (4.20); the furnished hall (48 poses, ~1400 s estimated) stopped
-/// unfinished. With the cross-validated ridge (the default since 5 Dec 2026; 2 threads,
-/// load 2–4, 13 min in all): corridor calibrate 95 s, FAIL (2.89) and FAIL (3.92); office
-/// 105 s, FAIL (3.30) and FAIL (4.13); furnished hall 479 s, FAIL (4.83) and FAIL (4.70).
-/// The posterior predictive check (`--posterior`, printed; corridor and office, 5 Dec
-/// 2026) fails too: 2.35 / 2.65 and 2.44 / 2.26, p = 0. Unmet: without
-/// `[diffuse]`/`[walls]` the model cannot reproduce the physics scenes (docs/calibrate.md).
+/// Measured with this prior (then `calibrate --walls`; issue 30, 5 Dec 2026, idle 2 cores,
+/// 15.5 min; the check's former ratio rule, before the check drew at the measured N0):
+/// corridor calibrate 138 s, office 118 s, furnished hall 649 s; the posterior predictive
+/// passed corridor (largest KS ratio 0.93 own, 1.08 seed + 1) and office (0.82, 0.99), and
+/// failed the furnished hall (1.54, 1.69).
+///
+/// Measured under the max-T rule (issue 45, 6 Dec 2026, `PRADAR_PREDICTIVE_SCENES=
+/// corridor,office`, load 6–7, 670 s): corridor calibrate 323 s, posterior predictive PASS
+/// p 0.775 own and 0.475 seed + 1 (the plug-in check, reference: FAIL 0.050 and 0.025);
+/// office 292 s, PASS p 0.275 and 0.200 (plug-in FAIL 0.050 and 0.025). The furnished hall
+/// not run under this rule (time box). The zoo measurement is in docs/calibrate.md
+/// ("Issue 45").
 #[test]
-#[ignore = "unmet: corridor, office and furnished hall fail check (KS ratio 2.89-4.83, own and seed+1); about 15 min on 2 idle cores"]
+#[ignore = "about 25 min on 2 shared cores; corridor and office pass (max-T p 0.775/0.475, 0.275/0.200), the furnished hall not measured under the max-T rule (it failed the former ratio rule)"]
 fn physics_scenes_predictive() {
-    assert_predictive(&physics_predictive(3000, 400, false, false, &ALL_SCENES));
+    assert_predictive(&physics_predictive(
+        3000,
+        400,
+        PhysicsPrior::Default,
+        &ALL_SCENES,
+    ));
+}
+
+/// [`physics_scenes_predictive`] with `calibrate --no-walls` (the eight cluster quantities,
+/// the default prior until issue 45 item 6).
+///
+/// Measured (issue 30, then the default prior; the check's former ratio rule, before the
+/// check drew at the measured N0; cross-validated ridge, 2 threads, load 2–4, 13 min):
+/// corridor calibrate 95 s, office 105 s, furnished hall 479 s; the plug-in check failed
+/// all three both ways, and the posterior predictive check (corridor and office) failed
+/// too (largest KS ratio 2.35 / 2.65 and 2.44 / 2.26, p = 0): without `[diffuse]` and
+/// `[walls]` the model cannot reproduce the physics scenes.
+#[test]
+#[ignore = "unmet when last measured (former ratio rule): corridor and office fail the posterior predictive check; about 15 min on 2 idle cores"]
+fn physics_scenes_predictive_no_walls() {
+    assert_predictive(&physics_predictive(
+        3000,
+        400,
+        PhysicsPrior::NoWalls,
+        &ALL_SCENES,
+    ));
 }
 
 /// [`physics_scenes_predictive`] with the cluster chain's model of each scene (intervals
-/// removed) as the prior: `[diffuse]` and `[walls]` free, the matching model. Not run yet
-/// (each simulation ~5× dearer than without `[diffuse]`/`[walls]`; the corridor alone
-/// took 609 s with another calibration on the cores, docs/calibrate.md).
+/// removed) as the prior ([`PhysicsPrior::Chain`]). Not run yet (each simulation ~5×
+/// dearer than without `[diffuse]`/`[walls]`; the corridor alone took 609 s with another
+/// calibration on the cores, docs/calibrate.md).
 #[test]
 #[ignore = "about 1-2 h on 2 shared cores (not run)"]
 fn physics_scenes_predictive_chain_prior() {
-    assert_predictive(&physics_predictive(3000, 400, true, false, &ALL_SCENES));
-}
-
-/// [`physics_scenes_predictive`] with `calibrate --walls` (the default prior with
-/// `[diffuse]` and `[walls]` free, 13 quantities) on the three scenes (the furnished hall
-/// since 5 Dec 2026).
-/// `cargo test --release --test tests -- calibrate::physics_scenes_predictive_walls
-/// --ignored --nocapture`.
-///
-/// Measured (issue 30, 5 Dec 2026, the cross-validated ridge, idle 2 cores, 15.5 min):
-/// corridor calibrate 138 s, check PASS vs its scene (largest KS ratio 1.41), FAIL vs
-/// seed + 1 (2.26: RMS delay spread, signal bins, first arrival, peaks); office 118 s, PASS
-/// (1.41) and FAIL (3.06); furnished hall 649 s, FAIL (4.19) and FAIL (5.59). The
-/// realisations' distance against the model's spread is printed per statistic
-/// ([`realisations_apart`]), and the posterior predictive check (`check --posterior`):
-/// corridor PASS (0.93) and PASS (1.08), office PASS (0.82) and PASS (0.99), furnished hall
-/// FAIL (1.54) and FAIL (1.69). Unmet (docs/calibrate.md, "the physics scenes with walls
-/// free" and "The `--walls` predictive check on idle cores").
-#[test]
-#[ignore = "unmet (plug-in check): corridor and office pass their own scene (1.41, 1.41) but fail seed+1 (2.26, 3.06), the furnished hall fails both (4.19, 5.59); the posterior predictive (printed) passes corridor and office both ways, the hall fails (1.54, 1.69); about 16 min on 2 idle cores (PRADAR_PREDICTIVE_SCENES=corridor,office: 5 min)"]
-fn physics_scenes_predictive_walls() {
-    assert_predictive(&physics_predictive(3000, 400, false, true, &ALL_SCENES));
+    assert_predictive(&physics_predictive(
+        3000,
+        400,
+        PhysicsPrior::Chain,
+        &ALL_SCENES,
+    ));
 }
 
 /// How far apart the two realisations of a scene are, against the calibrated model's own
 /// spread: per statistic of `pradar check`, the KS distance between the scene's table
 /// (`e`) and the second realisation's (`e2`), divided by the model's reference distance d
 /// (the median KS between two of its draws, as `check` computes it against `e`), beside
-/// the check's D/d against `e`. A ratio above 1.5 says the two realisations differ by more
-/// than the calibrated model's draws differ from each other, so no model with that spread
-/// passes both (printed only: a diagnostic of the second-realisation check).
+/// the check's D/d against `e`. A ratio well above 1 says the two realisations differ by
+/// more than the calibrated model's draws differ from each other (printed only: a
+/// diagnostic of the second-realisation check; the check's rule is its max-T p-value,
+/// `src/check/mod.rs`).
 fn realisations_apart(cpath: &Path, e: &Path, e2: &Path, model: &Path) {
     use pradar::check::stats::{ks_distance, Statistics};
     use pradar::params::ParamGuard;
@@ -990,14 +1019,15 @@ fn realisations_apart(cpath: &Path, e: &Path, e2: &Path, model: &Path) {
 /// The physics scenes of [`physics_predictive`].
 const ALL_SCENES: [&str; 3] = ["corridor", "office", "furnished hall"];
 
-/// Every scene's calibrated model passes against its scene and the second realisation.
+/// Every scene's calibrated model passes the posterior predictive check against its scene
+/// and the second realisation.
 fn assert_predictive(r: &[SceneChecks]) {
     let failed: Vec<String> = r
         .iter()
         .flat_map(|(n, a, b)| {
             [
-                (!a.0).then(|| format!("{n}: own scene fails (ratio {:.2})", a.1)),
-                (!b.0).then(|| format!("{n}: second realisation fails (ratio {:.2})", b.1)),
+                (!a.0).then(|| format!("{n}: own scene fails (max-T p {:.3})", a.1)),
+                (!b.0).then(|| format!("{n}: second realisation fails (max-T p {:.3})", b.1)),
             ]
         })
         .flatten()
@@ -1083,57 +1113,15 @@ fn contraction(sets: &[usize], poses: &[usize], sims: usize, pop: usize) -> Vec<
     all
 }
 
-/// Issue 30's contraction must-show, as stated: on the four closed-loop hall sets with 240
-/// poses (the closed loop's 480 m hall), the posterior medians of λ, AoA std, d_c and Γ
-/// within 15 % of the model in every set, and the 95 % intervals of those four shrinking
-/// from 32 to 240 poses roughly as 1/√poses: ln(hi/lo)@32 / ln(hi/lo)@240 at least
-/// 2/3 of √(240/32) = 2.74 (≥ 1.83) in every set. 1200 simulations (population 300) per
-/// calibration, as [`hall_sets`].
-///
-/// Not run in full: 8 calibrations, a 240-pose one 7.1× dearer than a 32-pose one at 400
-/// simulations (1464 s vs 205 s on the 2 shared cores) and 12.8× at 1200 (set 1: 1742 s
-/// vs 136 s), about 2 h in all. The reduced measurement [`hall_contraction_reduced`] (set
-/// 1, a third of the budget) does not meet it: at 240 poses λ +24 %, AoA +30 %, d_c +28 %,
-/// Γ +28 %, width ratios 0.98/1.06/1.31/1.41 with the fixed ridge; +10 %, −12 %, +6 %,
-/// +53 % and 1.03/0.69/1.32/1.18 with the cross-validated one (against ≥ 1.83). Set 1
-/// alone at this test's 1200 simulations (the reduced test with
-/// `PRADAR_CONTRACTION_SIMS=1200 PRADAR_CONTRACTION_POP=300`, 31 min): at 240 poses λ
-/// +1 %, AoA +20 %, d_c +14 %, Γ +11 %; width ratios 1.20/1.04/1.47/1.20 against ≥ 1.83,
-/// so unmet. `cargo test --release --test tests --
-/// calibrate::hall_contraction --exact --ignored --nocapture`.
-#[test]
-#[ignore = "about 2 h on 2 cores (not run in full); set 1 at its budget unmet: AoA +20 % at 240 poses, width ratios 1.04-1.47 vs 1.83"]
-fn hall_contraction() {
-    let all = contraction(&[0, 1, 2, 3], &[32, 240], 1200, 300);
-    let sqrt = (240.0f64 / 32.0).sqrt();
-    let models = hall_set_models();
-    let mut failed = Vec::new();
-    for (k, per_n) in all.iter().enumerate() {
-        let (name, model) = &models[k];
-        for i in [0, 1, 2, 4] {
-            let (q, pick) = QUANTITIES[i];
-            let t = pick(model);
-            let (v, lo, hi) = per_n[1][i];
-            if ((v - t) / t).abs() > 0.15 {
-                failed.push(format!("{name} {q}: median {v:.3} vs {t:.3} at 240 poses"));
-            }
-            let ratio = (per_n[0][i].2 / per_n[0][i].1).ln() / (hi / lo).ln();
-            if ratio < sqrt * 2.0 / 3.0 {
-                failed.push(format!(
-                    "{name} {q}: width ratio {ratio:.2} < {:.2}",
-                    sqrt * 2.0 / 3.0
-                ));
-            }
-        }
-    }
-    assert!(failed.is_empty(), "{}", failed.join("; "));
-}
-
-/// A reduced [`hall_contraction`] that fits a session: set 1 only (λ 1.0/ns, AoA 8°, d_c
+/// Contraction with the campaign, printed as reference (not a target: issue 45 item 6
+/// withdrew issue 30's contraction must-show — medians within 15 % and 95 % intervals
+/// shrinking as 1/√poses from 32 to 240 poses, ln(hi/lo)@32 / ln(hi/lo)@240 ≥ 1.83 —
+/// since the measurements below show campaigns of this size do not carry that
+/// information; its test `hall_contraction` is removed). Set 1 (λ 1.0/ns, AoA 8°, d_c
 /// 6 m), 32 and 240 poses, 400 simulations (population 200, the smallest population at
 /// which the regression adjustment still applies: 10 kept particles per coefficient).
-/// Prints the table of [`contraction`]; asserts nothing (the budget is a third of the
-/// must-show's; `PRADAR_CONTRACTION_SIMS` and `PRADAR_CONTRACTION_POP` set another).
+/// Prints the table of [`contraction`]; asserts nothing (`PRADAR_CONTRACTION_SIMS` and
+/// `PRADAR_CONTRACTION_POP` set another budget; 1200 and 300 were the must-show's).
 /// `cargo test --release --test tests -- calibrate::hall_contraction_reduced --ignored
 /// --nocapture`.
 ///
@@ -1147,9 +1135,11 @@ fn hall_contraction() {
 /// 2026; 702 s in all, 85 s at 32 poses, 615 s at 240, load 2–4): medians at 32 → 240
 /// poses λ +47 → +10 %, AoA −3 → −12 %, d_c −2 → +6 %, Γ −16 → +53 %; hi/lo λ 4.50 → 4.28,
 /// AoA 4.55 → 9.09, d_c 3.53 → 2.60, Γ 3.05 → 2.56; ln-width ratio 32/240 λ 1.03, AoA
-/// 0.69, d_c 1.32, Γ 1.18 (against 2.74); 8/8 covered at both. Table in docs/calibrate.md.
+/// 0.69, d_c 1.32, Γ 1.18 (against 2.74); 8/8 covered at both. Set 1 at the must-show's
+/// 1200 simulations (31 min): at 240 poses λ +1 %, AoA +20 %, d_c +14 %, Γ +11 %; width
+/// ratios 1.20/1.04/1.47/1.20. Table in docs/calibrate.md.
 #[test]
-#[ignore = "about 30 min on 2 shared cores; figures in docs/calibrate.md"]
+#[ignore = "reference, asserts nothing; about 30 min on 2 shared cores; figures in docs/calibrate.md"]
 fn hall_contraction_reduced() {
     // `PRADAR_CONTRACTION_SIMS=1200 PRADAR_CONTRACTION_POP=300`: set 1 at another budget
     // (1200, 300: the must-show's)

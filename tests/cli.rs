@@ -516,7 +516,11 @@ fn out_of_range_flags_give_one_clear_line() {
         (&map, &["--og-credit-depth", "nan"], "--og-credit-depth"),
         (&map, &["--og-bound-silent", "maybe"], "--og-bound-silent"),
         (&calibrate, &["--ridge", "lasso"], "--ridge"),
-        (&calibrate, &["--walls", "--prior", "p.toml"], "--walls"),
+        (
+            &calibrate,
+            &["--no-walls", "--prior", "p.toml"],
+            "--no-walls",
+        ),
         (&extract, &["--margin-db", "-1"], "--margin-db"),
         (&extract, &["--margin-db", "inf"], "--margin-db"),
         (&extract, &["--dynamic-range-db", "0"], "--dynamic-range-db"),

@@ -15,9 +15,10 @@
 //! **Free quantities** θ (inferred in ln units): λ `intra_cluster_rate`, AoA std
 //! `intra_cluster_aoa`, d_c `perimeter_spacing`, d_p `perimeter_offset`, Γ
 //! `cluster_decay`, γ `ray_decay`, σ `cluster_rrcs`, `rays_per_cluster`, when the
-//! prior has `[diffuse]`, `diffuse.wall_rcs_per_m` and `diffuse.lambert_exponent`, and
-//! when it has `[walls]`, `walls.specular_gamma` (0.01–1), `walls.corner_rcs`
-//! and `walls.edge_rcs` (1e-4–10 m², when present; the per-material |Γ| are copied). A
+//! prior has `[diffuse]` (the default prior has), `diffuse.wall_rcs_per_m` and
+//! `diffuse.lambert_exponent`, and when it has `[walls]` (the default prior has),
+//! `walls.specular_gamma` (0.01–1), `walls.corner_rcs` and `walls.edge_rcs` (1e-4–10 m²,
+//! when present; the per-material |Γ| are copied). A
 //! quantity whose 95 % interval spans ≥ 90 % of its prior's ln-range
 //! ([`Calibration::informed`]) is reported as not informed by the data. The
 //! others (Λ, which the model derives from geometry; the diffuse `power_share` and
@@ -26,13 +27,17 @@
 //! **Prior**: independent log-uniform, p(θ_k) ∝ 1/θ_k on [a_k, b_k]. Defaults
 //! ([`DEFAULT_PRIOR`], wide for indoor mm-wave): λ 0.05–3 /ns, AoA 2–60°, d_c 0.3–20 m,
 //! d_p 0.05–1.5 m (synth caps offsets at 1.5 m), Γ 2–60 ns (2 ns–10 µs for the excess decay of a schema-2 model, [`EXCESS_DECAY_PRIOR`]), γ 0.5–20 ns, σ 1e-4–1 m²,
-//! rays 1–20; σ′ 1e-3–1 m²/m, Lambert n 0.2–10. `--prior FILE` (model schema): a free
-//! quantity's `interval = [a, b]` is its prior range (a > 0); `a = b` holds it fixed at a;
-//! no interval keeps the default range. `--walls` (no prior file,
-//! [`Prior::default_with_walls`]): the default prior with `[diffuse]` and `[walls]` added,
-//! all 13 quantities free at their default ranges — the layout's own returns (the walls'
-//! continuum, specular feet, corners) that the clusters alone cannot stand in for on a
-//! physics scene; not the default, since each simulation is several times dearer.
+//! rays 1–20; σ′ 1e-3–1 m²/m, Lambert n 0.2–10; |Γ| 0.01–1, corner and edge σ
+//! 1e-4–10 m². The default prior ([`Prior::default_prior`]) frees every quantity of the
+//! model, the layout's parts included: the clusters' eight and the `[diffuse]` and
+//! `[walls]` five, 13 in all — the layout's own returns (the walls' continuum, specular
+//! feet, corners) are part of what a measured table holds and the clusters alone cannot
+//! stand in for them. `--no-walls` ([`Prior::no_walls`]): the clusters' eight only, no
+//! `[diffuse]` or `[walls]` — the matching prior for a table drawn from a model without
+//! them (`synth` of a cluster-only model), and several times cheaper per simulation.
+//! `--prior FILE` (model schema): a free quantity's `interval = [a, b]` is its prior range
+//! (a > 0); `a = b` holds it fixed at a; no interval keeps the default range; a section
+//! the file lacks is not in the model.
 //!
 //! **Method**: adaptive ABC population Monte Carlo (APMC; Lenormand, Jabot & Deffuant,
 //! Comput. Stat. 2013), the ABC-SMC of Beaumont, Cornuet, Marin & Robert (Biometrika 2009)
@@ -107,7 +112,8 @@ use std::path::Path;
 use summaries::SummaryContext;
 
 /// Default prior ranges (log-uniform): (quantity, lower, upper), in the schema's units.
-/// The `diffuse.*` and `walls.*` ones are free only when the prior file has that section.
+/// The `diffuse.*` and `walls.*` ones are free only when the prior has that section (the
+/// default prior has both, `--no-walls` neither).
 pub const DEFAULT_PRIOR: [(&str, f64, f64); 13] = [
     ("intra_cluster_rate", 0.05, 3.0),
     ("intra_cluster_aoa", 2.0, 60.0),
@@ -150,19 +156,12 @@ pub struct Prior {
 }
 
 impl Prior {
-    /// The default prior ([`DEFAULT_PRIOR`] over `table1_defaults`, a schema-2 model: Γ the
-    /// excess decay over [`EXCESS_DECAY_PRIOR`]; no `[diffuse]`).
+    /// The default prior: every quantity of the model free at its [`DEFAULT_PRIOR`]
+    /// range, 13 in all — the template `table1_defaults` with a `[diffuse]` section (σ′,
+    /// Lambert n free; `power_share` 0.5 and `decay` 10 ns, which synth does not draw from)
+    /// and a `[walls]` section (|Γ| one value for every material, corner σ and edge σ
+    /// free); a schema-2 model, so Γ is the excess decay over [`EXCESS_DECAY_PRIOR`].
     pub fn default_prior() -> Prior {
-        Prior::from_template(ModelConfig::table1_defaults(), Path::new("(default prior)"))
-            .expect("the default prior is valid")
-    }
-
-    /// The default prior with the layout's parts free too (`calibrate --walls`): the
-    /// template of [`Prior::default_prior`] with a `[diffuse]` section (σ′, Lambert n free;
-    /// `power_share` 0.5 and `decay` 10 ns, which synth does not draw from) and a
-    /// `[walls]` section (|Γ| of every material, corner σ and edge σ free), each at its
-    /// [`DEFAULT_PRIOR`] range: 13 free quantities.
-    pub fn default_with_walls() -> Prior {
         use crate::model::file::{DiffuseModel, WallModel};
         let mut m = ModelConfig::table1_defaults();
         m.diffuse = Some(DiffuseModel {
@@ -177,8 +176,18 @@ impl Prior {
             corner_rcs: Some(Quantity::new(0.05, "m2", "constant")),
             edge_rcs: Some(Quantity::new(0.05, "m2", "constant")),
         });
-        Prior::from_template(m, Path::new("(default prior with walls)"))
-            .expect("the default prior with walls is valid")
+        Prior::from_template(m, Path::new("(default prior)")).expect("the default prior is valid")
+    }
+
+    /// The clusters' prior (`calibrate --no-walls`): [`DEFAULT_PRIOR`] over
+    /// `table1_defaults` without `[diffuse]` or `[walls]`, the eight cluster quantities
+    /// free.
+    pub fn no_walls() -> Prior {
+        Prior::from_template(
+            ModelConfig::table1_defaults(),
+            Path::new("(default prior without walls)"),
+        )
+        .expect("the clusters' prior is valid")
     }
 
     /// Read a prior file (model schema; see the module docs); errors name the file and field.
@@ -534,10 +543,9 @@ mod tests {
 
     #[test]
     fn prior_from_template() {
+        // the default frees every quantity of the model, the layout's parts included
         let d = Prior::default_prior();
-        assert_eq!(d.free.len(), 8);
-        let w = Prior::default_with_walls();
-        assert_eq!(w.free.len(), 13);
+        assert_eq!(d.free.len(), 13);
         for (k, (name, a, b)) in DEFAULT_PRIOR.iter().enumerate() {
             // a schema-2 template's Γ is the excess decay, over its own range
             let (a, b) = if *name == "cluster_decay" {
@@ -545,8 +553,13 @@ mod tests {
             } else {
                 (*a, *b)
             };
-            assert_eq!((w.free[k].as_str(), w.lo[k], w.hi[k]), (*name, a, b));
+            assert_eq!((d.free[k].as_str(), d.lo[k], d.hi[k]), (*name, a, b));
         }
+        let n = Prior::no_walls();
+        assert_eq!(n.free.len(), 8);
+        assert!(n.template.diffuse.is_none() && n.template.walls.is_none());
+        assert_eq!(n.free[..], d.free[..8]);
+        assert_eq!((n.lo[0], n.hi[0]), (0.05, 3.0));
         // a schema-1 template keeps the total decay's range, and a fitted schema-2 file's
         // interval open upwards reaches the excess range's end
         let mut v1 = ModelConfig::table1_defaults();
@@ -559,7 +572,6 @@ mod tests {
         open.cluster_decay.interval = Some([30.0, f64::INFINITY]);
         let po = Prior::from_template(open, Path::new("p.toml")).unwrap();
         assert_eq!((po.lo[k], po.hi[k]), (30.0, EXCESS_DECAY_PRIOR.1));
-        assert_eq!((d.lo[0], d.hi[0]), (0.05, 3.0));
         let mut m = ModelConfig::table1_defaults();
         m.ray_decay.interval = Some([1.0, 8.0]);
         m.rays_per_cluster.interval = Some([4.0, 4.0]); // held fixed

@@ -204,14 +204,14 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Prior file in the model schema: each free quantity's `interval` is its log-uniform
-    /// prior range (default: the documented wide indoor ranges).
+    /// prior range (default: every quantity of the model free at the documented wide
+    /// indoor ranges, the layout's `[diffuse]` and `[walls]` included; 13 quantities).
     #[arg(long)]
     pub prior: Option<PathBuf>,
-    /// Without `--prior`: the default prior with the layout's parts free too (`[diffuse]`
-    /// σ′ and Lambert n, `[walls]` |Γ|, corner and edge σ at their default ranges; 13
-    /// free quantities, each simulation several times dearer).
+    /// Without `--prior`: free the clusters' eight quantities only, no `[diffuse]` or
+    /// `[walls]` (for a table drawn from a model without them; each simulation cheaper).
     #[arg(long, conflicts_with = "prior")]
-    pub walls: bool,
+    pub no_walls: bool,
     /// Simulation budget (at least the population).
     #[arg(long, default_value_t = CalibrateParams::default().simulations, value_parser = ranges::simulations)]
     pub simulations: usize,

@@ -87,7 +87,7 @@ impl CalibrateArgs {
             campaign: self.campaign,
             out: self.out,
             prior: self.prior,
-            walls: self.walls,
+            no_walls: self.no_walls,
             report: self.report,
             chain: self.chain,
             params: pradar::calibrate::CalibrateParams {
@@ -339,10 +339,12 @@ mod tests {
             _ => unreachable!(),
         }
         match parse(&["calibrate", e, "e.parquet", c, "c.toml", o, "m.toml"]) {
-            Cmd::Calibrate(a) => assert_eq!(
-                a.into_command().params,
-                pradar::calibrate::CalibrateParams::default()
-            ),
+            Cmd::Calibrate(a) => {
+                let cmd = a.into_command();
+                assert_eq!(cmd.params, pradar::calibrate::CalibrateParams::default());
+                // the default prior (every quantity free), not the clusters' only
+                assert!(cmd.prior.is_none() && !cmd.no_walls);
+            }
             _ => unreachable!(),
         }
         match parse(&["check", m, "m.toml", c, "c.toml", e, "e.parquet"]) {

@@ -23,11 +23,12 @@ pub struct Calibrate {
     /// Output model file; the final population is written beside it as
     /// `<stem>_posterior.csv`.
     pub out: PathBuf,
-    /// Prior file (model schema; default: [`crate::calibrate::DEFAULT_PRIOR`]).
+    /// Prior file (model schema; default: [`crate::calibrate::Prior::default_prior`],
+    /// every quantity free at its [`crate::calibrate::DEFAULT_PRIOR`] range).
     pub prior: Option<PathBuf>,
-    /// Without a prior file: free the layout's parts too
-    /// ([`crate::calibrate::Prior::default_with_walls`]).
-    pub walls: bool,
+    /// Without a prior file: the clusters' quantities only, no `[diffuse]` or `[walls]`
+    /// ([`crate::calibrate::Prior::no_walls`]).
+    pub no_walls: bool,
     /// Budget, population, seed.
     pub params: crate::calibrate::CalibrateParams,
     /// Report folder (`index.html` with the marginal posteriors and correlations, and the
@@ -138,7 +139,7 @@ pub fn calibrate(cmd: &Calibrate, progress: StepProgress) -> Result<CalibrateSum
     let params = cmd.params.check()?;
     let prior = match &cmd.prior {
         Some(p) => crate::calibrate::Prior::load(p)?,
-        None if cmd.walls => crate::calibrate::Prior::default_with_walls(),
+        None if cmd.no_walls => crate::calibrate::Prior::no_walls(),
         None => crate::calibrate::Prior::default_prior(),
     };
     let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
