@@ -339,22 +339,33 @@ pub(super) fn decay_quantity(
             )
         };
     };
-    let enc: Groups = pairs
-        .iter()
-        .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
-        .collect();
-    let iv = bootstrap_groups(
-        &enc,
-        |s| decay(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
-        r.bootstrap,
-        r.seed ^ seed,
-        r.block,
-    );
+    let iv = bootstrap_pairs(pairs, decay, seed, r);
     Quantity {
         interval: iv,
         n: Some(all.len()),
         ..Quantity::new(v, "ns", "exponential")
     }
+}
+
+/// The position-bootstrap interval of `stat` over (x, y) pairs per position (the pairs of a
+/// position resampled together).
+fn bootstrap_pairs(
+    pairs: &[Vec<(f64, f64)>],
+    stat: impl Fn(&[(f64, f64)]) -> Option<f64>,
+    seed: u64,
+    r: &Resampling,
+) -> Option<[f64; 2]> {
+    let enc: Groups = pairs
+        .iter()
+        .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
+        .collect();
+    bootstrap_groups(
+        &enc,
+        |s| stat(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
+        r.bootstrap,
+        r.seed ^ seed,
+        r.block,
+    )
 }
 
 /// Excess decay rates below this (1/ns; Γ above 10 µs, the schema's bound) are no excess
@@ -399,19 +410,9 @@ pub(super) fn excess_decay_quantity(
             )
         };
     };
-    let enc: Groups = pairs
-        .iter()
-        .map(|g| g.iter().flat_map(|x| [x.0, x.1]).collect())
-        .collect();
-    let iv = bootstrap_groups(
-        &enc,
-        |s| rate(&s.chunks(2).map(|c| (c[0], c[1])).collect::<Vec<_>>()),
-        r.bootstrap,
-        r.seed ^ seed,
-        r.block,
-    )
-    .filter(|[_, hi]| *hi >= NO_EXCESS_RATE_PER_NS)
-    .map(|[lo, hi]| [decay_of(hi), decay_of(lo.max(0.0))]);
+    let iv = bootstrap_pairs(pairs, rate, seed, r)
+        .filter(|[_, hi]| *hi >= NO_EXCESS_RATE_PER_NS)
+        .map(|[lo, hi]| [decay_of(hi), decay_of(lo.max(0.0))]);
     Quantity {
         interval: iv,
         n: Some(all.len()),
