@@ -315,7 +315,8 @@ fn score(
         let mean = d.iter().sum::<f64>() / d.len() as f64;
         let sd =
             (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (d.len() as f64 - 1.0)).sqrt();
-        let rel = (v - r) / r;
+        // Γ = ∞ on both sides (no excess decay) agrees
+        let rel = if v == r { 0.0 } else { (v - r) / r };
         let ok = rel.abs() <= 0.15;
         eprintln!(
             "{q:13} | {v:8.3} | {r:11.3} | {:8.3} | {mean:8.3} ± {sd:6.3} ({} ok) | {:+6.1} % {}{}",

@@ -390,7 +390,9 @@ pub(super) fn excess_decay_quantity(
             return None;
         }
         let (slope, _) = ls_line(p)?;
-        Some((-slope / (10.0 * std::f64::consts::LOG10_E)).max(0.0))
+        slope
+            .is_finite()
+            .then(|| (-slope / (10.0 * std::f64::consts::LOG10_E)).max(0.0))
     };
     let decay_of = |k: f64| {
         if k >= NO_EXCESS_RATE_PER_NS {
@@ -399,18 +401,32 @@ pub(super) fn excess_decay_quantity(
             f64::INFINITY
         }
     };
+    // a power that is not finite (a −inf dB) carries no slope
+    let pairs: Vec<Vec<(f64, f64)>> = pairs
+        .iter()
+        .map(|g| {
+            g.iter()
+                .copied()
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect()
+        })
+        .collect();
     let all: Vec<(f64, f64)> = pairs.iter().flatten().copied().collect();
     let Some(k) = rate(&all) else {
-        return Quantity {
-            n: Some(all.len()),
-            ..Quantity::not_estimable(
-                "ns",
-                "exponential",
-                format!("{} cluster powers, at least 3 needed", all.len()),
+        let reason = if all.len() < 3 {
+            format!("{} cluster powers, at least 3 needed", all.len())
+        } else {
+            format!(
+                "{} cluster powers, all at their position's first delay (no delay spread)",
+                all.len()
             )
         };
+        return Quantity {
+            n: Some(all.len()),
+            ..Quantity::not_estimable("ns", "exponential", reason)
+        };
     };
-    let iv = bootstrap_pairs(pairs, rate, seed, r)
+    let iv = bootstrap_pairs(&pairs, rate, seed, r)
         .filter(|[_, hi]| *hi >= NO_EXCESS_RATE_PER_NS)
         .map(|[lo, hi]| [decay_of(hi), decay_of(lo.max(0.0))]);
     Quantity {

@@ -302,9 +302,8 @@ fn stated_shown(reason: &str, q: &Quantity) -> String {
         format!("not estimable: {reason}; drawn at ∞ (stated)")
     } else {
         format!(
-            "not estimable: {reason}; drawn at {} {} (stated)",
-            crate::error::short(q.value),
-            q.unit
+            "not estimable: {reason}; drawn at {:.3} {} (stated)",
+            q.value, q.unit
         )
     }
 }

@@ -90,7 +90,8 @@ pub struct ChannelModel {
 impl ChannelModel {
     /// Draw the clusters of `config` along `layout`'s perimeter.
     pub fn draw(layout: &Layout, config: &ModelConfig, seed: u64) -> Result<ChannelModel> {
-        config.check()?;
+        // every quantity needs a value to draw from (a schema-1 flagged one has none)
+        config.require_estimable(&Default::default())?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5379_6e74_6800_0000);
         let lambda = config.intra_cluster_rate.value;
         let b = config.intra_cluster_aoa.value.to_radians() / 2f64.sqrt();

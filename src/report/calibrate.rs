@@ -85,7 +85,12 @@ pub fn posterior_plot(path: &Path, cal: &Calibration, chain: Option<&ModelConfig
                     line(q1, RGBColor(120, 120, 120)),
                 ])
                 .map_err(|e| plot_err(path, e))?;
-            if let Some(v) = chain.and_then(|m| m.quantity(name)).map(|q| q.value) {
+            // an estimated value of the chain's only (a stated one is not its estimate)
+            let estimated = chain
+                .and_then(|m| m.quantity(name))
+                .filter(|q| q.is_estimable())
+                .map(|q| q.value);
+            if let Some(v) = estimated {
                 if v.is_finite() && v > 0.0 && v.ln() >= lo && v.ln() <= hi {
                     chart
                         .draw_series([line(v.ln(), RED)])
@@ -123,11 +128,23 @@ pub fn section(
             continue;
         };
         let [lo, hi] = q.interval.unwrap_or([f64::NAN; 2]);
-        let c = chain.and_then(|m| m.quantity(name)).map(|q| q.value);
+        let c = chain.and_then(|m| m.quantity(name));
         let (shown, flag) = match c {
-            Some(v) if v.is_finite() => (
-                format!("{v:.4}"),
-                if v < lo || v > hi {
+            Some(q) if !q.is_estimable() => (
+                format!("not estimable (stated {})", crate::error::short(q.value)),
+                "",
+            ),
+            Some(q) if q.value == f64::INFINITY => (
+                "∞".to_string(),
+                if hi.is_finite() && hi < crate::calibrate::EXCESS_DECAY_PRIOR.1 {
+                    "outside the credible interval"
+                } else {
+                    ""
+                },
+            ),
+            Some(q) if q.value.is_finite() => (
+                format!("{:.4}", q.value),
+                if q.value < lo || q.value > hi {
                     "outside the credible interval"
                 } else {
                     ""

@@ -60,7 +60,9 @@
 //! * ray decay γ 2–6 ns: 802.11ad's 3.7–4.5 ns inside; ends our choice;
 //! * cluster decay Γ 5–25 ns: our choice around the corridor's 12 ns (60 GHz indoor cluster
 //!   decays of a few to a few tens of ns: Gustafson et al., "On mm-wave multipath clustering
-//!   and channel modeling", IEEE TAP 62(3), 2014);
+//!   and channel modeling", IEEE TAP 62(3), 2014); drawn (it keeps the scenes' random
+//!   streams) but not read by the physics simulator, whose clusters are point targets at
+//!   their own range: no excess decay, Γ = ∞ in the model's schema-2 meaning;
 //! * inter-cluster rate Λ 0.1–0.4 /ns: around the source paper's 0.21 /ns (our choice; the
 //!   simulator places clusters by d_c, not by Λ);
 //! * intra-cluster AoA std 5–30° (Laplacian): the source paper's 16.9° inside; ends our
