@@ -687,7 +687,9 @@ mod tests {
         assert_eq!(f.model.inter_cluster_rate.value, 0.21);
         assert!(
             rows[0].value_shown.starts_with("not estimable: ")
-                && rows[0].value_shown.ends_with("drawn at 0.210 1/ns (stated)"),
+                && rows[0]
+                    .value_shown
+                    .ends_with("drawn at 0.210 1/ns (stated)"),
             "{}",
             rows[0].value_shown
         );
