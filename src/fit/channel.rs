@@ -83,8 +83,8 @@ use crate::fit::geometry::{
     Interior, OBSERVED_STEP_M,
 };
 use crate::fit::quantities::{
-    decay_lad0, decay_quantity, excess_decay_quantity, fit_arrivals, fit_offset, fit_spacing,
-    mean_quantity, Groups, PairGroups, Resampling,
+    excess_decay_quantity, fit_arrivals, fit_offset, fit_spacing, mean_quantity,
+    ray_decay_quantity, Groups, PairGroups, Resampling,
 };
 use crate::model::file::{BinSettings, ModelConfig};
 use crate::table;
@@ -259,7 +259,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         fit_spacing(&s.dc, &s.exposure, &r),
     );
     let cluster_decay = excess_decay_quantity(&s.cluster_pairs(), 6, &r);
-    let ray_decay = decay_quantity(&s.ray_decay, "ray", 9, decay_lad0, &r);
+    let ray_decay = ray_decay_quantity(&s.ray_decay, 9, &r);
     let rays_per_cluster = mean_quantity(&s.members, "count", "poisson", 7, &r);
     let cluster_rrcs = mean_quantity(&s.sigma, "m2", "lognormal", 8, &r);
     let q = |k: &str| details[k].q.clone();

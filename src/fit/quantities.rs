@@ -318,16 +318,11 @@ pub(super) fn fit_spacing(dc: &Groups, exposure: &Groups, r: &Resampling) -> Fit
     }
 }
 
-/// A power-decay constant from (excess delay, relative power dB) pairs per position, with
-/// its position-bootstrap interval; `what` names the powers in the reason when there is no
-/// decaying trend (or fewer than 3 pairs): then not estimable.
-pub(super) fn decay_quantity(
-    pairs: &[Vec<(f64, f64)>],
-    what: &str,
-    seed: u64,
-    decay: fn(&[(f64, f64)]) -> Option<f64>,
-    r: &Resampling,
-) -> Quantity {
+/// The ray decay γ ([`decay_lad0`]) from (excess delay, power relative to the cluster's first
+/// ray dB) pairs per position, with its position-bootstrap interval; not estimable when
+/// there is no decaying trend (or fewer than 3 pairs).
+pub(super) fn ray_decay_quantity(pairs: &[Vec<(f64, f64)>], seed: u64, r: &Resampling) -> Quantity {
+    let decay = decay_lad0;
     let all: Vec<(f64, f64)> = pairs.iter().flatten().copied().collect();
     let Some(v) = decay(&all).filter(|v| v.is_finite() && *v > 0.0) else {
         return Quantity {
@@ -335,7 +330,7 @@ pub(super) fn decay_quantity(
             ..Quantity::not_estimable(
                 "ns",
                 "exponential",
-                format!("no decaying trend in {} {what} powers", all.len()),
+                format!("no decaying trend in {} ray powers", all.len()),
             )
         };
     };
