@@ -9,6 +9,7 @@ pub mod calibrate;
 pub mod campaign;
 pub mod check;
 pub mod cluster;
+pub mod correction;
 pub mod energy;
 pub mod error;
 pub mod export;

@@ -105,7 +105,8 @@ fn run(cli: Cli) -> Result<()> {
             report(quiet, summary)
         }
         Cmd::Fit(a) => {
-            let summary = commands::fit(&a.into_command())?;
+            let cmd = a.into_command();
+            let summary = with_bar(quiet, "correct", |p| commands::fit(&cmd, p))?;
             for w in summary.warnings() {
                 eprintln!("warning: {w}");
             }

@@ -16,6 +16,7 @@ use pradar::calibrate::CalibrateParams;
 use pradar::campaign::manifest::SweepFormat;
 use pradar::check::CheckParams;
 use pradar::cluster::{ClusterParams, Criterion};
+use pradar::correction::CorrectionParams;
 use pradar::fit::channel::FitParams;
 use pradar::mapping::{EkfParams, EkfVariant, GridParams, Method as MapMethod, OgParams};
 use pradar::mpc::{DiffuseParams, ExtractParams, Method as ExtractMethod};
@@ -431,6 +432,12 @@ pub struct FitArgs {
     /// `fit` refuses.
     #[arg(long)]
     pub energy: Option<PathBuf>,
+    /// Keep the paper's method's values: no bias correction by simulation of the chain.
+    #[arg(long)]
+    pub no_correction: bool,
+    /// Simulated campaigns per point of the bias correction (R; more: narrower intervals).
+    #[arg(long, default_value_t = CorrectionParams::default().draws, conflicts_with = "no_correction")]
+    pub correction_draws: usize,
 }
 
 // `pradar report`

@@ -172,6 +172,8 @@ pub fn report(opts: &ReportValid, progress: Progress) -> Result<ReportOutput> {
         model: opts.model.as_deref(),
         truth,
         experiments: opts.experiments.then_some(&opts.experiment_params),
+        // the smaller run, as reproduce: `fit` makes the full one
+        correction: Some(crate::correction::CorrectionParams::quick()),
         progress,
     };
     run(
@@ -193,6 +195,8 @@ pub(crate) struct Job<'a, 'p> {
     pub truth: Option<PathBuf>,
     /// The experiments' parameters, when they run.
     pub experiments: Option<&'a ExperimentValid>,
+    /// The bias correction of Table 1 (`crate::correction`), when it runs.
+    pub correction: Option<crate::correction::CorrectionParams>,
     /// Progress bars.
     pub progress: Progress<'p>,
 }
@@ -379,6 +383,13 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
             drop(to_side);
             let mut a = analyse(&s.campaign, &s.em, &s.energy_path, work, true)?;
             timings.0.append(&mut a.timings);
+            if let Some(p) = job.correction {
+                let label = format!("bias correction (R = {})", p.draws);
+                timings.time(&label, || {
+                    correct_fit(&s, &mut a, &p.check()?, job.progress);
+                    Ok(())
+                })?;
+            }
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
             })?;
@@ -524,7 +535,7 @@ fn check_section(job: &Job, s: &Data, a: &Analysis, progress: Progress) -> Secti
                     .as_ref()
                     .map_err(|e| Error::param("fit", e.to_string()))?;
                 (
-                    f.model.require_estimable(&Default::default())?,
+                    f.model_out().require_estimable(&Default::default())?,
                     format!(
                         "the fitted model (fitted_model.toml) against the energy table of {name}"
                     ),
@@ -548,6 +559,45 @@ fn check_section(job: &Job, s: &Data, a: &Analysis, progress: Progress) -> Secti
     })
 }
 
+/// The bias correction of the analysis's fit (`crate::correction`) with the partition
+/// stability of its clustering, kept in the fit; a correction that fails leaves the fit as
+/// the paper's method gave it, and Table 1 then has no corrected column.
+fn correct_fit(
+    s: &Data,
+    a: &mut Analysis,
+    p: &crate::correction::CorrectionValid,
+    progress: Progress,
+) {
+    let Ok(f) = &mut a.fit else {
+        return;
+    };
+    let cb = progress("correct", 0);
+    let run = || -> Result<crate::fit::corrected::Corrected> {
+        let mut c =
+            crate::correction::correct(&s.campaign, &s.em, &s.energy_path, f, p, &|d, t| cb(d, t))?;
+        let headings: Vec<f64> = s
+            .campaign
+            .manifest
+            .poses
+            .iter()
+            .map(|p| p.heading_deg)
+            .collect();
+        let params = a.cluster_params.check()?;
+        c.stability = Some(crate::correction::stability::partition_stability(
+            &a.clustering.mpcs,
+            &a.clustering.cluster_id,
+            &headings,
+            &params,
+            p.resamples,
+            p.seed.unwrap_or(s.campaign.manifest.seed),
+        )?);
+        Ok(c)
+    };
+    if let Ok(c) = run() {
+        f.correction = Some(c);
+    }
+}
+
 /// Table 1 (`fitted_model.toml`, `table1.md`, the fit plots) beside the simulator's truth
 /// through the same estimators when there is one (else the page says why there is no truth
 /// column), the K note and the K_max table: the section's HTML.
@@ -565,7 +615,7 @@ fn table1_section(s: &Data, a: &Analysis, work: &Path, out: &Path) -> Result<Str
     };
     let table1 = match &a.fit {
         Ok(f) => {
-            f.model.save(&out.join("fitted_model.toml"))?;
+            f.model_out().save(&out.join("fitted_model.toml"))?;
             crate::fit::channel::write_table1(&out.join("table1.md"), name, f, truth.as_ref())?;
             let plots = write_fit_plots(f, out)?;
             page::table1_fitted_html(name, &table1_html_rows(f, truth.as_ref()), &plots)

@@ -4,7 +4,7 @@
 //! beside the simulator's truth). Each takes its command struct and gives a summary whose
 //! `Display` is printed.
 
-use super::{campaign_inputs, refuse};
+use super::{campaign_inputs, refuse, StepProgress};
 use crate::campaign::manifest::Campaign;
 use crate::cluster::ClusterParams;
 use crate::energy::{EnergySource, EnergyTable};
@@ -13,7 +13,7 @@ use crate::fit::channel::{ChannelFit, FitParams};
 use crate::mpc::{ExtractParams, Mpc};
 use crate::params::ParamGuard;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `pradar extract`: MPCs of an energy table.
 #[derive(Debug, Clone)]
@@ -201,6 +201,9 @@ pub struct Fit {
     pub energy: Option<PathBuf>,
     /// Bootstrap resamples and seed.
     pub params: FitParams,
+    /// The bias correction's parameters (`crate::correction`); None keeps the paper's
+    /// method's values (`--no-correction`).
+    pub correction: Option<crate::correction::CorrectionParams>,
 }
 
 /// The fits `fit` wrote.
@@ -256,7 +259,7 @@ impl fmt::Display for FitSummary {
 /// Table 1. A partial fit is written with its not-estimable quantities marked
 /// ([`FitSummary::warnings`] lists them); a fit where no quantity can be estimated is an
 /// error and writes nothing.
-pub fn fit(cmd: &Fit) -> Result<FitSummary> {
+pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
     let c = Campaign::load(&cmd.campaign)?;
     let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
     inputs.push((cmd.clusters.clone(), "--clusters"));
@@ -282,12 +285,21 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
         &inputs,
     )?;
     let params = cmd.params.check()?;
+    let correction = cmd.correction.map(|p| p.check()).transpose()?;
     let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
     match energy {
         Some(energy) => {
             let em = crate::energy::EnergyMatrix::read(&energy)?;
             crate::energy::matrix::check_campaign(&c, &em, &energy)?;
             fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+            if let Some(p) = &correction {
+                crate::correction::check_correctable(&fit, &cmd.clusters)?;
+                let mut corr = crate::correction::correct(&c, &em, &energy, &fit, p, &|d, t| {
+                    progress(d, t)
+                })?;
+                corr.stability = Some(data_stability(&cmd.clusters, &c, p)?);
+                fit.correction = Some(corr);
+            }
         }
         None => {
             return Err(crate::error::Error::param(
@@ -305,6 +317,34 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     };
     // the table first, the model last: a model file on disk means the run completed
     crate::fit::channel::write_table1(&cmd.table, &c.manifest.name, &fit, truth.as_ref())?;
-    fit.model.save(&cmd.out)?;
+    fit.model_out().save(&cmd.out)?;
     Ok(FitSummary { fit, truth })
+}
+
+/// The partition stability of a clustered MPC table (its `cluster_id` against the default
+/// clustering of bootstrap resamples, the campaign's sector; `crate::correction::stability`).
+pub fn data_stability(
+    clusters: &Path,
+    c: &Campaign,
+    p: &crate::correction::CorrectionValid,
+) -> Result<crate::fit::corrected::PartitionStability> {
+    let mpcs = crate::mpc::read_mpcs(clusters)?;
+    let df = crate::table::read_parquet(clusters, None)?;
+    let ids = crate::table::i64_column(clusters, &df, "cluster_id")?;
+    let labels: Vec<Option<usize>> = ids
+        .iter()
+        .map(|&i| (i >= 0).then_some(i as usize))
+        .collect();
+    let headings: Vec<f64> = c.manifest.poses.iter().map(|p| p.heading_deg).collect();
+    let params = crate::cluster::ClusterParams::default()
+        .sector_deg(c.manifest.directions.width_deg())
+        .check()?;
+    crate::correction::stability::partition_stability(
+        &mpcs,
+        &labels,
+        &headings,
+        &params,
+        p.resamples,
+        p.seed.unwrap_or(c.manifest.seed),
+    )
 }
