@@ -34,19 +34,21 @@
 //! common draws. Its diagonal Jᵢᵢ is quantity i's own slope; below `min_slope` (0.25) the
 //! quantity is not identifiable — the chain's estimate barely moves with it — and it is
 //! held at its raw value (drawn as stated, flagged in the model file), as is one the chain
-//! reads in fewer than half of the draws. Then Newton steps on the diagonal, for each
-//! identifiable quantity i: u_{k+1,i} = u_{k,i} + (tᵢ − T̄ᵢ(u_k))/Jᵢᵢ (at most a factor 2
-//! per step; Γ's rate between half and twice itself, kept ≥ 0), from the best point so far,
-//! the step halved after one that left a larger remaining bias, R draws per step, until
-//! every remaining bias |tⱼ − T̄ⱼ| is within the simulation noise of its mean sⱼ/√R
-//! (settled) or `iterations` steps are made; the point with the smallest
-//! Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. The cross terms of J are measured and left out of the
-//! step: from R = 8 draws they are noisy, and the full J⁻¹ step diverged on the 12-pose
-//! corridor (`docs/correction.md`). Cost: R·(1 + |S| + iterations) chain runs, S the
-//! quantities moved; the defaults (R 8, 3 iterations) make at most 88.
+//! reads in fewer than half of the draws. Then Newton steps on the identifiable set S
+//! from the best point so far: u_{k+1} = u_k + J_SS⁻¹ (t − T̄(u_k)) (LU), each component at
+//! most a factor 2 (Γ's rate between half and twice itself, kept ≥ 0) and inside the
+//! schema's range; after a step that left a larger remaining bias the next one uses the
+//! diagonal alone (u_{k+1,i} = u_{k,i} + (tᵢ − T̄ᵢ)/Jᵢᵢ), the kinds alternate, and after
+//! both failed the step is halved. R draws per step, until every remaining bias
+//! |tⱼ − T̄ⱼ| is within the simulation noise of its mean sⱼ/√R (settled) or `iterations`
+//! steps are made; the point with the smallest Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. Why both
+//! kinds: on a 150-pose hall the cross terms are large and real (d_p's estimate moves −3
+//! times the AoA's log), on the 12-pose corridor they are mostly noise and the whole-J
+//! step went astray (`docs/correction.md`). Cost: R·(1 + |S| + iterations) chain runs; the
+//! defaults (R 8, 4 iterations) make at most 96.
 //!
 //! The interval. Linearised at the kept point û, the corrected value moves as
-//! (tᵢ − T̄ᵢ)/Jᵢᵢ, and the chain's estimate on a campaign drawn at û scatters as the R
+//! (tᵢ − T̄ᵢ)/Jᵢᵢ (the diagonal: the whole J⁻¹ carries its noise into every interval), and the chain's estimate on a campaign drawn at û scatters as the R
 //! draws do: the draws stand for the data's sampling spread (a parametric bootstrap of
 //! the correction). So per quantity the sample sd of T_{r,i}/Jᵢᵢ over the draws,
 //! times √(1 + 1/R) for the simulation noise of T̄ (Gourieroux et al.'s factor), and
@@ -64,7 +66,7 @@
 //! read them; the slopes are taken at the start, not refreshed along the steps.
 //!
 //! Partition stability (beside, [`stability`]): the ARI between the data's clusters and
-//! the chain's clusters of bootstrap resamples of each position's MPCs.
+//! the chain's clusters of random 80 % subsamples of each position's MPCs.
 //!
 //! Deterministic: the draws' seeds come from one ChaCha stream keyed by the seed, the
 //! chain runs in parallel (rayon) and every result lands in its own slot.
@@ -115,6 +117,17 @@ const MOVED: [(&str, Scale); 7] = [
 
 /// d_c's index in [`MOVED`]: its step gives Λ's slope.
 const SPACING: usize = 2;
+
+/// Solve J_SS x = r (LU); None when J_SS is singular or the solution not finite.
+fn solve(j: &[Vec<f64>], set: &[usize], r: &[f64]) -> Option<Vec<f64>> {
+    let n = set.len();
+    let a = nalgebra::DMatrix::from_fn(n, n, |p, q| j[set[p]][set[q]]);
+    let b = nalgebra::DVector::from_column_slice(r);
+    let x = a.lu().solve(&b)?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
+}
 
 /// The largest move of a log-scale quantity in one step (a factor 2).
 const MAX_LOG_STEP: f64 = std::f64::consts::LN_2;
@@ -461,13 +474,21 @@ pub fn correct(
     let mut best = (score, t, start.clone(), settled);
     let mut u = t;
     let mut iterations = 0;
-    // the step's share: halved after a step that left a larger remaining bias
+    // the step: Newton's on the whole J (the cross terms: one quantity's estimate moving
+    // with another), else on its diagonal alone; after a step that left a larger remaining
+    // bias the other kind is tried, and after both the share is halved
+    let mut full = true;
     let mut share = 1.0;
+    let mut failed = 0;
     while !best.3 && iterations < params.iterations && !set.is_empty() {
         let (_, from, from_draws, _) = &best;
         let (_, _, r) = residual(&t, from_draws, &set);
+        let dx: Vec<f64> = match full.then(|| solve(&jac, &set, &r)).flatten() {
+            Some(dx) => dx,
+            None => (set.iter().zip(&r)).map(|(&i, r)| r / jac[i][i]).collect(),
+        };
         for (k, &i) in set.iter().enumerate() {
-            let dx = share * r[k] / jac[i][i];
+            let dx = share * dx[k];
             let to = match MOVED[i].1 {
                 Scale::Log => from[i] + dx.clamp(-MAX_LOG_STEP, MAX_LOG_STEP),
                 Scale::Rate => (from[i] + dx)
@@ -485,9 +506,13 @@ pub fn correct(
         }
         if score < best.0 {
             best = (score, u, draws, settled);
-            share = 1.0;
+            failed = 0;
         } else {
-            share *= 0.5;
+            failed += 1;
+            full = !full;
+            if failed % 2 == 0 {
+                share *= 0.5;
+            }
         }
     }
     let (_, u_hat, draws, settled_best) = best;
@@ -672,6 +697,25 @@ mod tests {
         );
         assert!(to_u(Scale::Log, -1.0).is_nan());
         assert!(to_u(Scale::Log, f64::NAN).is_nan());
+    }
+
+    /// Newton's solve on a known 2 × 2 system; a singular one gives none.
+    #[test]
+    fn the_newton_step_solves_the_jacobian_system() {
+        let mut j = vec![vec![0.0; 7]; 7];
+        j[0][0] = 2.0;
+        j[0][1] = 1.0;
+        j[1][0] = 0.5;
+        j[1][1] = 1.0;
+        let x = solve(&j, &[0, 1], &[3.0, 1.5]).unwrap();
+        // 2a + b = 3, 0.5a + b = 1.5: a = 1, b = 1
+        assert!(
+            (x[0] - 1.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12,
+            "{x:?}"
+        );
+        j[1][0] = 4.0;
+        j[1][1] = 2.0;
+        assert_eq!(solve(&j, &[0, 1], &[2.0, 4.0]), None);
     }
 
     #[test]

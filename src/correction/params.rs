@@ -12,7 +12,7 @@
 //! * `min_slope` — a quantity whose own slope is below this is not identifiable: the
 //!   chain's estimate moves by less than this fraction of the quantity's move, so the
 //!   data's sampling error is magnified more than 1/min_slope times. 0.25, a stated choice.
-//! * `resamples` — bootstrap resamples of each position's MPCs for the partition
+//! * `resamples` — random 80 % subsamples of each position's MPCs for the partition
 //!   stability (0: not measured).
 //! * `seed` — the draws' seed (default: the campaign's).
 
@@ -30,7 +30,7 @@ pub struct CorrectionParams {
     pub step: f64,
     /// Slope below which a quantity is not identifiable.
     pub min_slope: f64,
-    /// Bootstrap resamples of the partition stability (0: none).
+    /// Subsamples of the partition stability (0: none).
     pub resamples: usize,
     /// Seed of the draws (None: the campaign's).
     pub seed: Option<u64>,
@@ -47,7 +47,7 @@ impl Default for CorrectionParams {
     fn default() -> Self {
         CorrectionParams {
             draws: 8,
-            iterations: 3,
+            iterations: 4,
             step: 0.25,
             min_slope: 0.25,
             resamples: 5,

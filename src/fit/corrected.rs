@@ -139,7 +139,7 @@ impl Corrected {
                 .filter(|a| a.is_finite() && **a < 0.5)
                 .count();
             s.push_str(&format!(
-                " Partition stability (ARI of the chain's partitions of {} bootstrap resamples of each position's MPCs): {:.2} overall, below 0.5 at {} of {} positions.",
+                " Partition stability (ARI between the data's clusters and the chain's clusters of {} random 80 % subsamples of each position's MPCs): {:.2} overall, below 0.5 at {} of {} positions.",
                 st.resamples,
                 st.overall,
                 low,
