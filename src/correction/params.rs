@@ -47,7 +47,7 @@ impl Default for CorrectionParams {
     fn default() -> Self {
         CorrectionParams {
             draws: 8,
-            iterations: 4,
+            iterations: 6,
             step: 0.25,
             min_slope: 0.25,
             resamples: 5,

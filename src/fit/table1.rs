@@ -25,6 +25,12 @@
 //!   interval and KS p); its CSV value, lo, hi and ks_p are empty (a stated value is not
 //!   an estimate).
 //!   The same holds for the truth column.
+//! * With a bias correction (`crate::correction`, [`ChannelFit::correction`]) the value
+//!   column is headed "pradar (paper's method)" and three columns follow the interval:
+//!   "bias-corrected" (or "not identifiable from this campaign: …"), its 95 % interval and
+//!   the binding slope (CSV: `corrected, corrected_lo, corrected_hi, slope`); a row "rays
+//!   per cluster (mean)" is added (the correction moves it too), and the Markdown and the
+//!   report print the method, R and the partition stability under the table.
 //!
 //! [`ModelConfig::table1_defaults`]: crate::model::file::ModelConfig::table1_defaults
 
