@@ -172,7 +172,7 @@ pub mod tiled;
 pub use dense::DenseEkf;
 pub use linalg::cholesky;
 pub use observation::{truncate_kernel, Linearized, NoiseModel, Observation};
-pub use params::{normal_cdf, EkfParams, EkfValid, EkfVariant};
+pub use params::{normal_cdf, EkfParams, EkfUpdate, EkfValid, EkfVariant};
 pub use run::{
     ekf_run, ekf_run_with_arcs, mean_grey, std_grey, EchoArcs, EkfMap, EkfReport, EkfStats, Sight,
 };
@@ -196,6 +196,9 @@ pub trait RrcsFilter: Send {
     fn covariance(&self, i: usize, j: usize) -> Option<f64>;
     /// One EKF update with an observation linearised at the current mean.
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()>;
+    /// `obs` linearised at the current mean with the Gaussian second-order terms of the
+    /// filter's own covariance ([`Linearized::second_order`]).
+    fn linearize_second_order(&self, obs: &Observation, noise: &NoiseModel) -> Linearized;
     /// Reflect negative means (x_i → −x_i, row/column i of P negated), then keep means
     /// ≥ `x_min`; returns the cells reflected.
     fn project_positive(&mut self, x_min: f64) -> usize;

@@ -223,6 +223,74 @@ impl Linearized {
         }
         l
     }
+
+    /// Linearise `obs` at `x` with the terms of the Gaussian second-order filter
+    /// (Jazwinski 1970; Bar-Shalom, Li & Kirubarajan 2001, §10.3). For h_k = Σ_i c̃_{k,i}·x_i²
+    /// the Hessian is 2·diag(c̃_k), so the predicted energy gains ½·tr(H_xx·P) = Σ_i c̃_{k,i}·P_ii
+    /// (the mean of a quadratic form under N(x, P)) and R_k gains
+    /// ½·tr(H_xx·P·H_xx·P) = 2·Σ_ij c̃_{k,i}·c̃_{k,j}·P_ij² (its variance); the detector
+    /// noise is taken at the predicted signal energy Σ_i c̃_{k,i}·(x_i² + P_ii). H is the
+    /// Jacobian at `x` as in [`Linearized::new`]. `block(i)` names the block of cell i
+    /// (cells of different blocks have no covariance: the tiled filter's tiles; one block for
+    /// the dense filter) and `cov(i, j)` is P_ij within a block. Cost per row: the sum over
+    /// its blocks of (entries in the block)².
+    pub fn second_order(
+        obs: &Observation,
+        x: &[f64],
+        noise: &NoiseModel,
+        block: &dyn Fn(usize) -> u32,
+        cov: &dyn Fn(usize, usize) -> f64,
+    ) -> Linearized {
+        let mut l = Linearized::new(obs, x, noise);
+        let mut by_block: Vec<(u32, usize)> = Vec::new();
+        for j in 0..obs.rows() {
+            let (e0, e1) = (obs.ptr[j], obs.ptr[j + 1]);
+            let mut es = 0.0;
+            let mut bias = 0.0;
+            let mut var2 = 0.0;
+            let mut hph = 0.0;
+            by_block.clear();
+            for e in e0..e1 {
+                let ci = obs.cell[e] as usize;
+                let c = obs.coef[e];
+                es += c * x[ci] * x[ci];
+                let pii = cov(ci, ci);
+                bias += c * pii;
+                var2 += c * c * pii * pii;
+                hph += l.hval[e] * l.hval[e] * pii;
+                by_block.push((block(ci), e));
+            }
+            by_block.sort_unstable();
+            let mut a = 0;
+            while a < by_block.len() {
+                let mut b = a + 1;
+                while b < by_block.len() && by_block[b].0 == by_block[a].0 {
+                    b += 1;
+                }
+                for (u, &(_, e)) in by_block[a..b].iter().enumerate() {
+                    let (ci, c) = (obs.cell[e] as usize, obs.coef[e]);
+                    for &(_, f) in &by_block[a + u + 1..b] {
+                        let pij = cov(ci, obs.cell[f] as usize);
+                        var2 += 2.0 * c * obs.coef[f] * pij * pij;
+                        hph += 2.0 * l.hval[e] * l.hval[f] * pij;
+                    }
+                }
+                a = b;
+            }
+            let h = es + bias + noise.mean();
+            l.h[j] = h;
+            l.nu[j] = obs.z[j] - h;
+            // Var(E_s) under N(x, P): the linear term H·P·Hᵀ and the quadratic 2·Σ c c P²
+            let var_es = hph + 2.0 * var2;
+            let er = if std::env::var("PRADAR_NEES_ER").is_ok() {
+                noise.model_error.powi(2) * var_es
+            } else {
+                0.0
+            };
+            l.r[j] = noise.variance(es + bias) + 2.0 * var2 + er;
+        }
+        l
+    }
 }
 
 #[cfg(test)]
