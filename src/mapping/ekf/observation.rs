@@ -248,7 +248,6 @@ impl Linearized {
             let mut es = 0.0;
             let mut bias = 0.0;
             let mut var2 = 0.0;
-            let mut hph = 0.0;
             by_block.clear();
             for e in e0..e1 {
                 let ci = obs.cell[e] as usize;
@@ -257,7 +256,6 @@ impl Linearized {
                 let pii = cov(ci, ci);
                 bias += c * pii;
                 var2 += c * c * pii * pii;
-                hph += l.hval[e] * l.hval[e] * pii;
                 by_block.push((block(ci), e));
             }
             by_block.sort_unstable();
@@ -272,7 +270,6 @@ impl Linearized {
                     for &(_, f) in &by_block[a + u + 1..b] {
                         let pij = cov(ci, obs.cell[f] as usize);
                         var2 += 2.0 * c * obs.coef[f] * pij * pij;
-                        hph += 2.0 * l.hval[e] * l.hval[f] * pij;
                     }
                 }
                 a = b;
@@ -280,14 +277,7 @@ impl Linearized {
             let h = es + bias + noise.mean();
             l.h[j] = h;
             l.nu[j] = obs.z[j] - h;
-            // Var(E_s) under N(x, P): the linear term H·P·Hᵀ and the quadratic 2·Σ c c P²
-            let var_es = hph + 2.0 * var2;
-            let er = if std::env::var("PRADAR_NEES_ER").is_ok() {
-                noise.model_error.powi(2) * var_es
-            } else {
-                0.0
-            };
-            l.r[j] = noise.variance(es + bias) + 2.0 * var2 + er;
+            l.r[j] = noise.variance(es + bias) + 2.0 * var2;
         }
         l
     }
@@ -296,6 +286,36 @@ impl Linearized {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One row over two cells, c̃ = (1, 2), x = (0.1, 0.2), P = [[0.01, 0.005], [0.005, 0.04]],
+    /// no detector noise: h = Σ c̃ (x² + P_ii) = 0.09 + 0.09, and the quadratic term's
+    /// variance 2·Σ_ij c̃_i c̃_j P_ij² = 2·(1e-4 + 2·2·2.5e-5 + 4·1.6e-3) = 0.0132 (0.013
+    /// when the two cells are in different blocks: no covariance between them).
+    #[test]
+    fn second_order_terms_are_the_quadratic_forms_mean_and_variance() {
+        let obs = Observation {
+            bin: vec![5],
+            z: vec![0.5],
+            ptr: vec![0, 2],
+            cell: vec![0, 1],
+            coef: vec![1.0, 2.0],
+        };
+        let noise = NoiseModel {
+            n0: 0.0,
+            tw: 1.0,
+            pulses: 1.0,
+            model_error: 0.0,
+        };
+        let p = [[0.01, 0.005], [0.005, 0.04]];
+        let x = [0.1, 0.2];
+        let one = Linearized::second_order(&obs, &x, &noise, &|_| 0, &|i, j| p[i][j]);
+        assert!((one.h[0] - 0.18).abs() < 1e-15);
+        assert!((one.nu[0] - 0.32).abs() < 1e-15);
+        assert!((one.r[0] - 0.0132).abs() < 1e-15, "{}", one.r[0]);
+        assert_eq!(one.hval, vec![0.2, 0.8]);
+        let two = Linearized::second_order(&obs, &x, &noise, &|i| i as u32, &|i, j| p[i][j]);
+        assert!((two.r[0] - 0.013).abs() < 1e-15, "{}", two.r[0]);
+    }
 
     #[test]
     fn kernel_is_truncated_at_the_floor() {
