@@ -535,11 +535,11 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
 /// runs (the corridor at 0.3 m cells).
 #[test]
 fn scalable_matches_dense_on_a_coarse_corridor() {
-    scalable_against_dense(false);
+    scalable_against_dense(false, pradar::mapping::EkfUpdate::FirstOrder);
 }
 
 /// The scalable filter against the dense one; `strict` asserts item 4 in full.
-fn scalable_against_dense(strict: bool) {
+fn scalable_against_dense(strict: bool, update: pradar::mapping::EkfUpdate) {
     let (c, e) = corridor100();
     let l = load(c, e, 0.3);
     let spec = l.model.spec;
@@ -553,11 +553,17 @@ fn scalable_against_dense(strict: bool) {
     };
     let dp = EkfParams {
         variant: EkfVariant::Dense,
+        update,
         ..Default::default()
     }
     .check()
     .unwrap();
-    let sp = EkfParams::default().check().unwrap();
+    let sp = EkfParams {
+        update,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
     let mut dense = DenseEkf::new(n, &dp).unwrap();
     let t0 = std::time::Instant::now();
     run_filter(&l, &dp, &mut dense);
@@ -677,7 +683,18 @@ fn scalable_against_dense(strict: bool) {
 #[test]
 #[ignore = "unmet by the tiled approximation: psi 18.3 % apart, means 51.7 % RMS, std >= 0.9x dense in 55.7 % of cells (information split; plain update 16.6 %, 43.9 %, 56.7 %); the dense filter itself is inconsistent in this nonlinear regime"]
 fn scalable_meets_the_dense_criterion() {
-    scalable_against_dense(true);
+    scalable_against_dense(true, pradar::mapping::EkfUpdate::FirstOrder);
+}
+
+/// [`scalable_meets_the_dense_criterion`] with both filters on the second-order update
+/// (issue 48; its dense filter is 44 times nearer consistency than the first order's, not
+/// consistent: NEES 2.2). Unmet: psi 10.3 % apart, means 92.5 % RMS relative, std >= 0.9x
+/// dense in 72.3 % of the updated cells (lowest ratio 0.047). About 4 s; run with
+/// `--ignored`.
+#[test]
+#[ignore = "unmet: psi 10.3 % apart, means 92.5 % RMS, std >= 0.9x dense in 72.3 % of cells (second-order update)"]
+fn scalable_meets_the_dense_criterion_with_the_second_order_update() {
+    scalable_against_dense(true, pradar::mapping::EkfUpdate::SecondOrder);
 }
 
 #[test]
