@@ -535,11 +535,11 @@ fn covariance_stays_symmetric_psd_through_a_corridor_run() {
 /// runs (the corridor at 0.3 m cells).
 #[test]
 fn scalable_matches_dense_on_a_coarse_corridor() {
-    scalable_against_dense(false);
+    scalable_against_dense(false, pradar::mapping::EkfUpdate::FirstOrder);
 }
 
 /// The scalable filter against the dense one; `strict` asserts item 4 in full.
-fn scalable_against_dense(strict: bool) {
+fn scalable_against_dense(strict: bool, update: pradar::mapping::EkfUpdate) {
     let (c, e) = corridor100();
     let l = load(c, e, 0.3);
     let spec = l.model.spec;
@@ -553,11 +553,17 @@ fn scalable_against_dense(strict: bool) {
     };
     let dp = EkfParams {
         variant: EkfVariant::Dense,
+        update,
         ..Default::default()
     }
     .check()
     .unwrap();
-    let sp = EkfParams::default().check().unwrap();
+    let sp = EkfParams {
+        update,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
     let mut dense = DenseEkf::new(n, &dp).unwrap();
     let t0 = std::time::Instant::now();
     run_filter(&l, &dp, &mut dense);
@@ -677,7 +683,18 @@ fn scalable_against_dense(strict: bool) {
 #[test]
 #[ignore = "unmet by the tiled approximation: psi 18.3 % apart, means 51.7 % RMS, std >= 0.9x dense in 55.7 % of cells (information split; plain update 16.6 %, 43.9 %, 56.7 %); the dense filter itself is inconsistent in this nonlinear regime"]
 fn scalable_meets_the_dense_criterion() {
-    scalable_against_dense(true);
+    scalable_against_dense(true, pradar::mapping::EkfUpdate::FirstOrder);
+}
+
+/// [`scalable_meets_the_dense_criterion`] with both filters on the second-order update
+/// (issue 48; its dense filter is 44 times nearer consistency than the first order's, not
+/// consistent: NEES 2.2). Unmet: psi 10.3 % apart, means 92.5 % RMS relative, std >= 0.9x
+/// dense in 72.3 % of the updated cells (lowest ratio 0.047). About 4 s; run with
+/// `--ignored`.
+#[test]
+#[ignore = "unmet: psi 10.3 % apart, means 92.5 % RMS, std >= 0.9x dense in 72.3 % of cells (second-order update)"]
+fn scalable_meets_the_dense_criterion_with_the_second_order_update() {
+    scalable_against_dense(true, pradar::mapping::EkfUpdate::SecondOrder);
 }
 
 #[test]
@@ -912,6 +929,34 @@ struct Scene {
 /// its blocks (what it holds). Summed over the N runs it is χ²(N·n) for a consistent
 /// filter; the band is its 2.5 % and 97.5 % quantiles.
 fn nees(scene: Scene, reg: Regime, runs: usize, seed0: u64) -> Nees {
+    nees_with(scene, reg, runs, seed0, Update::Ekf)
+}
+
+/// The update under test in [`nees_with`].
+#[derive(Clone, Copy, Debug)]
+enum Update {
+    /// The EKF: linearised once at the mean.
+    Ekf,
+    /// The Gaussian second-order filter ([`Linearized::second_order`]).
+    SecondOrder,
+}
+
+/// One update of `f` by `o` under `upd`.
+fn apply<F: RrcsFilter>(f: &mut F, o: &Observation, noise: &NoiseModel, upd: Update) {
+    match upd {
+        Update::Ekf => {
+            let lin = Linearized::new(o, f.mean(), noise);
+            f.update(o, &lin).unwrap();
+        }
+        Update::SecondOrder => {
+            let lin = f.linearize_second_order(o, noise);
+            f.update(o, &lin).unwrap();
+        }
+    }
+}
+
+/// [`nees`] with the update `upd` for both filters.
+fn nees_with(scene: Scene, reg: Regime, runs: usize, seed0: u64, upd: Update) -> Nees {
     use rand_distr::{Distribution, StandardNormal};
     use rayon::prelude::*;
     use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -1022,13 +1067,18 @@ fn nees(scene: Scene, reg: Regime, runs: usize, seed0: u64) -> Nees {
             })
             .sum()
     };
-    let run = |f: &mut dyn RrcsFilter, obs: &[Observation], p: &pradar::mapping::EkfValid| {
+    fn run<F: RrcsFilter>(
+        f: &mut F,
+        obs: &[Observation],
+        p: &pradar::mapping::EkfValid,
+        noise: &NoiseModel,
+        upd: Update,
+    ) {
         for o in obs {
-            let lin = Linearized::new(o, f.mean(), &noise);
-            f.update(o, &lin).unwrap();
+            apply(f, o, noise, upd);
             f.project_positive(p.x_min());
         }
-    };
+    }
     let per_run: Vec<(usize, f64, f64, f64)> = (0..runs)
         .into_par_iter()
         .map(|r| {
@@ -1057,9 +1107,9 @@ fn nees(scene: Scene, reg: Regime, runs: usize, seed0: u64) -> Nees {
                 })
                 .collect();
             let mut dense = DenseEkf::new(n, &pd).unwrap();
-            run(&mut dense, &obs, &pd);
+            run(&mut dense, &obs, &pd, &noise, upd);
             let mut tiled = TiledEkf::new(side, side, ps.tile, &ps).unwrap();
-            run(&mut tiled, &obs, &ps);
+            run(&mut tiled, &obs, &ps, &noise, upd);
             let upd: Vec<usize> = (0..n)
                 .filter(|&i| dense.variances()[i] < v0 * (1.0 - 1e-9))
                 .collect();
@@ -1129,7 +1179,8 @@ const DENSE_SCAN: Scene = Scene {
 /// the band [0.939, 1.063] (the five seed sets of the pooled test: dense 0.965–1.020 and
 /// split 0.973–1.028 inside in 5 of 5). Pooled over 100 runs, and in a denser scan or at
 /// the default model error, the split is not inside
-/// (`nees_pooled_over_100_runs_in_four_configurations`).
+/// (`nees_pooled_over_100_runs_in_four_configurations`). The second-order update of issue 48
+/// is inside too (dense 0.977, tiled 0.981).
 #[test]
 fn nees_of_the_dense_and_the_tiled_filter_is_inside_the_chi2_band() {
     let t0 = std::time::Instant::now();
@@ -1142,6 +1193,16 @@ fn nees_of_the_dense_and_the_tiled_filter_is_inside_the_chi2_band() {
     assert!(r.inside(r.dense), "dense filter inconsistent");
     assert!(r.inside(r.tiled), "tiled filter inconsistent");
     assert!(r.min_std_ratio >= 0.9, "tiled std below 0.9x dense");
+    // the second-order update (`--ekf-update second-order`) stays consistent where the
+    // first order is: its extra terms are small when the prior is far from zero
+    let t0 = std::time::Instant::now();
+    let s = nees_with(SMALL, NEAR_LINEAR, 20, 1000, Update::SecondOrder);
+    s.print(&format!(
+        "10 x 10 cells, 10° steps, near-linear regime, ε = 0.1, second order ({:.1} s)",
+        t0.elapsed().as_secs_f64()
+    ));
+    assert!(s.inside(s.dense), "second-order dense filter inconsistent");
+    assert!(s.inside(s.tiled), "second-order tiled filter inconsistent");
 }
 
 /// [`nees`] over `sets` sets of 20 runs (seeds 1000·k + run, k = 1..=sets), pooled: the
@@ -1200,27 +1261,33 @@ fn nees_pooled_over_100_runs_in_four_configurations() {
 }
 
 /// The default prior (μ0 = 0.01 m, σ0 = 0.1 m: the prior reaches far below zero, the
-/// truth is |x|) and the default ε = 0.5: far from linear, the dense filter is not
-/// consistent either (average NEES per cell 96.8 against [0.949, 1.052]; 97–220 over five
-/// seed sets; the tiled filters 91–211; the strong cells dominate: the EKF splits a ring's
-/// energy between its cells at the first linearisations and keeps a tight, wrong split). So the NEES test is run in the near-linear regime, and
-/// the dense criterion on the corridor (`scalable_meets_the_dense_criterion`) compares two
-/// overconfident filters. Run with `--ignored`.
+/// truth is |x|) and the default ε = 0.5, far from linear: issue 48's must-show is the
+/// dense filter's NEES inside the band here. The EKF (first order) is at 96.8 times its
+/// expectation (97–220 over five seed sets; the tiled filter 91–211): it splits a ring's
+/// energy between its cells at the first linearisations and keeps a tight, wrong split. The
+/// Gaussian second-order filter (`--ekf-update second-order`) brings the dense filter to
+/// 2.20 and the tiled one to 2.51 against [0.949, 1.052]; with the quadratic term's
+/// covariance between rows as well (a textbook dense update, measured at commit c7e1523)
+/// 1.56; the iterated EKF (5 iterations) 3.63 / 3.09 (`docs/mapping.md`, "Issue 48"). About
+/// 25 s; run with `--ignored`.
 #[test]
-#[ignore = "unmet by the dense filter too: average NEES per cell 96.8 in the default prior (nonlinear) regime"]
+#[ignore = "unmet: average NEES per cell, dense / tiled, second-order 2.20 / 2.51, first-order 96.8 / 90.9, against [0.949, 1.052]"]
 fn nees_in_the_default_prior_regime() {
     let d = EkfParams::default();
-    let r = nees(
-        DENSE_SCAN,
-        Regime {
-            mu0: d.mu0,
-            sigma0: d.sigma0,
-            model_error: d.model_error,
-            fold: true,
-        },
-        20,
-        1000,
+    let reg = Regime {
+        mu0: d.mu0,
+        sigma0: d.sigma0,
+        model_error: d.model_error,
+        fold: true,
+    };
+    let first = nees_with(DENSE_SCAN, reg, 20, 1000, Update::Ekf);
+    first.print("12 x 12 cells, 5° steps, default prior and ε, first order");
+    let second = nees_with(DENSE_SCAN, reg, 20, 1000, Update::SecondOrder);
+    second.print("12 x 12 cells, 5° steps, default prior and ε, second order");
+    // the second-order filter's confidence is far nearer its claim than the EKF's
+    assert!(second.anees(second.dense) < first.anees(first.dense) / 10.0);
+    assert!(
+        second.inside(second.dense) && second.inside(second.tiled),
+        "second-order NEES outside the band"
     );
-    r.print("12 x 12 cells, 5° steps, default prior and ε");
-    assert!(r.inside(r.dense) && r.inside(r.tiled));
 }

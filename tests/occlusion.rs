@@ -310,9 +310,12 @@ fn both_mappers_map_the_building_and_leave_the_outside_free() {
 /// before 5 Dec 2026 (`--og-bound-silent off --og-credit-depth guard`) 37 of 48: the OG
 /// also missed the office N = 100's beyond the walls (7.0 %) and ψ in the office at N = 16;
 /// with the layout-only ψ (objects counted as wrong, before 5 Dec 2026) 39 of 48. The ghost
-/// and fig6 are their own tests.
+/// and fig6 are their own tests. Issue 48's decisions: ψ is judged on the observable region
+/// (a) and 0.80 of the observable walls is accepted at N = 16 (d): 46 of 48 (the OG all 24;
+/// the EKF misses the corridor at N = 16 on F1(1), 0.599 against 0.599, and on ψ, 3.92
+/// against 3.43).
 #[test]
-#[ignore = "unmet: 40 of 48 (OG observable walls 0.823/0.833 at N = 16, psi vs boresight on the corridor N = 16 8.26 vs 7.79; EKF observable walls 0.812/0.809 at N = 16, corridor N = 16 F1(1) 0.588 vs 0.599, psi on the corridor)"]
+#[ignore = "unmet: 46 of 48 with issue 48's decisions (EKF corridor N = 16: F1(1) 0.599 vs boresight 0.599, psi on the observable region 3.92 vs 3.43); the OG meets all 24"]
 fn maps_ii_must_show_on_the_three_class_reference() {
     let mut failures = Vec::new();
     let mut met = 0;
@@ -320,6 +323,8 @@ fn maps_ii_must_show_on_the_three_class_reference() {
     for (name, n, figs) in figures() {
         let bs = &figs["og-boresight"];
         let t = |j: &Value, region: &str, k: &str| f(j, &["metrics", "three_class", region, k]);
+        // issue 48 (d): 0.81–0.83 of the observable walls at N = 16 is what 25° beams see
+        let walls_bound = if *n == 16 { 0.80 } else { 0.85 };
         for method in ["og", "ekf"] {
             let j = &figs[method];
             let checks = [
@@ -332,8 +337,8 @@ fn maps_ii_must_show_on_the_three_class_reference() {
                 (
                     "observable walls",
                     t(j, "observable", "walls_found_1"),
-                    0.85,
-                    t(j, "observable", "walls_found_1") >= 0.85,
+                    walls_bound,
+                    t(j, "observable", "walls_found_1") >= walls_bound,
                 ),
                 (
                     "room",
@@ -354,10 +359,10 @@ fn maps_ii_must_show_on_the_three_class_reference() {
                     t(j, "building", "f1_1") > t(bs, "building", "f1_1"),
                 ),
                 (
-                    "psi vs boresight",
-                    t(j, "building", "psi"),
-                    t(bs, "building", "psi"),
-                    t(j, "building", "psi") < t(bs, "building", "psi"),
+                    "psi vs boresight (observable)",
+                    t(j, "observable", "psi"),
+                    t(bs, "observable", "psi"),
+                    t(j, "observable", "psi") < t(bs, "observable", "psi"),
                 ),
             ];
             eprintln!(
@@ -394,6 +399,63 @@ fn maps_ii_must_show_on_the_three_class_reference() {
         "NOT MET ({met} of {total} met):\n{}",
         failures.join("\n")
     );
+}
+
+/// fig6's statement as decided in issue 48 (b), judged on physics: on the sweeps simulated
+/// at both N (the corridor and the office, three campaign seeds each: the fixture's seed and
+/// the next two), N = 16 has more wrong cells than N = 100 over the building for both
+/// mappers (three-class reference, objects from `truth/scatterers.csv`). On model data
+/// fig6 reports the comparison (`experiment::fig6_*`) and asserts nothing about it. Figures
+/// in `docs/mapping.md` ("Issue 48"). About 3 min on 2 shared cores (eight simulations
+/// beside the four of [`scenes`]); run with `--ignored`.
+#[test]
+#[ignore = "unmet: 8 of 12 (OG office seed 1 164 vs 170, office seed 2 184 vs 184; EKF corridor seed 2 274 vs 292, office all met; about 3 min)"]
+fn fig6_n16_has_more_wrong_cells_than_n100_on_physics_sweeps() {
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("occlusion_fig6");
+    let mut failures = Vec::new();
+    for (name, t) in [
+        ("corridor", corridor()),
+        ("office", fixture("tests/office.toml")),
+    ] {
+        let seed0 = t["seed"].as_integer().unwrap();
+        for k in 0..3i64 {
+            let mut wrong_by_n = std::collections::HashMap::new();
+            for n in [16usize, 100] {
+                let (c, e) = if k == 0 {
+                    let r = scenes().iter().find(|r| r.0 == name && r.1 == n).unwrap();
+                    (r.2.clone(), r.3.clone())
+                } else {
+                    let mut t = t.clone();
+                    set(&mut t, "seed", seed0 + k);
+                    simulated(&root.join(format!("{name}_s{k}_n{n}")), &t, n)
+                };
+                for method in ["og", "ekf"] {
+                    let j = map(
+                        method,
+                        &c,
+                        &e,
+                        &root.join(format!("{name}_s{k}_n{n}_{method}")),
+                    );
+                    let w = f(&j, &["metrics", "three_class", "building", "wrong"]);
+                    wrong_by_n.insert((n, method), w);
+                }
+            }
+            for method in ["og", "ekf"] {
+                let (a, b) = (wrong_by_n[&(16, method)], wrong_by_n[&(100, method)]);
+                eprintln!(
+                    "fig6 on sweeps, {name} seed {} {method}: three-class building wrong N = 16 {a:.0}, N = 100 {b:.0}",
+                    seed0 + k
+                );
+                if a <= b {
+                    failures.push(format!(
+                        "{name} seed {} {method}: {a:.0} vs {b:.0}",
+                        seed0 + k
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "NOT MET:\n{}", failures.join("\n"));
 }
 
 /// The ghost scene: the office with a strong reflector seen only through the north wall

@@ -18,7 +18,9 @@ use pradar::check::CheckParams;
 use pradar::cluster::{ClusterParams, Criterion};
 use pradar::correction::CorrectionParams;
 use pradar::fit::channel::FitParams;
-use pradar::mapping::{EkfParams, EkfVariant, GridParams, Method as MapMethod, OgParams};
+use pradar::mapping::{
+    EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
+};
 use pradar::mpc::{DiffuseParams, ExtractParams, Method as ExtractMethod};
 use pradar::pipeline::commands::map::PoseNoise;
 use pradar::pipeline::experiment::ExperimentParams;
@@ -315,6 +317,9 @@ pub struct MapArgs {
     /// EKF implementation: dense (exact) or scalable (tiled).
     #[arg(long, value_enum, default_value_t = EkfParams::default().variant, hide_possible_values = true, help_heading = "EKF (ekf)")]
     pub ekf: EkfVariant,
+    /// EKF linearisation of the energy rows: first-order or second-order.
+    #[arg(long, value_enum, default_value_t = EkfParams::default().update, hide_possible_values = true, help_heading = "EKF (ekf)")]
+    pub ekf_update: EkfUpdate,
     /// Prior mean of the RRCS μ0, m.
     #[arg(long, default_value_t = EkfParams::default().mu0, value_parser = ranges::positive, allow_negative_numbers = true, help_heading = "EKF (ekf)")]
     pub mu0: f64,

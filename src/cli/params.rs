@@ -149,6 +149,7 @@ impl MapArgs {
                 },
                 ekf: EkfParams {
                     variant: self.ekf,
+                    update: self.ekf_update,
                     mu0: self.mu0,
                     sigma0: self.sigma0,
                     kappa: self.kappa,

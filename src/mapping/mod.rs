@@ -38,6 +38,6 @@ pub mod pose_noise;
 pub mod reference;
 pub mod score;
 
-pub use ekf::{EkfParams, EkfValid, EkfVariant};
+pub use ekf::{EkfParams, EkfUpdate, EkfValid, EkfVariant};
 pub use grid::{Beam, GridParams, GridValid, ObservationModel};
 pub use og::{fuse, og_map, LogOddsMap, Method, OgParams, OgValid};

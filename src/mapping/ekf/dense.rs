@@ -24,7 +24,7 @@ use super::linalg::{
     inverse_from_cholesky, lower_inverse, mat_times_rows, sym_downdate, symmetrise,
     symmetrise_add_r,
 };
-use super::{EkfValid, Linearized, Observation, RrcsFilter};
+use super::{EkfValid, Linearized, NoiseModel, Observation, RrcsFilter};
 use crate::error::{Error, Result};
 use ndarray::linalg::general_mat_mul;
 use ndarray::{ArrayView2, ArrayViewMut2};
@@ -369,6 +369,10 @@ impl RrcsFilter for DenseEkf {
     }
     fn name(&self) -> &'static str {
         "dense"
+    }
+    fn linearize_second_order(&self, obs: &Observation, noise: &NoiseModel) -> Linearized {
+        let n = self.n;
+        Linearized::second_order(obs, &self.x, noise, &|_| 0, &|i, j| self.p[i * n + j])
     }
 
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()> {

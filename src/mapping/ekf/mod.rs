@@ -52,6 +52,23 @@
 //! change of variables, not an approximation), and means are kept ≥ 1e-3·μ0 so the
 //! Jacobian never vanishes ([`RrcsFilter::project_positive`]).
 //!
+//! Update (`--ekf-update`, [`EkfUpdate`]). The observation is quadratic in the state and
+//! the default prior reaches far below zero, where the first-order expansion at μ0 fails:
+//! at x⁻ = μ0 the prediction c̃·μ0² ignores the prior's own power c̃·σ0², the Jacobian is
+//! tiny, and one strong bin throws a cell far past its truth with a variance that has
+//! collapsed (average NEES per cell 97–220 times its expectation, `docs/mapping.md`).
+//! `second-order` is the Gaussian second-order filter (Jazwinski 1970; Bar-Shalom, Li &
+//! Kirubarajan 2001, §10.3): per row the prediction gains Σ_i c̃_i·P_ii and R_k gains
+//! 2·Σ_ij c̃_i·c̃_j·P_ij² ([`Linearized::second_order`]; the tiled filter's pairs within a
+//! tile, the covariance it keeps), the exact mean and variance of the quadratic form under
+//! N(x⁻, P); the rows' mutual quadratic covariance is left out (it would need the m × m S,
+//! which the push-through update avoids). It is the remedy kept of the four measured
+//! (the iterated EKF, a full second-order S, the noise averaged over the state; figures in
+//! `docs/mapping.md`, "Issue 48"): NEES 2.2 against the EKF's 97. It is not the default:
+//! under the default prior every cell predicts the prior's power c̃·(μ0² + σ0²), so the
+//! cells climb slowly and keep honest, wide variances, and the binary rule x̂ − κσ̂ > μ0
+//! finds 0.48–0.56 of the observable walls against the first order's 0.81–0.88.
+//!
 //! Two implementations of [`RrcsFilter`]:
 //! * [`DenseEkf`] — exact, full n × n covariance (row-major, 8n² bytes: the reference up to a
 //!   few thousand cells; refused above `max_dense_cells`). Only the na illuminated cells have
@@ -172,7 +189,7 @@ pub mod tiled;
 pub use dense::DenseEkf;
 pub use linalg::cholesky;
 pub use observation::{truncate_kernel, Linearized, NoiseModel, Observation};
-pub use params::{normal_cdf, EkfParams, EkfValid, EkfVariant};
+pub use params::{normal_cdf, EkfParams, EkfUpdate, EkfValid, EkfVariant};
 pub use run::{
     ekf_run, ekf_run_with_arcs, mean_grey, std_grey, EchoArcs, EkfMap, EkfReport, EkfStats, Sight,
 };
@@ -196,6 +213,9 @@ pub trait RrcsFilter: Send {
     fn covariance(&self, i: usize, j: usize) -> Option<f64>;
     /// One EKF update with an observation linearised at the current mean.
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()>;
+    /// `obs` linearised at the current mean with the Gaussian second-order terms of the
+    /// filter's own covariance ([`Linearized::second_order`]).
+    fn linearize_second_order(&self, obs: &Observation, noise: &NoiseModel) -> Linearized;
     /// Reflect negative means (x_i → −x_i, row/column i of P negated), then keep means
     /// ≥ `x_min`; returns the cells reflected.
     fn project_positive(&mut self, x_min: f64) -> usize;

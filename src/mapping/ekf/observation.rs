@@ -223,11 +223,99 @@ impl Linearized {
         }
         l
     }
+
+    /// Linearise `obs` at `x` with the terms of the Gaussian second-order filter
+    /// (Jazwinski 1970; Bar-Shalom, Li & Kirubarajan 2001, §10.3). For h_k = Σ_i c̃_{k,i}·x_i²
+    /// the Hessian is 2·diag(c̃_k), so the predicted energy gains ½·tr(H_xx·P) = Σ_i c̃_{k,i}·P_ii
+    /// (the mean of a quadratic form under N(x, P)) and R_k gains
+    /// ½·tr(H_xx·P·H_xx·P) = 2·Σ_ij c̃_{k,i}·c̃_{k,j}·P_ij² (its variance); the detector
+    /// noise is taken at the predicted signal energy Σ_i c̃_{k,i}·(x_i² + P_ii). H is the
+    /// Jacobian at `x` as in [`Linearized::new`]. `block(i)` names the block of cell i
+    /// (cells of different blocks have no covariance: the tiled filter's tiles; one block for
+    /// the dense filter) and `cov(i, j)` is P_ij within a block. Cost per row: the sum over
+    /// its blocks of (entries in the block)².
+    pub fn second_order(
+        obs: &Observation,
+        x: &[f64],
+        noise: &NoiseModel,
+        block: &dyn Fn(usize) -> u32,
+        cov: &dyn Fn(usize, usize) -> f64,
+    ) -> Linearized {
+        let mut l = Linearized::new(obs, x, noise);
+        let mut by_block: Vec<(u32, usize)> = Vec::new();
+        for j in 0..obs.rows() {
+            let (e0, e1) = (obs.ptr[j], obs.ptr[j + 1]);
+            let mut es = 0.0;
+            let mut bias = 0.0;
+            let mut var2 = 0.0;
+            by_block.clear();
+            for e in e0..e1 {
+                let ci = obs.cell[e] as usize;
+                let c = obs.coef[e];
+                es += c * x[ci] * x[ci];
+                let pii = cov(ci, ci);
+                bias += c * pii;
+                var2 += c * c * pii * pii;
+                by_block.push((block(ci), e));
+            }
+            by_block.sort_unstable();
+            let mut a = 0;
+            while a < by_block.len() {
+                let mut b = a + 1;
+                while b < by_block.len() && by_block[b].0 == by_block[a].0 {
+                    b += 1;
+                }
+                for (u, &(_, e)) in by_block[a..b].iter().enumerate() {
+                    let (ci, c) = (obs.cell[e] as usize, obs.coef[e]);
+                    for &(_, f) in &by_block[a + u + 1..b] {
+                        let pij = cov(ci, obs.cell[f] as usize);
+                        var2 += 2.0 * c * obs.coef[f] * pij * pij;
+                    }
+                }
+                a = b;
+            }
+            let h = es + bias + noise.mean();
+            l.h[j] = h;
+            l.nu[j] = obs.z[j] - h;
+            l.r[j] = noise.variance(es + bias) + 2.0 * var2;
+        }
+        l
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One row over two cells, c̃ = (1, 2), x = (0.1, 0.2), P = [[0.01, 0.005], [0.005, 0.04]],
+    /// no detector noise: h = Σ c̃ (x² + P_ii) = 0.09 + 0.09, and the quadratic term's
+    /// variance 2·Σ_ij c̃_i c̃_j P_ij² = 2·(1e-4 + 2·2·2.5e-5 + 4·1.6e-3) = 0.0132 (0.013
+    /// when the two cells are in different blocks: no covariance between them).
+    #[test]
+    fn second_order_terms_are_the_quadratic_forms_mean_and_variance() {
+        let obs = Observation {
+            bin: vec![5],
+            z: vec![0.5],
+            ptr: vec![0, 2],
+            cell: vec![0, 1],
+            coef: vec![1.0, 2.0],
+        };
+        let noise = NoiseModel {
+            n0: 0.0,
+            tw: 1.0,
+            pulses: 1.0,
+            model_error: 0.0,
+        };
+        let p = [[0.01, 0.005], [0.005, 0.04]];
+        let x = [0.1, 0.2];
+        let one = Linearized::second_order(&obs, &x, &noise, &|_| 0, &|i, j| p[i][j]);
+        assert!((one.h[0] - 0.18).abs() < 1e-15);
+        assert!((one.nu[0] - 0.32).abs() < 1e-15);
+        assert!((one.r[0] - 0.0132).abs() < 1e-15, "{}", one.r[0]);
+        assert_eq!(one.hval, vec![0.2, 0.8]);
+        let two = Linearized::second_order(&obs, &x, &noise, &|i| i as u32, &|i, j| p[i][j]);
+        assert!((two.r[0] - 0.013).abs() < 1e-15, "{}", two.r[0]);
+    }
 
     #[test]
     fn kernel_is_truncated_at_the_floor() {

@@ -42,6 +42,19 @@ impl EkfVariant {
     }
 }
 
+/// How an energy row enters the filter ([`crate::mapping::ekf`] module docs, "Update").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum EkfUpdate {
+    /// Linearised once at the mean (the EKF; the maps' default).
+    #[value(name = "first-order", help = None::<&str>)]
+    FirstOrder,
+    /// The Gaussian second-order filter: the quadratic term's mean and variance added
+    /// ([`crate::mapping::ekf::Linearized::second_order`]; the consistent confidence).
+    #[value(name = "second-order", help = None::<&str>)]
+    SecondOrder,
+}
+
 /// EKF parameters (see the module docs for the reasons of the defaults).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct EkfParams {
@@ -61,6 +74,8 @@ pub struct EkfParams {
     pub arc_explain: f64,
     /// Implementation (scalable).
     pub variant: EkfVariant,
+    /// Linearisation of the energy rows (first order).
+    pub update: EkfUpdate,
     /// Tile side of the scalable filter, cells (4).
     pub tile: usize,
     /// Largest grid the dense filter accepts (20,000 cells = 3.2 GB of covariance).
@@ -94,6 +109,7 @@ impl Default for EkfParams {
             kappa: KAPPA,
             arc_explain: ARC_EXPLAIN,
             variant: EkfVariant::Scalable,
+            update: EkfUpdate::FirstOrder,
             tile: 4,
             max_dense_cells: 20_000,
         }

@@ -199,6 +199,7 @@ pub fn ekf_run_with_arcs(
     let snapshot = |f: &dyn RrcsFilter| -> Option<Vec<bool>> {
         sight.map(|_| EkfMap::from_filter(f, model.spec.rows, model.spec.cols, params).binary())
     };
+    let second_order = params.update == super::EkfUpdate::SecondOrder;
     let mut current = if np > 0 {
         Some(build(0, snapshot(&*filter)))
     } else {
@@ -217,7 +218,11 @@ pub fn ekf_run_with_arcs(
         let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
             let tu = Instant::now();
             for (o, free) in &obs {
-                let lin = Linearized::new(o, filter.mean(), noise);
+                let lin = if second_order {
+                    filter.linearize_second_order(o, noise)
+                } else {
+                    Linearized::new(o, filter.mean(), noise)
+                };
                 filter.update(o, &lin)?;
                 st.reflected += filter.project_positive(params.x_min()) as u64;
                 if let Some((f, r)) = free {

@@ -52,7 +52,7 @@
 //! s, so a campaign costs O(nnz(H)·tile²) and memory O(n·tile²) (runtime against the plain
 //! update: `docs/mapping.md`).
 
-use super::{EkfValid, Linearized, Observation, RrcsFilter};
+use super::{EkfValid, Linearized, NoiseModel, Observation, RrcsFilter};
 use crate::error::{Error, Result};
 
 /// Scalable EKF: covariance block-diagonal over square tiles (see the module docs).
@@ -169,6 +169,13 @@ impl RrcsFilter for TiledEkf {
     }
     fn name(&self) -> &'static str {
         "scalable"
+    }
+    fn linearize_second_order(&self, obs: &Observation, noise: &NoiseModel) -> Linearized {
+        Linearized::second_order(obs, &self.x, noise, &|i| self.cell_tile[i], &|i, j| {
+            let t = self.cell_tile[i] as usize;
+            let k = self.tile_cells[t].len();
+            self.tile_p[t][self.cell_local[i] as usize * k + self.cell_local[j] as usize]
+        })
     }
 
     fn update(&mut self, obs: &Observation, lin: &Linearized) -> Result<()> {

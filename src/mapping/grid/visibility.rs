@@ -549,6 +549,7 @@ mod tests {
             }
         }
         same::<EkfVariant>();
+        same::<crate::mapping::ekf::EkfUpdate>();
         same::<SilentBound>();
     }
 
