@@ -11,6 +11,7 @@ pub mod check;
 pub mod cluster;
 pub mod energy;
 pub mod error;
+pub mod explore;
 pub mod export;
 pub mod fit;
 #[cfg(feature = "fuzz")]

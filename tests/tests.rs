@@ -17,6 +17,7 @@ mod cluster;
 mod diffuse;
 mod ekf;
 mod experiment;
+mod explore;
 mod fit_cli;
 mod fit_coverage;
 mod fit_estimators;

@@ -18,6 +18,7 @@ mod analysis;
 mod campaign_report;
 pub mod commands;
 pub mod experiment;
+pub mod explore;
 mod geometry;
 mod kmax;
 mod reproduce;
