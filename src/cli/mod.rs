@@ -528,14 +528,24 @@ pub struct ExploreArgs {
     /// Transmit powers, dBm (default: the campaign's [noise] tx_power_dbm).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub tx_power_dbm: Vec<f64>,
-    /// Mappers: og, ekf.
-    #[arg(long, value_delimiter = ',', default_value = "og")]
+    /// Mappers: og, ekf (comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "og",
+        hide_possible_values = true
+    )]
     pub mapper: Vec<MapMethod>,
     /// Seeds (each draws a new scene and noise).
     #[arg(long, value_delimiter = ',', default_values_t = ExploreParams::default().seeds)]
     pub seeds: Vec<u64>,
-    /// Data: physics sweeps of the campaign's [scene], or synth of --model.
-    #[arg(long, value_enum, default_value = "sweeps")]
+    /// Data: sweeps (physics, the campaign's [scene]) or model (synth of --model).
+    #[arg(
+        long,
+        value_enum,
+        default_value = "sweeps",
+        hide_possible_values = true
+    )]
     pub data: ExploreData,
     /// Model file (with --data model).
     #[arg(long, required_if_eq("data", "model"))]

@@ -59,9 +59,15 @@ pub fn configured(base: &Campaign, cfg: &Config, seed: u64) -> Result<Campaign> 
     m.seed = m.seed.wrapping_add(seed);
     m.pulses = cfg.pulses;
     m.directions.step_deg = cfg.step_deg;
-    m.directions
-        .check()
-        .map_err(|e| Error::param("--step-deg", e.to_string()))?;
+    m.directions.check().map_err(|_| {
+        Error::param(
+            "--step-deg",
+            format!(
+                "{}° does not divide the campaign's sector {}° to {}° (or gives too many directions)",
+                cfg.step_deg, m.directions.start_deg, m.directions.stop_deg
+            ),
+        )
+    })?;
     let df = m.band.step_hz();
     let b = cfg.bandwidth_ghz * 1e9;
     let fc = m.band.center_hz();
@@ -69,9 +75,17 @@ pub fn configured(base: &Campaign, cfg: &Config, seed: u64) -> Result<Campaign> 
     m.band.start_hz = fc - 0.5 * b;
     m.band.stop_hz = fc + 0.5 * b;
     m.band.points = steps + 1;
-    m.band
-        .check()
-        .map_err(|e| Error::param("--bandwidth-ghz", e.to_string()))?;
+    m.band.check().map_err(|_| {
+        Error::param(
+            "--bandwidth-ghz",
+            format!(
+                "{} GHz at the campaign's {} MHz step gives {} frequency points (8 to the largest sweep)",
+                cfg.bandwidth_ghz,
+                df / 1e6,
+                m.band.points
+            ),
+        )
+    })?;
     m.noise.tx_power_dbm = cfg.tx_power_dbm;
     Ok(c)
 }
