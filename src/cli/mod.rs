@@ -459,6 +459,9 @@ pub struct ReportArgs {
     /// Skip the mapping experiments.
     #[arg(long)]
     pub skip_experiments: bool,
+    /// A `pradar explore` folder to show as a section (its files copied into OUT/explore/).
+    #[arg(long)]
+    pub explore: Option<PathBuf>,
     #[command(flatten)]
     pub seeds: SeedsArg,
 }

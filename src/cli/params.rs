@@ -249,6 +249,7 @@ impl ReportArgs {
             experiment_params: ExperimentParams::default()
                 .seeds(self.seeds.seeds)
                 .check()?,
+            explore: self.explore,
         }
         .check()?)
     }

@@ -24,7 +24,9 @@ mod kmax;
 mod reproduce;
 
 pub use analysis::{analyse, Analysis};
-pub use campaign_report::{report, ReportOptions, ReportOutput, ReportValid, DEFAULT_REPORT_OUT};
+pub use campaign_report::{
+    report, ReportOptions, ReportOutput, ReportValid, DEFAULT_REPORT_OUT, EXPLORE_SECTION,
+};
 pub use reproduce::{reproduce, ReproduceOptions, ReproduceValid, DEFAULT_REPRODUCE_OUT};
 
 /// The built-in corridor manifest.

@@ -94,6 +94,7 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<ReportOutp
         model: None,
         truth: None,
         experiments: opts.experiments.then_some(&opts.experiment_params),
+        explore: None,
         progress,
     };
     let done = run_inner(&job, Source::Simulate(&c))?;

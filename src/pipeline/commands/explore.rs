@@ -1,6 +1,6 @@
 //! The `explore` command: the design-space grid ([`crate::pipeline::explore`]) into one
 //! folder — `explore.csv|.md`, `summary.csv|.md`, `timing.csv`, `energy_model.toml`, the
-//! plots and `index.html`. Takes its command struct and gives a summary whose `Display` is
+//! plots, `index.html` and `report_section.html` (the section `report --explore` shows). Takes its command struct and gives a summary whose `Display` is
 //! printed.
 
 use crate::error::Result;
@@ -151,6 +151,9 @@ pub fn explore(cmd: &Explore, progress: Progress) -> Result<ExploreSummary> {
     ];
     let section = crate::report::explore::section("", &listed, &s, &v, &model);
     crate::report::explore::write_index(&cmd.out, &section)?;
+    // the same section for `report --explore DIR`, its links under `explore/`
+    let linked = crate::report::explore::section("explore/", &listed, &s, &v, &model);
+    write(crate::pipeline::EXPLORE_SECTION, linked.html)?;
     Ok(ExploreSummary {
         jobs: out.timings.len(),
         estimate_minutes: out.estimate_minutes,
