@@ -139,7 +139,7 @@ fn grid(base: &Campaign, p: &ExploreValid) -> (Vec<Config>, Config) {
 /// The data every job draws from.
 enum Source {
     Sweeps,
-    Model(ModelConfig),
+    Model(Box<ModelConfig>),
 }
 
 /// Inputs of [`explore`].
@@ -178,7 +178,10 @@ pub fn explore(
             let mc = ModelConfig::load(m)?
                 .require_estimable(&Default::default())
                 .map_err(|e| Error::input(m, e.to_string()))?;
-            (Source::Model(mc), format!("synth of {}", m.display()))
+            (
+                Source::Model(Box::new(mc)),
+                format!("synth of {}", m.display()),
+            )
         }
     };
     let (configs, paper) = grid(&base, params);
