@@ -8,7 +8,7 @@
 //! naming what was written, so `pradar energy` reads the simulated campaign like a measured
 //! one.
 
-use crate::campaign::manifest::{one_line, Band, Campaign, SweepFormat, SweepsConfig};
+use crate::campaign::manifest::{one_line, ArrayConfig, Band, Campaign, SweepFormat, SweepsConfig};
 use crate::campaign::sweeps::{parquet_batch, write_touchstone_position, PositionSweeps};
 use crate::error::{Error, Result};
 use crate::table;
@@ -84,7 +84,12 @@ fn changed_sections(c: &Campaign, text: &str, t: &mut toml::Table) -> Result<()>
     if m.band != orig.band {
         t.insert("band".into(), val(toml::Value::try_from(m.band))?);
     }
-    if m.array != orig.array {
+    // `elements` alone is already written by the caller
+    let same_but_elements = ArrayConfig {
+        elements: m.array.elements,
+        ..orig.array
+    } == m.array;
+    if !same_but_elements {
         t.insert("array".into(), val(toml::Value::try_from(m.array))?);
     }
     if m.directions != orig.directions {
