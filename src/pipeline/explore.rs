@@ -17,7 +17,6 @@ use crate::params::ParamGuard;
 use crate::pipeline::commands::map::{run_map, MapOptions, MapRun, PoseNoise};
 use crate::pipeline::Progress;
 use crate::simulate::{has_scene, simulate, write_campaign};
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -235,7 +234,9 @@ pub fn explore(
             ),
         ));
     }
-    // the rest, largest first on the pool (results put back in job order)
+    // the rest, largest first, on `threads` workers each with a one-thread pool: a job's
+    // stages run on its worker only, so at most `threads` jobs are in memory at once (on
+    // one shared pool a waiting thread would steal and start further jobs)
     let mut order: Vec<usize> = (0..jobs.len()).filter(|&i| i != probe).collect();
     order.sort_by(|&a, &b| {
         jobs[b]
@@ -244,31 +245,60 @@ pub fn explore(
             .then(a.cmp(&b))
     });
     let cb = progress("explore", jobs.len());
-    let mut done = 1;
-    cb(done, jobs.len());
-    let (tx, rx) = std::sync::mpsc::channel::<()>();
-    let results: Vec<JobResult> = std::thread::scope(|s| {
-        let (order, jobs, base, source) = (&order, &jobs, &base, &source);
-        let worker = s.spawn(move || {
-            order
-                .par_iter()
-                .map(|&i| {
-                    let r = run_job(base, source, &jobs[i], params, &work_dir, inputs.keep_work);
-                    let _ = tx.send(());
-                    r
-                })
-                .collect::<Result<Vec<_>>>()
-        });
-        for () in rx {
+    cb(1, jobs.len());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<JobResult>)>();
+    let mut by_job: Vec<Option<JobResult>> = vec![None; jobs.len()];
+    by_job[probe] = Some(probe_done);
+    let mut first_error = None;
+    std::thread::scope(|s| {
+        let (order, jobs, base, source, next) = (&order, &jobs, &base, &source, &next);
+        for _ in 0..threads as usize {
+            let tx = tx.clone();
+            let work_dir = &work_dir;
+            s.spawn(move || {
+                let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() else {
+                    return;
+                };
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(&i) = order.get(k) else { break };
+                    let r = pool.install(|| {
+                        run_job(base, source, &jobs[i], params, work_dir, inputs.keep_work)
+                    });
+                    let failed = r.is_err();
+                    if tx.send((i, r)).is_err() || failed {
+                        // stop taking jobs after an error
+                        next.store(order.len(), std::sync::atomic::Ordering::Relaxed);
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut done = 1;
+        for (i, r) in rx {
+            match r {
+                Ok(r) => by_job[i] = Some(r),
+                Err(e) => {
+                    // the first error in job order among those that failed
+                    if first_error.as_ref().is_none_or(|(j, _)| i < *j) {
+                        first_error = Some((i, e));
+                    }
+                }
+            }
             done += 1;
             cb(done, jobs.len());
         }
-        worker.join().expect("explore worker")
-    })?;
-    let mut by_job: Vec<Option<JobResult>> = vec![None; jobs.len()];
-    by_job[probe] = Some(probe_done);
-    for (&i, r) in order.iter().zip(results) {
-        by_job[i] = Some(r);
+    });
+    if let Some((_, e)) = first_error {
+        return Err(e);
+    }
+    if by_job.iter().any(|r| r.is_none()) {
+        return Err(Error::param(
+            "threads",
+            "a worker could not start its thread pool",
+        ));
     }
     let mut rows = Vec::new();
     let mut timings = Vec::new();
