@@ -66,6 +66,8 @@ pub fn pareto_plot(path: &Path, s: &[Summary], mapper: &str) -> Result<()> {
             .map_err(|e| plot_err(path, e))?;
         chart
             .configure_mesh()
+            .x_labels(6)
+            .x_label_formatter(&|x| format!("{x:.0}"))
             .x_desc("energy per scan (mJ)")
             .y_desc("F1 within one cell (mean over seeds)")
             .label_style(("sans-serif", 12))
@@ -141,6 +143,7 @@ pub fn heat_maps(path: &Path, s: &[Summary], mapper: &str, slice: (f64, f64, f64
             .find(|x| x.config.elements == n && x.config.pulses == p)
             .map(|x| if walls { x.walls_found.mean } else { x.f1.mean })
     };
+    let top = |n: usize| if n >= 2 { n - 1 } else { 1 };
     crate::io::write_rendered(path, "png", |tmp| {
         let root = BitMapBackend::new(tmp, (960, 420)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
@@ -171,24 +174,26 @@ pub fn heat_maps(path: &Path, s: &[Summary], mapper: &str, slice: (f64, f64, f64
                 .margin(10)
                 .x_label_area_size(40)
                 .y_label_area_size(50)
-                .build_cartesian_2d(0.0..ps.len().max(1) as f64, 0.0..ns.len().max(1) as f64)
+                // `0..k` segmented has k + 1 cells: the last value's is `k`
+                .build_cartesian_2d(
+                    (0..top(ps.len())).into_segmented(),
+                    (0..top(ns.len())).into_segmented(),
+                )
                 .map_err(|e| plot_err(path, e))?;
             let (ps2, ns2) = (ps.clone(), ns.clone());
+            let centre = |v: &SegmentValue<usize>, list: &[usize]| match v {
+                SegmentValue::CenterOf(i) => {
+                    list.get(*i).map(|x| x.to_string()).unwrap_or_default()
+                }
+                _ => String::new(),
+            };
             chart
                 .configure_mesh()
                 .disable_mesh()
                 .x_labels(ps.len().max(1))
                 .y_labels(ns.len().max(1))
-                .x_label_formatter(&move |x| {
-                    ps2.get(x.floor() as usize)
-                        .map(|p| p.to_string())
-                        .unwrap_or_default()
-                })
-                .y_label_formatter(&move |y| {
-                    ns2.get(y.floor() as usize)
-                        .map(|n| n.to_string())
-                        .unwrap_or_default()
-                })
+                .x_label_formatter(&move |x| centre(x, &ps2))
+                .y_label_formatter(&move |y| centre(y, &ns2))
                 .x_desc("pulses per direction")
                 .y_desc("elements N")
                 .label_style(("sans-serif", 12))
@@ -200,10 +205,12 @@ pub fn heat_maps(path: &Path, s: &[Summary], mapper: &str, slice: (f64, f64, f64
                         continue;
                     };
                     let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
-                    let (x, y) = (j as f64, i as f64);
                     chart
                         .draw_series(std::iter::once(Rectangle::new(
-                            [(x, y), (x + 1.0, y + 1.0)],
+                            [
+                                (SegmentValue::Exact(j), SegmentValue::Exact(i)),
+                                (SegmentValue::Exact(j + 1), SegmentValue::Exact(i + 1)),
+                            ],
                             ViridisRGB::get_color(t).filled(),
                         )))
                         .map_err(|e| plot_err(path, e))?;
@@ -211,7 +218,7 @@ pub fn heat_maps(path: &Path, s: &[Summary], mapper: &str, slice: (f64, f64, f64
                     chart
                         .draw_series(std::iter::once(Text::new(
                             format!("{v:.3}"),
-                            (x + 0.35, y + 0.55),
+                            (SegmentValue::CenterOf(j), SegmentValue::CenterOf(i)),
                             ("sans-serif", 13).into_font().color(&colour),
                         )))
                         .map_err(|e| plot_err(path, e))?;
