@@ -12,6 +12,7 @@ pub mod cluster;
 pub mod correction;
 pub mod energy;
 pub mod error;
+pub mod explore;
 pub mod export;
 pub mod fit;
 #[cfg(feature = "fuzz")]

@@ -129,6 +129,7 @@ fn run(cli: Cli) -> Result<()> {
             report_done(quiet, &done)
         }
         Cmd::Experiment(a) => report(quiet, commands::experiments(&a.into_command(), &stages)?),
+        Cmd::Explore(a) => report(quiet, commands::explore(&a.into_command(), &stages)?),
         Cmd::Zoo(a) => report(
             quiet,
             commands::zoo(&commands::Zoo {

@@ -21,6 +21,7 @@ pub use crate::export::LineChart;
 pub mod calibrate;
 pub mod check;
 pub mod experiments;
+pub mod explore;
 pub mod reproduce;
 
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");

@@ -18,6 +18,7 @@ mod correction;
 mod diffuse;
 mod ekf;
 mod experiment;
+mod explore;
 mod fit_cli;
 mod fit_coverage;
 mod fit_estimators;

@@ -17,6 +17,7 @@ use pradar::campaign::manifest::SweepFormat;
 use pradar::check::CheckParams;
 use pradar::cluster::{ClusterParams, Criterion};
 use pradar::correction::CorrectionParams;
+use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
 use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
@@ -68,6 +69,9 @@ pub enum Cmd {
     Reproduce(ReproduceArgs),
     /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
     Experiment(ExperimentArgs),
+    /// Design space: map quality, energy per scan and scan time over N, pulses, step,
+    /// bandwidth and transmit power.
+    Explore(ExploreArgs),
     /// Write the scene zoo: seeded physics scenes, each with a noise-only twin and a second
     /// realisation (campaign.toml + layout.geojson per folder; scripts/zoo runs the chain).
     Zoo(ZooArgs),
@@ -467,6 +471,9 @@ pub struct ReportArgs {
     /// Skip the mapping experiments.
     #[arg(long)]
     pub skip_experiments: bool,
+    /// A `pradar explore` folder to show as a section (its files copied into OUT/explore/).
+    #[arg(long)]
+    pub explore: Option<PathBuf>,
     #[command(flatten)]
     pub seeds: SeedsArg,
 }
@@ -509,6 +516,73 @@ pub struct ExperimentArgs {
     pub model: Option<PathBuf>,
     #[command(flatten)]
     pub seeds: SeedsArg,
+}
+
+// `pradar explore`
+#[derive(Args)]
+pub struct ExploreArgs {
+    /// Output folder: explore.csv|.md, summary.csv|.md, pareto_*.png, heatmap_*.png,
+    /// index.html.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Campaign manifest (default: the built-in corridor).
+    #[arg(long)]
+    pub campaign: Option<PathBuf>,
+    /// Elements per array (perfect squares).
+    #[arg(long, value_delimiter = ',', default_values_t = ExploreParams::default().elements)]
+    pub elements: Vec<usize>,
+    /// Pulses per direction.
+    #[arg(long, value_delimiter = ',', default_values_t = ExploreParams::default().pulses)]
+    pub pulses: Vec<usize>,
+    /// Angular steps, degrees (each must divide the campaign's sector).
+    #[arg(long, value_delimiter = ',', default_values_t = ExploreParams::default().step_deg)]
+    pub step_deg: Vec<f64>,
+    /// Bandwidths, GHz (default: the campaign's; centre and frequency step kept).
+    #[arg(long, value_delimiter = ',')]
+    pub bandwidth_ghz: Vec<f64>,
+    /// Transmit powers, dBm (default: the campaign's [noise] tx_power_dbm).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub tx_power_dbm: Vec<f64>,
+    /// Mappers: og, ekf (comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "og",
+        hide_possible_values = true
+    )]
+    pub mapper: Vec<MapMethod>,
+    /// Seeds (each draws a new scene and noise).
+    #[arg(long, value_delimiter = ',', default_values_t = ExploreParams::default().seeds)]
+    pub seeds: Vec<u64>,
+    /// Data: sweeps (physics, the campaign's [scene]) or model (synth of --model).
+    #[arg(
+        long,
+        value_enum,
+        default_value = "sweeps",
+        hide_possible_values = true
+    )]
+    pub data: ExploreData,
+    /// Model file (with --data model).
+    #[arg(long, required_if_eq("data", "model"))]
+    pub model: Option<PathBuf>,
+    /// Energy-model constants (TOML; defaults in docs/explore.md).
+    #[arg(long)]
+    pub energy_model: Option<PathBuf>,
+    /// Refuse a grid estimated (from a timed probe job) above this many minutes.
+    #[arg(long, default_value_t = ExploreParams::default().max_minutes)]
+    pub max_minutes: f64,
+    /// Keep every job's data and maps in DIR/work/.
+    #[arg(long)]
+    pub keep_work: bool,
+}
+
+/// `explore --data`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExploreData {
+    /// Physics simulator.
+    Sweeps,
+    /// synth of --model.
+    Model,
 }
 
 /// `--seeds`, shared by `report`, `reproduce` and `experiment`.

@@ -4,8 +4,8 @@
 //! parsed flags and giving the struct the library entry runs. Nothing here reads a file.
 
 use super::{
-    CalibrateArgs, CheckArgs, ClusterArgs, EnergyArgs, ExperimentArgs, ExtractArgs, FitArgs,
-    ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
+    CalibrateArgs, CheckArgs, ClusterArgs, EnergyArgs, ExperimentArgs, ExploreArgs, ExploreData,
+    ExtractArgs, FitArgs, ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use anyhow::Result;
 use pradar::mapping::{EkfParams, GridParams, OgParams};
@@ -254,6 +254,7 @@ impl ReportArgs {
             experiment_params: ExperimentParams::default()
                 .seeds(self.seeds.seeds)
                 .check()?,
+            explore: self.explore,
         }
         .check()?)
     }
@@ -270,6 +271,34 @@ impl ExperimentArgs {
                 model: self.model,
             },
             params: ExperimentParams::default().seeds(self.seeds.seeds),
+            out: self.out,
+        }
+    }
+}
+
+impl ExploreArgs {
+    /// `explore`'s command (`--model` without `--data model` is ignored).
+    pub fn into_command(self) -> commands::Explore {
+        let data = match (self.data, self.model) {
+            (ExploreData::Model, Some(m)) => pradar::explore::DataKind::Model(m),
+            _ => pradar::explore::DataKind::Sweeps,
+        };
+        commands::Explore {
+            campaign: self.campaign,
+            data,
+            energy_model: self.energy_model,
+            params: pradar::explore::ExploreParams {
+                elements: self.elements,
+                pulses: self.pulses,
+                step_deg: self.step_deg,
+                bandwidth_ghz: self.bandwidth_ghz,
+                tx_power_dbm: self.tx_power_dbm,
+                mappers: self.mapper,
+                seeds: self.seeds,
+                max_minutes: self.max_minutes,
+                ..Default::default()
+            },
+            keep_work: self.keep_work,
             out: self.out,
         }
     }

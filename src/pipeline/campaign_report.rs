@@ -73,6 +73,9 @@ pub struct ReportOptions {
     pub experiments: bool,
     /// Their parameters, checked.
     pub experiment_params: ExperimentValid,
+    /// A `pradar explore` folder whose section the page shows (its files copied into
+    /// `out/explore/`).
+    pub explore: Option<PathBuf>,
 }
 
 /// [`ReportOptions`] that passed their check.
@@ -90,6 +93,14 @@ impl ParamGuard for ReportOptions {
             if let Some(p) = p {
                 crate::io::regular_input(p, what)?;
                 inputs.push((p.clone(), what));
+            }
+        }
+        if let Some(d) = &self.explore {
+            if !d.join(EXPLORE_SECTION).is_file() {
+                return Err(Error::input(
+                    d,
+                    format!("--explore: no {EXPLORE_SECTION} (not a `pradar explore` folder)"),
+                ));
             }
         }
         if let Some(t) = &self.truth {
@@ -150,6 +161,7 @@ pub struct ReportOutput {
 ///     truth: None,
 ///     experiments: true,
 ///     experiment_params: ExperimentParams::default().check()?,
+///     explore: None,
 /// }
 /// .check()?;
 /// let progress = |_: &str, _: usize| -> Box<dyn Fn(usize, usize)> { Box::new(|_, _| {}) };
@@ -174,6 +186,7 @@ pub fn report(opts: &ReportValid, progress: Progress) -> Result<ReportOutput> {
         experiments: opts.experiments.then_some(&opts.experiment_params),
         // the smaller run, as reproduce: `fit` makes the full one
         correction: Some(crate::correction::CorrectionParams::quick()),
+        explore: opts.explore.as_deref(),
         progress,
     };
     run(
@@ -183,6 +196,32 @@ pub fn report(opts: &ReportValid, progress: Progress) -> Result<ReportOutput> {
             energy: opts.energy.as_deref(),
         },
     )
+}
+
+/// The section `pradar explore` writes for a report (links under `explore/`).
+pub const EXPLORE_SECTION: &str = "report_section.html";
+
+/// `report --explore DIR`: DIR's files copied into `out/explore/` and its section.
+fn explore_section(dir: &Path, out: &Path) -> Result<Section> {
+    let dest = out.join("explore");
+    std::fs::create_dir_all(&dest).map_err(|e| Error::io(&dest, e))?;
+    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let mut names: Vec<String> = rd
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != EXPLORE_SECTION)
+        .collect();
+    names.sort();
+    for n in names {
+        let bytes = std::fs::read(dir.join(&n)).map_err(|e| Error::io(dir.join(&n), e))?;
+        crate::io::write_bytes(&dest.join(&n), &bytes)?;
+    }
+    let html = crate::io::read_text(&dir.join(EXPLORE_SECTION))?;
+    Ok(Section {
+        title: "Design space (explore)".into(),
+        html,
+    })
 }
 
 /// One run of the page: where it goes and what it uses beside the data.
@@ -197,6 +236,8 @@ pub(crate) struct Job<'a, 'p> {
     pub experiments: Option<&'a ExperimentValid>,
     /// The bias correction of Table 1 (`crate::correction`), when it runs.
     pub correction: Option<crate::correction::CorrectionParams>,
+    /// A `pradar explore` folder to show (`report --explore`).
+    pub explore: Option<&'a Path>,
     /// Progress bars.
     pub progress: Progress<'p>,
 }
@@ -423,6 +464,13 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
         )?,
         None => Vec::new(),
     };
+    let mut experiments = experiments;
+    if let Some(d) = job.explore {
+        experiments.push(explore_section(d, out).unwrap_or_else(|e| Section {
+            title: "Design space (explore)".into(),
+            html: page::failed("the explore section", &e),
+        }));
+    }
     let name = &s.campaign.manifest.name;
     let index = out.join("index.html");
     let report_page = ReproducePage {

@@ -18,12 +18,15 @@ mod analysis;
 mod campaign_report;
 pub mod commands;
 pub mod experiment;
+pub mod explore;
 mod geometry;
 mod kmax;
 mod reproduce;
 
 pub use analysis::{analyse, Analysis};
-pub use campaign_report::{report, ReportOptions, ReportOutput, ReportValid, DEFAULT_REPORT_OUT};
+pub use campaign_report::{
+    report, ReportOptions, ReportOutput, ReportValid, DEFAULT_REPORT_OUT, EXPLORE_SECTION,
+};
 pub use reproduce::{reproduce, ReproduceOptions, ReproduceValid, DEFAULT_REPRODUCE_OUT};
 
 /// The built-in corridor manifest.

@@ -96,6 +96,7 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<ReportOutp
         experiments: opts.experiments.then_some(&opts.experiment_params),
         // the smaller run keeps the main job quick (its intervals are the wider for it)
         correction: Some(crate::correction::CorrectionParams::quick()),
+        explore: None,
         progress,
     };
     let done = run_inner(&job, Source::Simulate(&c))?;

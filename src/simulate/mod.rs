@@ -95,6 +95,14 @@ pub fn has_scene(c: &Campaign) -> Result<bool> {
     Ok(t.contains_key("scene"))
 }
 
+/// Write campaign `c` as it is loaded (its changed seed, pulses, band, array, directions
+/// and noise over its manifest's text, no `[sweeps]`) into `out_dir/campaign.toml` with
+/// its layout beside it; returns the manifest's path (`explore` maps `synth` data with it).
+pub fn write_campaign(c: &Campaign, out_dir: &Path) -> Result<PathBuf> {
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    output::write_manifest(c, out_dir, None)
+}
+
 /// Read `[scene]` (checked) and `[clutter]` from the manifest text (simulator only).
 pub fn scene_sections(c: &Campaign) -> Result<(SceneValid, Option<ModelConfig>)> {
     let text = crate::io::read_text(&c.path)?;
@@ -195,7 +203,7 @@ pub fn simulate(
     rays.finish(None)?;
     write_truth_scatterers(&truth_dir, &scene.scatterers)?;
     write_truth_clusters(&truth_dir, &scene.clusters)?;
-    let manifest = output::write_manifest(c, out_dir, format)?;
+    let manifest = output::write_manifest(c, out_dir, Some(format))?;
     Ok(SimReport {
         sweeps: np * nd * nk,
         scatterers: scene.scatterers.len(),

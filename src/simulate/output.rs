@@ -2,11 +2,13 @@
 //! position) and the output manifest.
 //!
 //! The output manifest is the input manifest's TOML with `layout = "layout.geojson"` (the
-//! layout is copied beside it), `[array].elements` made explicit and a `[sweeps]` section
+//! layout is copied beside it), `[array].elements` made explicit, the measurement fields
+//! changed on the loaded campaign (seed, pulses, band, array, directions, noise) written
+//! over the input's, and a `[sweeps]` section
 //! naming what was written, so `pradar energy` reads the simulated campaign like a measured
 //! one.
 
-use crate::campaign::manifest::{one_line, Band, Campaign, SweepFormat, SweepsConfig};
+use crate::campaign::manifest::{one_line, ArrayConfig, Band, Campaign, SweepFormat, SweepsConfig};
 use crate::campaign::sweeps::{parquet_batch, write_touchstone_position, PositionSweeps};
 use crate::error::{Error, Result};
 use crate::table;
@@ -64,8 +66,50 @@ impl SweepSink {
     }
 }
 
+/// The measurement fields a caller changed on the loaded campaign (`explore` changes the
+/// seed, pulses, band, array, directions and noise) written over the input's: a field equal
+/// to the input's is left as the input wrote it.
+fn changed_sections(c: &Campaign, text: &str, t: &mut toml::Table) -> Result<()> {
+    let m = &c.manifest;
+    let orig = Campaign::from_str(text, &c.path)?.manifest;
+    let val = |v: Result<toml::Value, toml::ser::Error>| {
+        v.map_err(|e| Error::input(&c.path, one_line(&e.to_string())))
+    };
+    if m.seed != orig.seed {
+        t.insert("seed".into(), toml::Value::Integer(m.seed as i64));
+    }
+    if m.pulses != orig.pulses {
+        t.insert("pulses".into(), toml::Value::Integer(m.pulses as i64));
+    }
+    if m.band != orig.band {
+        t.insert("band".into(), val(toml::Value::try_from(m.band))?);
+    }
+    // `elements` alone is already written by the caller
+    let same_but_elements = ArrayConfig {
+        elements: m.array.elements,
+        ..orig.array
+    } == m.array;
+    if !same_but_elements {
+        t.insert("array".into(), val(toml::Value::try_from(m.array))?);
+    }
+    if m.directions != orig.directions {
+        t.insert(
+            "directions".into(),
+            val(toml::Value::try_from(m.directions))?,
+        );
+    }
+    if m.noise != orig.noise {
+        t.insert("noise".into(), val(toml::Value::try_from(m.noise))?);
+    }
+    Ok(())
+}
+
 /// Copy the layout beside the output and write `out_dir/campaign.toml`; returns its path.
-pub(super) fn write_manifest(c: &Campaign, out_dir: &Path, format: SweepFormat) -> Result<PathBuf> {
+pub(super) fn write_manifest(
+    c: &Campaign,
+    out_dir: &Path,
+    format: Option<SweepFormat>,
+) -> Result<PathBuf> {
     let layout_out = out_dir.join("layout.geojson");
     let layout_text = crate::io::read_text(&c.layout_path())?;
     crate::io::write_bytes(&layout_out, layout_text.as_bytes())?;
@@ -82,17 +126,22 @@ pub(super) fn write_manifest(c: &Campaign, out_dir: &Path, format: SweepFormat) 
             toml::Value::Integer(c.manifest.array.elements as i64),
         );
     }
+    changed_sections(c, &text, &mut t)?;
     let sweeps = match format {
-        SweepFormat::Touchstone => SweepsConfig {
-            format,
+        None => {
+            t.remove("sweeps");
+            return finish_manifest(c, out_dir, &t);
+        }
+        Some(SweepFormat::Touchstone) => SweepsConfig {
+            format: SweepFormat::Touchstone,
             pattern: Some(TOUCHSTONE_PATTERN.to_string()),
             files: vec![],
             path: None,
             parameter: None,
             ..Default::default()
         },
-        SweepFormat::Parquet => SweepsConfig {
-            format,
+        Some(SweepFormat::Parquet) => SweepsConfig {
+            format: SweepFormat::Parquet,
             pattern: None,
             files: vec![],
             path: Some("sweeps.parquet".into()),
@@ -104,8 +153,13 @@ pub(super) fn write_manifest(c: &Campaign, out_dir: &Path, format: SweepFormat) 
         "sweeps".into(),
         toml::Value::try_from(&sweeps).map_err(|e| Error::input(&c.path, e.to_string()))?,
     );
+    finish_manifest(c, out_dir, &t)
+}
+
+/// Write `t` as `out_dir/campaign.toml` under its header line.
+fn finish_manifest(c: &Campaign, out_dir: &Path, t: &toml::Table) -> Result<PathBuf> {
     let manifest_out = out_dir.join("campaign.toml");
-    let body = toml::to_string(&t).map_err(|e| Error::input(&manifest_out, e.to_string()))?;
+    let body = toml::to_string(t).map_err(|e| Error::input(&manifest_out, e.to_string()))?;
     crate::io::write_bytes(
         &manifest_out,
         format!(

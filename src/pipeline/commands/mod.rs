@@ -112,6 +112,7 @@
 mod analysis;
 mod campaign;
 mod experiments;
+mod explore;
 pub(crate) mod import;
 pub mod map;
 mod model;
@@ -125,6 +126,7 @@ pub use campaign::{
     energy, simulate, synth, Energy, EnergySummary, Simulate, SimulateSummary, Synth, SynthSummary,
 };
 pub use experiments::{experiments, select_experiments, Experiments, ExperimentsSummary};
+pub use explore::{explore, Explore, ExploreSummary};
 pub use import::{
     import, ImportOutcome, ImportParams, SweepFiles, MAX_INDEX_ROWS, MAX_POSES, SHOWN_PROBLEMS,
 };
