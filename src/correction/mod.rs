@@ -34,20 +34,22 @@
 //! common draws. Its diagonal Jᵢᵢ is quantity i's own slope; below `min_slope` (0.25) the
 //! quantity is not identifiable — the chain's estimate barely moves with it — and it is
 //! held at its raw value (drawn as stated, flagged in the model file), as is one the chain
-//! reads in fewer than half of the draws. Then Levenberg–Marquardt steps (Levenberg 1944;
-//! Marquardt 1963) on the identifiable set S from the best point so far:
-//! Δ = (JᵀWJ + μ·diag(JᵀWJ))⁻¹ JᵀW (t − T̄), W = diag(1/sⱼ²) with sⱼ the draws' spread of
-//! estimate j, μ from 1, divided by 3 after a step that lowered the remaining bias and
-//! multiplied by 4 after one that raised it; each component at most a factor 2 (Γ's rate
-//! between half and twice itself, kept ≥ 0) and inside the schema's range. R draws per
-//! step, until every remaining bias |tⱼ − T̄ⱼ| is within the simulation noise of its mean
-//! sⱼ/√R (settled) or `iterations` steps are made; the point with the smallest
-//! Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. Why damped: the binding function's cross terms are
-//! large and real on a 150-pose hall (d_p's estimate moves −3 times the AoA's log), so a
-//! step on the diagonal alone does not converge there, while the undamped whole-J step
-//! made the remaining bias larger (the function is not linear over the step; on the
-//! 12-pose corridor the cross terms are mostly noise): `docs/correction.md`. Cost:
-//! R·(1 + |S| + iterations) chain runs; the defaults (R 8, 6 iterations) make at most 112.
+//! reads in fewer than half of the draws. Then steps on the identifiable set S from the
+//! best point so far, two candidates evaluated together at each: the Levenberg–Marquardt
+//! step (Levenberg 1944; Marquardt 1963) Δ = (JᵀWJ + μ·diag(JᵀWJ))⁻¹ JᵀW (t − T̄),
+//! W = diag(1/sⱼ²) with sⱼ the draws' spread of estimate j, μ from 1, divided by 3 after
+//! this step won and multiplied by 4 otherwise; and the diagonal step Δᵢ = (tᵢ − T̄ᵢ)/Jᵢᵢ.
+//! Each component at most a factor 2 (Γ's rate between half and twice itself, kept ≥ 0)
+//! and inside the schema's range. R draws per candidate, until every remaining bias
+//! |tⱼ − T̄ⱼ| is within the simulation noise of its mean sⱼ/√R (settled) or `iterations`
+//! steps are made; the point with the smallest Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. Why two:
+//! the binding function's cross terms are large and real on a 150-pose hall (d_p's
+//! estimate moves −3 times the AoA's log), so the diagonal alone cannot converge where
+//! they dominate (the unit test's function), yet on that hall the diagonal steps lowered
+//! the remaining bias to 38 where the damped whole-J steps reached 57 (the function is
+//! rugged over a step: K-means' choices jump): `docs/correction.md`. Cost:
+//! R·(1 + |S| + 2·iterations) chain runs; the defaults (R 8, 3 iterations) make at most
+//! 112.
 //!
 //! The interval. Linearised at the kept point û, the corrected value moves as
 //! (tᵢ − T̄ᵢ)/Jᵢᵢ (the diagonal: the whole J⁻¹ carries its noise into every interval), and the chain's estimate on a campaign drawn at û scatters as the R
@@ -452,13 +454,12 @@ fn solve_binding(
         }
     }
     // Newton steps with the start's J on the identifiable set
-    let (mut score, mut settled, r) = residual(&t, start, &set);
+    let (score, settled, r) = residual(&t, start, &set);
     if trace {
         let m: Vec<f64> = (0..7).map(|j| moments(start, j).0).collect();
         eprintln!("start  T̄ {m:?} score {score:.2} r {r:?}");
     }
     let mut best = (score, t, start.clone(), settled);
-    let mut u = t;
     let mut iterations = 0;
     // Levenberg–Marquardt's damping: smaller after a step that lowered the remaining bias,
     // larger after one that raised it
@@ -470,31 +471,47 @@ fn solve_binding(
     while !best.3 && iterations < params.iterations && !set.is_empty() {
         let (_, from, from_draws, _) = &best;
         let (_, _, r) = residual(&t, from_draws, &set);
-        let dx = lm_step(&jac, &set, &r, &weights, mu)
-            .unwrap_or_else(|| (set.iter().zip(&r)).map(|(&i, r)| r / jac[i][i]).collect());
-        for (k, &i) in set.iter().enumerate() {
-            let dx = dx[k];
-            let to = match MOVED[i].1 {
-                Scale::Log => from[i] + dx.clamp(-MAX_LOG_STEP, MAX_LOG_STEP),
-                Scale::Rate => (from[i] + dx)
-                    .clamp(from[i] / 2.0, (2.0 * from[i]).max(from[i] + 2.0 * steps[i])),
-            };
-            // inside the schema's range of each quantity (synth refuses a model outside it)
-            u[i] = within_bounds(i, to);
-        }
-        let draws = evaluate(&[u])?.remove(0);
+        // two candidates, one batch: the damped whole-J step and the diagonal one
+        let diagonal: Vec<f64> = (set.iter().zip(&r)).map(|(&i, r)| r / jac[i][i]).collect();
+        let whole = lm_step(&jac, &set, &r, &weights, mu).unwrap_or_else(|| diagonal.clone());
+        let candidates: Vec<[f64; 7]> = [&whole, &diagonal]
+            .iter()
+            .map(|dx| {
+                let mut u = *from;
+                for (k, &i) in set.iter().enumerate() {
+                    let to = match MOVED[i].1 {
+                        Scale::Log => from[i] + dx[k].clamp(-MAX_LOG_STEP, MAX_LOG_STEP),
+                        Scale::Rate => (from[i] + dx[k])
+                            .clamp(from[i] / 2.0, (2.0 * from[i]).max(from[i] + 2.0 * steps[i])),
+                    };
+                    // inside the schema's range (synth refuses a model outside it)
+                    u[i] = within_bounds(i, to);
+                }
+                u
+            })
+            .collect();
+        let evaluated = evaluate(&candidates)?;
         iterations += 1;
-        (score, settled, _) = residual(&t, &draws, &set);
-        if trace {
-            let m: Vec<f64> = (0..7).map(|j| moments(&draws, j).0).collect();
-            eprintln!("iter {iterations} u {u:?}\n       T̄ {m:?} score {score:.2}");
+        let mut improved_whole = false;
+        for (c, (u, draws)) in candidates.iter().zip(evaluated).enumerate() {
+            let (score, settled, _) = residual(&t, &draws, &set);
+            if trace {
+                let m: Vec<f64> = (0..7).map(|j| moments(&draws, j).0).collect();
+                eprintln!(
+                    "iter {iterations} {} u {u:?}\n       T̄ {m:?} score {score:.2}",
+                    ["whole", "diagonal"][c]
+                );
+            }
+            if score < best.0 {
+                best = (score, *u, draws, settled);
+                improved_whole = c == 0;
+            }
         }
-        if score < best.0 {
-            best = (score, u, draws, settled);
-            mu = (mu / 3.0).max(1e-3);
+        mu = if improved_whole {
+            (mu / 3.0).max(1e-3)
         } else {
-            mu *= 4.0;
-        }
+            mu * 4.0
+        };
     }
     let (_, u_hat, draws, settled) = best;
     Ok(Solved {
@@ -541,7 +558,7 @@ pub fn correct(
             Scale::Rate => (params.step * t[j]).max(1.0 / span_ns),
         })
         .collect();
-    let total = r_draws * (1 + active.len() + params.iterations);
+    let total = r_draws * (1 + active.len() + 2 * params.iterations);
     let done = AtomicUsize::new(0);
     progress(0, total);
     let evaluate = |points: &[[f64; 7]]| -> Result<Vec<Vec<Draw>>> {
@@ -828,7 +845,7 @@ mod tests {
         }
         // the flat quantity stays where the data put it
         assert_eq!(solved.u_hat[6], data[6]);
-        assert_eq!(calls, 8 + solved.iterations);
+        assert_eq!(calls, 8 + 2 * solved.iterations);
     }
 
     #[test]

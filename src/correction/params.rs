@@ -5,7 +5,8 @@
 //!   `MAX_DRAWS`]. The correction's interval scales the draws' spread by √(1 + 1/R) and
 //!   uses Student's t with R − 1 degrees of freedom, so a small R widens it rather than
 //!   making it wrong; the figures behind the default are in `docs/correction.md`.
-//! * `iterations` — the most Newton steps after the start, in [0, [`MAX_ITERATIONS`]].
+//! * `iterations` — the most steps after the start (two candidates each), in
+//!   [0, [`MAX_ITERATIONS`]].
 //! * `step` — the finite-difference step of the binding function's slopes, relative (the
 //!   log of a positive quantity moves by ln(1 + step); the rate 1/Γ by step times itself,
 //!   at least by the rate whose e-fold is the energy table's delay span).
@@ -47,7 +48,7 @@ impl Default for CorrectionParams {
     fn default() -> Self {
         CorrectionParams {
             draws: 8,
-            iterations: 6,
+            iterations: 3,
             step: 0.25,
             min_slope: 0.25,
             resamples: 5,
