@@ -39,8 +39,9 @@
 //! step (Levenberg 1944; Marquardt 1963) Δ = (JᵀWJ + μ·diag(JᵀWJ))⁻¹ JᵀW (t − T̄),
 //! W = diag(1/sⱼ²) with sⱼ the draws' spread of estimate j, μ from 1, divided by 3 after
 //! this step won and multiplied by 4 otherwise; and the diagonal step Δᵢ = (tᵢ − T̄ᵢ)/Jᵢᵢ.
-//! Each component at most a factor 2 (Γ's rate between half and twice itself, kept ≥ 0)
-//! and inside the schema's range. R draws per candidate, until every remaining bias
+//! Each component at most a factor 2 (Γ's rate between half of itself and the larger of
+//! twice itself and itself plus two slope steps, so it can leave 0) and inside the
+//! schema's range. R draws per candidate, until every remaining bias
 //! |tⱼ − T̄ⱼ| is within the simulation noise of its mean sⱼ/√R (settled) or `iterations`
 //! steps are made; the point with the smallest Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. Why two:
 //! the binding function's cross terms are large and real on a 150-pose hall (d_p's
@@ -62,12 +63,14 @@
 //! (synth's truth, in memory, every ray of the half-plane within the table's delay span,
 //! as `fit_truth`), the bias at û is b = mean(log T_r^Λ − log L_r), and Λ is corrected
 //! to exp(log t^Λ − b); its slope is d mean log T^Λ / d mean log L along d_c's step (the
-//! quantity that moves Λ), its interval from the spread of log T^Λ and of the bias.
+//! quantity that moves Λ; not finite or below `min_slope`: not identifiable), its interval
+//! log t^Λ − b ± t·s_b·√(1 + 1/n), s_b the draws' spread of log T_r^Λ − log L_r: the
+//! target is the campaign's own environment, which the chain misses by that much.
 //!
 //! What it assumes, stated: the clustering and extraction the data went through are the
 //! defaults (a clustered table made with other options is corrected as if made with
 //! them: use `fit --no-correction` then); the levels (walls, diffuse, σ) stay as `fit`
-//! read them; the slopes are taken at the start, not refreshed along the steps.
+//! read them at the raw values (σ is not refitted at the corrected ones); the slopes are taken at the start, not refreshed along the steps.
 //!
 //! Partition stability (beside, [`stability`]): the ARI between the data's clusters and
 //! the chain's clusters of random 80 % subsamples of each position's MPCs.
@@ -236,12 +239,18 @@ impl<'a> Chain<'a> {
             data: e,
             ..self.em.clone()
         };
-        let mpcs = crate::mpc::extract(&drawn, self.c, &self.extract)?;
-        let clustering = crate::cluster::cluster(&mpcs, &self.headings_deg, &self.cluster)?;
         let nan = Draw {
             t: [f64::NAN; 7],
             log_lambda_chain: f64::NAN,
             log_lambda_truth: f64::NAN,
+        };
+        // a simulated campaign the chain cannot read counts as read nowhere (the 2n ≥ R rule)
+        let Ok(mpcs) = crate::mpc::extract(&drawn, self.c, &self.extract) else {
+            return Ok(nan);
+        };
+        let Ok(clustering) = crate::cluster::cluster(&mpcs, &self.headings_deg, &self.cluster)
+        else {
+            return Ok(nan);
         };
         // a draw where the chain estimates nothing reads as NaN everywhere
         let Ok(chain) = fit_clustered(&self.name, clustered_rays(&clustering), self.c, None) else {
@@ -350,15 +359,23 @@ fn moments_of(v: &[f64]) -> (f64, f64, usize) {
     (mean, sd, n)
 }
 
-/// The standardised remaining bias Σ ((tⱼ − T̄ⱼ)/(sⱼ/√nⱼ))² over `set`, and whether every
-/// term is within one simulation standard error.
-fn residual(t: &[f64; 7], draws: &[Draw], set: &[usize]) -> (f64, bool, Vec<f64>) {
+/// The standardised remaining bias Σ ((tⱼ − T̄ⱼ)/(sⱼ/√nⱼ))² over `set`, sⱼ the start's
+/// spread of estimate j (`spread`: every point judged on one scale, so a point where the
+/// chain scatters more does not score better), and whether every term is within one
+/// simulation standard error (never for an empty set).
+fn residual(
+    t: &[f64; 7],
+    draws: &[Draw],
+    set: &[usize],
+    spread: &[f64; 7],
+) -> (f64, bool, Vec<f64>) {
     let mut score = 0.0;
-    let mut settled = true;
+    // nothing to move is nothing settled
+    let mut settled = !set.is_empty();
     let mut r = Vec::with_capacity(set.len());
     for &j in set {
-        let (mean, sd, n) = moments(draws, j);
-        let se = (sd / (n.max(1) as f64).sqrt()).max(1e-12);
+        let (mean, _, n) = moments(draws, j);
+        let se = (spread[j] / (n.max(1) as f64).sqrt()).max(1e-12);
         let z = (t[j] - mean) / se;
         score += if z.is_finite() { z * z } else { 1e12 };
         settled &= z.abs() <= 1.0;
@@ -454,7 +471,11 @@ fn solve_binding(
         }
     }
     // Newton steps with the start's J on the identifiable set
-    let (score, settled, r) = residual(&t, start, &set);
+    let mut spread = [f64::NAN; 7];
+    for (j, s) in spread.iter_mut().enumerate() {
+        *s = moments(start, j).1;
+    }
+    let (score, settled, r) = residual(&t, start, &set, &spread);
     if trace {
         let m: Vec<f64> = (0..7).map(|j| moments(start, j).0).collect();
         eprintln!("start  T̄ {m:?} score {score:.2} r {r:?}");
@@ -470,7 +491,7 @@ fn solve_binding(
         .collect();
     while !best.3 && iterations < params.iterations && !set.is_empty() {
         let (_, from, from_draws, _) = &best;
-        let (_, _, r) = residual(&t, from_draws, &set);
+        let (_, _, r) = residual(&t, from_draws, &set, &spread);
         // two candidates, one batch: the damped whole-J step and the diagonal one
         let diagonal: Vec<f64> = (set.iter().zip(&r)).map(|(&i, r)| r / jac[i][i]).collect();
         let whole = lm_step(&jac, &set, &r, &weights, mu).unwrap_or_else(|| diagonal.clone());
@@ -494,7 +515,7 @@ fn solve_binding(
         iterations += 1;
         let mut improved_whole = false;
         for (c, (u, draws)) in candidates.iter().zip(evaluated).enumerate() {
-            let (score, settled, _) = residual(&t, &draws, &set);
+            let (score, settled, _) = residual(&t, &draws, &set, &spread);
             if trace {
                 let m: Vec<f64> = (0..7).map(|j| moments(&draws, j).0).collect();
                 eprintln!(
@@ -541,7 +562,12 @@ pub fn correct(
     let t0 = std::time::Instant::now();
     let chain = Chain::new(c, em, energy_path)?;
     let base = fit.model.clone().with_stated_values();
-    base.require_estimable(&Default::default())?;
+    if let Err(e) = base.require_estimable(&Default::default()) {
+        return Err(Error::param(
+            "correction",
+            format!("the fitted model cannot be drawn ({e}); use --no-correction"),
+        ));
+    }
     let r_draws = params.draws;
     let seed = params.seed.unwrap_or(c.manifest.seed);
     let seeds: Vec<u64> = (0..r_draws).map(|r| draw_seed(seed, r)).collect();
@@ -608,9 +634,7 @@ pub fn correct(
     let inflate = (1.0 + 1.0 / r_draws as f64).sqrt();
     let mut quantities = Vec::with_capacity(MOVED.len() + 1);
     // Λ first (Table 1's order)
-    quantities.push(lambda_row(
-        fit, &batch, &active, &draws, tq, inflate, params,
-    ));
+    quantities.push(lambda_row(fit, &batch, &active, &draws, tq, params));
     for (i, (key, scale)) in MOVED.iter().enumerate() {
         let raw = estimate(&fit.model, key);
         let slope = if active.contains(&i) {
@@ -628,14 +652,15 @@ pub fn correct(
             (f64::NAN, None, Some(why.clone()))
         } else {
             let half = tq * sd[i] * inflate;
-            let iv = half.is_finite().then(|| {
-                let (a, b) = (u_hat[i] - half, u_hat[i] + half);
-                match scale {
-                    Scale::Log => [a.exp(), b.exp()],
-                    // the rate's ends inverted: [1/hi, 1/lo], ∞ where the rate reaches 0
-                    Scale::Rate => [from_u(*scale, b.max(0.0)), from_u(*scale, a.max(0.0))],
-                }
-            });
+            let (a, b) = (u_hat[i] - half, u_hat[i] + half);
+            let iv = match scale {
+                _ if !half.is_finite() => None,
+                Scale::Log => Some([a.exp(), b.exp()]),
+                // the rate's ends inverted: [1/hi, 1/lo], ∞ where the rate reaches 0; none
+                // when the whole rate interval is below the no-excess floor (Γ = ∞ only)
+                Scale::Rate if b < NO_EXCESS_RATE_PER_NS => None,
+                Scale::Rate => Some([from_u(*scale, b), from_u(*scale, a.max(0.0))]),
+            };
             (from_u(*scale, u_hat[i]), iv, None)
         };
         quantities.push(CorrectedQuantity {
@@ -674,7 +699,6 @@ fn lambda_row(
     active: &[usize],
     draws: &[Draw],
     tq: f64,
-    inflate: f64,
     params: &CorrectionValid,
 ) -> CorrectedQuantity {
     let raw = estimate(&fit.model, "inter_cluster_rate");
@@ -708,13 +732,8 @@ fn lambda_row(
         .map(|d| d.log_lambda_chain - d.log_lambda_truth)
         .filter(|x| x.is_finite())
         .collect();
-    let chain: Vec<f64> = draws
-        .iter()
-        .map(|d| d.log_lambda_chain)
-        .filter(|x| x.is_finite())
-        .collect();
     let (b, b_sd, n) = moments_of(&bias);
-    if row.slope.is_nan() || row.slope < params.min_slope || 2 * n < draws.len() {
+    if !row.slope.is_finite() || row.slope < params.min_slope || 2 * n < draws.len() {
         row.not_identifiable = Some(if 2 * n < draws.len() {
             format!(
                 "not identifiable from this campaign: the chain reads it in {n} of {} simulated campaigns",
@@ -729,9 +748,10 @@ fn lambda_row(
         });
         return row;
     }
+    // the target is the environment's own Λ: log t − b̂ misses it by the spread of the
+    // chain's log Λ about the truth's, plus the noise of b̂'s mean
     let centre = raw.ln() - b;
-    let s = moments_of(&chain).1;
-    let sd = (s * s * inflate * inflate + b_sd * b_sd / n as f64).sqrt();
+    let sd = b_sd * (1.0 + 1.0 / n as f64).sqrt();
     row.value = centre.exp();
     let half = tq * sd;
     row.interval = half

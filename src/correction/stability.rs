@@ -30,8 +30,8 @@ use std::collections::BTreeMap;
 const SUBSAMPLE: f64 = 0.8;
 
 /// The partition stability of `mpcs` labelled `labels` (`None` for a diffuse MPC), their
-/// poses' headings `headings_deg`, clustered with `params`; `resamples` bootstrap
-/// replicates seeded by `seed`.
+/// poses' headings `headings_deg`, clustered with `params`; `resamples` subsamples
+/// seeded by `seed`.
 pub fn partition_stability(
     mpcs: &[Mpc],
     labels: &[Option<usize>],

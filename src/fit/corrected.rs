@@ -34,7 +34,7 @@ impl CorrectedQuantity {
 }
 
 /// The partition stability of the data's clustering: the adjusted Rand index between the
-/// chain's partition of each position and its partition of bootstrap resamples of that
+/// chain's partition of each position and its partition of random 80 % subsamples of that
 /// position's MPCs (same points compared).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PartitionStability {
@@ -42,7 +42,7 @@ pub struct PartitionStability {
     pub per_position: Vec<f64>,
     /// The MPC-weighted mean over positions.
     pub overall: f64,
-    /// Resamples per position.
+    /// Subsamples per position.
     pub resamples: usize,
 }
 
@@ -53,7 +53,7 @@ pub struct Corrected {
     pub quantities: Vec<CorrectedQuantity>,
     /// Simulated draws per evaluation (R).
     pub draws: usize,
-    /// Newton iterations run after the start.
+    /// Steps made after the start (two candidates each).
     pub iterations: usize,
     /// Whether the remaining bias fell within the simulation noise of its mean.
     pub settled: bool,
@@ -119,7 +119,7 @@ impl Corrected {
     /// One line for the table's foot: the method, R, the iterations and the stability.
     pub fn summary_line(&self) -> String {
         let mut s = format!(
-            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} Newton iteration{} ({}), {:.0} s; a quantity whose binding slope is below {} is not identifiable from this campaign.",
+            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} step{} ({}), {:.0} s; a quantity whose binding slope is below {} is not identifiable from this campaign.",
             self.chain_runs,
             self.draws,
             self.iterations,
@@ -127,7 +127,7 @@ impl Corrected {
             if self.settled {
                 "settled within the simulation noise"
             } else {
-                "stopped at the iteration cap"
+                "stopped at the step cap, or nothing identifiable to move"
             },
             self.seconds,
             self.min_slope

@@ -332,7 +332,7 @@ pub struct CorrectionMeta {
     pub method: String,
     /// Simulated draws per evaluation point (R).
     pub draws: usize,
-    /// Newton iterations after the start.
+    /// Steps made after the start.
     pub iterations: usize,
     /// Whether the remaining bias fell within the simulation noise.
     pub settled: bool,

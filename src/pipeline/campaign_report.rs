@@ -424,16 +424,17 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
             drop(to_side);
             let mut a = analyse(&s.campaign, &s.em, &s.energy_path, work, true)?;
             timings.0.append(&mut a.timings);
+            let mut correction_note = None;
             if let Some(p) = job.correction {
                 let label = format!("bias correction (R = {})", p.draws);
-                timings.time(&label, || {
-                    correct_fit(&s, &mut a, &p.check()?, job.progress);
-                    Ok(())
+                correction_note = timings.time(&label, || {
+                    Ok(correct_fit(&s, &mut a, &p.check()?, job.progress))
                 })?;
             }
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
             })?;
+            let table1 = table1 + correction_note.as_deref().unwrap_or("");
             let check = timings.time("check (20 synth draws)", || {
                 Ok(check_section(job, &s, &a, progress))
             })?;
@@ -609,15 +610,16 @@ fn check_section(job: &Job, s: &Data, a: &Analysis, progress: Progress) -> Secti
 
 /// The bias correction of the analysis's fit (`crate::correction`) with the partition
 /// stability of its clustering, kept in the fit; a correction that fails leaves the fit as
-/// the paper's method gave it, and Table 1 then has no corrected column.
+/// the paper's method gave it (Table 1 then has no corrected column) and returns the
+/// page's note saying why.
 fn correct_fit(
     s: &Data,
     a: &mut Analysis,
     p: &crate::correction::CorrectionValid,
     progress: Progress,
-) {
+) -> Option<String> {
     let Ok(f) = &mut a.fit else {
-        return;
+        return None;
     };
     let cb = progress("correct", 0);
     let run = || -> Result<crate::fit::corrected::Corrected> {
@@ -641,8 +643,12 @@ fn correct_fit(
         )?);
         Ok(c)
     };
-    if let Ok(c) = run() {
-        f.correction = Some(c);
+    match run() {
+        Ok(c) => {
+            f.correction = Some(c);
+            None
+        }
+        Err(e) => Some(page::failed("the bias correction", &e)),
     }
 }
 
@@ -663,7 +669,9 @@ fn table1_section(s: &Data, a: &Analysis, work: &Path, out: &Path) -> Result<Str
     };
     let table1 = match &a.fit {
         Ok(f) => {
-            f.model_out().save(&out.join("fitted_model.toml"))?;
+            let model = f.model_out();
+            model.check()?;
+            model.save(&out.join("fitted_model.toml"))?;
             crate::fit::channel::write_table1(&out.join("table1.md"), name, f, truth.as_ref())?;
             let plots = write_fit_plots(f, out)?;
             page::table1_fitted_html(name, &table1_html_rows(f, truth.as_ref()), &plots)

@@ -294,10 +294,15 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
             fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
             if let Some(p) = &correction {
                 crate::correction::check_correctable(&fit, &cmd.clusters)?;
+                // the cheap reads first: a bad input fails before minutes of simulation
+                let stability_inputs = data_stability_inputs(&cmd.clusters)?;
+                if let Some(dir) = &cmd.truth {
+                    crate::fit::channel::fit_truth(dir, &c, &params)?;
+                }
                 let mut corr = crate::correction::correct(&c, &em, &energy, &fit, p, &|d, t| {
                     progress(d, t)
                 })?;
-                corr.stability = Some(data_stability(&cmd.clusters, &c, p)?);
+                corr.stability = Some(data_stability(stability_inputs, &c, p)?);
                 fit.correction = Some(corr);
             }
         }
@@ -316,18 +321,18 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
         None => None,
     };
     // the table first, the model last: a model file on disk means the run completed
+    let out = fit.model_out();
+    out.check()?;
     crate::fit::channel::write_table1(&cmd.table, &c.manifest.name, &fit, truth.as_ref())?;
-    fit.model_out().save(&cmd.out)?;
+    out.save(&cmd.out)?;
     Ok(FitSummary { fit, truth })
 }
 
-/// The partition stability of a clustered MPC table (its `cluster_id` against the default
-/// clustering of bootstrap resamples, the campaign's sector; `crate::correction::stability`).
-pub fn data_stability(
-    clusters: &Path,
-    c: &Campaign,
-    p: &crate::correction::CorrectionValid,
-) -> Result<crate::fit::corrected::PartitionStability> {
+/// The MPCs of a clustered MPC table and their `cluster_id` labels (None for −1).
+type Labelled = (Vec<crate::mpc::Mpc>, Vec<Option<usize>>);
+
+/// Read a clustered MPC table's MPCs and labels for [`data_stability`].
+fn data_stability_inputs(clusters: &Path) -> Result<Labelled> {
     let mpcs = crate::mpc::read_mpcs(clusters)?;
     let df = crate::table::read_parquet(clusters, None)?;
     let ids = crate::table::i64_column(clusters, &df, "cluster_id")?;
@@ -335,6 +340,17 @@ pub fn data_stability(
         .iter()
         .map(|&i| (i >= 0).then_some(i as usize))
         .collect();
+    Ok((mpcs, labels))
+}
+
+/// The partition stability of a clustered table's MPCs and labels (its `cluster_id`
+/// against the default clustering of subsamples, the campaign's sector;
+/// `crate::correction::stability`).
+pub fn data_stability(
+    (mpcs, labels): Labelled,
+    c: &Campaign,
+    p: &crate::correction::CorrectionValid,
+) -> Result<crate::fit::corrected::PartitionStability> {
     let headings: Vec<f64> = c.manifest.poses.iter().map(|p| p.heading_deg).collect();
     let params = crate::cluster::ClusterParams::default()
         .sector_deg(c.manifest.directions.width_deg())
