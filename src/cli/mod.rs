@@ -562,7 +562,7 @@ pub struct ExploreArgs {
         hide_possible_values = true
     )]
     pub data: ExploreData,
-    /// Model file (with --data model).
+    /// Model file (--data model; given alone it means model data).
     #[arg(long, required_if_eq("data", "model"))]
     pub model: Option<PathBuf>,
     /// Energy-model constants (TOML; defaults in docs/explore.md).

@@ -277,11 +277,11 @@ impl ExperimentArgs {
 }
 
 impl ExploreArgs {
-    /// `explore`'s command (`--model` without `--data model` is ignored).
+    /// `explore`'s command (`--model` means model data, with or without `--data model`).
     pub fn into_command(self) -> commands::Explore {
         let data = match (self.data, self.model) {
-            (ExploreData::Model, Some(m)) => pradar::explore::DataKind::Model(m),
-            _ => pradar::explore::DataKind::Sweeps,
+            (_, Some(m)) => pradar::explore::DataKind::Model(m),
+            (ExploreData::Model | ExploreData::Sweeps, None) => pradar::explore::DataKind::Sweeps,
         };
         commands::Explore {
             campaign: self.campaign,

@@ -171,7 +171,7 @@ impl ParamGuard for ExploreParams {
         }
         for &n in &self.elements {
             let s = (n as f64).sqrt().round() as usize;
-            if n == 0 || s * s != n {
+            if n == 0 || s.checked_mul(s) != Some(n) {
                 return Err(Error::param(
                     "--elements",
                     format!("{n} is not a perfect square (e.g. 16, 36, 64, 100, 196, 400)"),
@@ -188,6 +188,13 @@ impl ParamGuard for ExploreParams {
             if v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
                 return Err(Error::param(name, "values must be finite and > 0"));
             }
+        }
+        // the band is drawn inside 57.5–63.5 GHz: more than 6 GHz is no personal radar's
+        if self.bandwidth_ghz.iter().any(|x| *x > 6.0) {
+            return Err(Error::param(
+                "--bandwidth-ghz",
+                "values must be at most 6 GHz (57.5–63.5 GHz)",
+            ));
         }
         if self.tx_power_dbm.iter().any(|x| !x.is_finite()) {
             return Err(Error::param("--tx-power-dbm", "values must be finite"));

@@ -63,11 +63,13 @@ impl fmt::Display for ExploreSummary {
 /// Run `pradar explore`.
 pub fn explore(cmd: &Explore, progress: Progress) -> Result<ExploreSummary> {
     let params = cmd.params.check()?;
+    // a constant out of range names the file it came from
     let model = match &cmd.energy_model {
-        Some(p) => EnergyModel::load(p)?,
-        None => EnergyModel::default(),
-    }
-    .check()?;
+        Some(p) => EnergyModel::load(p)?
+            .check()
+            .map_err(|e| crate::error::Error::input(p, e.to_string()))?,
+        None => EnergyModel::default().check()?,
+    };
     std::fs::create_dir_all(&cmd.out).map_err(|e| crate::error::Error::io(&cmd.out, e))?;
     let campaign = match &cmd.campaign {
         Some(c) => c.clone(),
