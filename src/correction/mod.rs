@@ -445,11 +445,14 @@ fn solve_binding(
             reasons[i] = Some(format!(
                 "not identifiable from this campaign: the chain reads it in {n} of {r_draws} simulated campaigns"
             ));
-        } else if slope.is_nan() || slope < params.min_slope {
+        } else if slope.is_nan() {
+            reasons[i] = Some(
+                "not identifiable from this campaign: no slope could be measured (the step left the quantity's range, or no draw read it twice)".to_string(),
+            );
+        } else if slope < params.min_slope {
             reasons[i] = Some(format!(
-                "not identifiable from this campaign: the chain's estimate moves {} times the quantity's move (slope below {})",
-                crate::error::short(slope),
-                params.min_slope
+                "not identifiable from this campaign: the chain's estimate moves {:.2} times the quantity's move (slope below {})",
+                slope, params.min_slope
             ));
         }
     }
@@ -739,10 +742,12 @@ fn lambda_row(
                 "not identifiable from this campaign: the chain reads it in {n} of {} simulated campaigns",
                 draws.len()
             )
+        } else if !row.slope.is_finite() {
+            "not identifiable from this campaign: no slope along d_c could be measured (d_c not moved, or the true Λ did not move with it)".to_string()
         } else {
             format!(
-                "not identifiable from this campaign: the chain's Λ moves {} times the true Λ along d_c (slope below {})",
-                crate::error::short(row.slope),
+                "not identifiable from this campaign: the chain's Λ moves {:.2} times the true Λ along d_c (slope below {})",
+                row.slope,
                 params.min_slope
             )
         });
