@@ -21,7 +21,7 @@ its largest magnitude. Each folder also gets
   poses.csv     ``Pos,X [m],Y [m],Heading [deg]`` then ``P01,0.5,-0.3,0`` ... (the manifest's
                 [[poses]])
   <layout>      the simulated campaign's layout, copied
-  base.toml     name (lab-<sim name>-keysight / -rs), [array] as simulated, [processing] with
+  base.toml     name (lab-<sim name>-keysight / -rs), the simulated seed, [array] as simulated, [processing] with
                 every field the simulated manifest has (noise_from_ns always written), and
                 [sweeps] parameter = "S21"
 
@@ -174,6 +174,9 @@ def make(sim_manifest: Path, out: Path) -> None:
         base = [
             "# What the sweep files cannot tell pradar import (scripts/lab_folders.py).",
             "name = " + toml_value(f"lab-{m['name']}-{suffix}"),
+            # the simulated campaign's seed: the report's seeded steps (the check's draws,
+            # the bias correction's simulated campaigns) then draw what the simulated report drew
+            "seed = " + toml_value(m["seed"]),
             "",
             "[array]",
         ]

@@ -116,10 +116,11 @@ impl Corrected {
         self.quantities.iter().find(|q| q.key == key)
     }
 
-    /// One line for the table's foot: the method, R, the iterations and the stability.
+    /// One line for the table's foot: the method, R, the steps and the stability (no wall
+    /// time: the same inputs give the same bytes).
     pub fn summary_line(&self) -> String {
         let mut s = format!(
-            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} step{} ({}), {:.0} s; a quantity whose binding slope is below {} is not identifiable from this campaign.",
+            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} step{} ({}); a quantity whose binding slope is below {} is not identifiable from this campaign.",
             self.chain_runs,
             self.draws,
             self.iterations,
@@ -129,7 +130,6 @@ impl Corrected {
             } else {
                 "stopped at the step cap, or nothing identifiable to move"
             },
-            self.seconds,
             self.min_slope
         );
         if let Some(st) = &self.stability {
