@@ -75,17 +75,18 @@ const STEP_DEG: f64 = 3.0;
 /// Seeds of the extra environment draws (synth `--seed`), beside the campaign's 77.
 const DRAW_SEEDS: [u64; 5] = [101, 102, 103, 104, 105];
 
-/// A layout (its perimeter polygon) and the poses in it.
-struct Scene {
-    name: &'static str,
+/// A layout (its perimeter polygon) and the poses in it (the bias correction's closed
+/// loops, `tests/correction.rs`, use the same hall).
+pub(crate) struct Scene {
+    pub(crate) name: &'static str,
     /// Perimeter polygon, closed.
-    ring: Vec<[f64; 2]>,
-    poses: Vec<[f64; 3]>,
+    pub(crate) ring: Vec<[f64; 2]>,
+    pub(crate) poses: Vec<[f64; 3]>,
 }
 
 impl Scene {
     /// The 480 m × 12 m hall, 240 random poses at least 2.5 m from the walls.
-    fn hall() -> Scene {
+    pub(crate) fn hall() -> Scene {
         let hx = 240.0;
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let poses = (0..240)
@@ -143,7 +144,7 @@ impl Scene {
     }
 
     /// Write the layout and the campaign into `dir`; returns the manifest path.
-    fn write(&self, dir: &Path) -> PathBuf {
+    pub(crate) fn write(&self, dir: &Path) -> PathBuf {
         std::fs::create_dir_all(dir).unwrap();
         let coords: Vec<String> = self
             .ring
@@ -164,7 +165,7 @@ impl Scene {
     }
 }
 
-fn run(args: &[&str]) {
+pub(crate) fn run(args: &[&str]) {
     let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
         .args(args)
         .output()
@@ -176,7 +177,7 @@ fn run(args: &[&str]) {
     );
 }
 
-fn s(p: &Path) -> String {
+pub(crate) fn s(p: &Path) -> String {
     p.to_str().unwrap().to_string()
 }
 

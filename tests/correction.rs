@@ -21,6 +21,7 @@
 //!
 //! Figures and times of the runs: `docs/correction.md`.
 
+use crate::closed_loop::{run, s, Scene};
 use crate::common;
 use pradar::campaign::manifest::Campaign;
 use pradar::fit::channel::fit_truth;
@@ -29,24 +30,7 @@ use pradar::params::ParamGuard;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
-
-fn run(args: &[&str]) {
-    let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "pradar {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-}
-
-fn s(p: &Path) -> String {
-    p.to_str().unwrap().to_string()
-}
 
 /// The seven quantities scored (model-file keys and Table 1's names).
 const KEYS: [(&str, &str); 7] = [
@@ -75,24 +59,6 @@ fn model(l: f64, aoa: f64, dc: f64, dp: f64, g_cl: f64, g_ray: f64) -> ModelConf
     m
 }
 
-/// Write a layout ring and the poses as a campaign into `dir` (the closed-loop test's
-/// manifest: 400 elements, 3° steps, 801 points); returns the manifest.
-fn write_scene(dir: &Path, ring: &[[f64; 2]], poses: &[[f64; 3]]) -> PathBuf {
-    std::fs::create_dir_all(dir).unwrap();
-    let coords: Vec<String> = ring.iter().map(|[x, y]| format!("[{x:?},{y:?}]")).collect();
-    std::fs::write(
-        dir.join("hall.geojson"),
-        format!(
-            r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{"role":"perimeter","name":"hall","material":"concrete"}},"geometry":{{"type":"Polygon","coordinates":[[{}]]}}}}]}}"#,
-            coords.join(",")
-        ),
-    )
-    .unwrap();
-    let path = dir.join("campaign.toml");
-    std::fs::write(&path, common::hall_manifest(3.0, poses)).unwrap();
-    path
-}
-
 /// A scene and its generating model.
 struct Case {
     campaign: PathBuf,
@@ -118,39 +84,29 @@ fn case(name: &str, dir: &Path) -> Case {
                 }
                 poses.push([x, y, rng.gen_range(-180.0..180.0)]);
             }
-            let ring = [
-                [0.0, 0.0],
-                [70.0, 0.0],
-                [70.0, 10.0],
-                [10.0, 10.0],
-                [10.0, 40.0],
-                [0.0, 40.0],
-                [0.0, 0.0],
-            ];
-            (
-                write_scene(&d, &ring, &poses),
-                model(0.7, 12.0, 4.0, 0.25, 20.0, 5.0),
-            )
+            let scene = Scene {
+                name: "L-shaped hall, arms 70 m and 40 m",
+                ring: vec![
+                    [0.0, 0.0],
+                    [70.0, 0.0],
+                    [70.0, 10.0],
+                    [10.0, 10.0],
+                    [10.0, 40.0],
+                    [0.0, 40.0],
+                    [0.0, 0.0],
+                ],
+                poses,
+            };
+            (scene.write(&d), model(0.7, 12.0, 4.0, 0.25, 20.0, 5.0))
         }
         "hall1" | "hall2" | "hall3" => {
-            let hx = 240.0;
-            let mut rng = ChaCha8Rng::seed_from_u64(5);
-            let poses: Vec<[f64; 3]> = (0..240)
-                .map(|_| {
-                    [
-                        rng.gen_range(-(hx - 2.5)..(hx - 2.5)),
-                        rng.gen_range(-3.5..3.5),
-                        rng.gen_range(-180.0..180.0),
-                    ]
-                })
-                .collect();
-            let ring = [[-hx, -6.0], [hx, -6.0], [hx, 6.0], [-hx, 6.0], [-hx, -6.0]];
             let m = match name {
                 "hall1" => common::hall_model(1.0, 8.0, 6.0),
                 "hall2" => common::hall_model(0.43, 16.9, 8.0),
                 _ => common::hall_model(0.2, 30.0, 10.0),
             };
-            (write_scene(&d, &ring, &poses), m)
+            // the closed-loop test's 480 m hall and its 240 poses
+            (Scene::hall().write(&d), m)
         }
         z if z.starts_with("zoo:") => {
             let zoo = dir.join("zoo");

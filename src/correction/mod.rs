@@ -235,9 +235,17 @@ impl<'a> Chain<'a> {
         let mut e = self.sim.energies(model, seed)?;
         let (nd, nb) = (self.em.directions(), self.em.bins);
         self.em.meta.mask_missing(nd, nb, &mut e);
+        // the measured table's axes and metadata with the drawn energies (cloning the
+        // whole table would copy its energies once per run only to drop them)
+        let em = self.em;
         let drawn = EnergyMatrix {
+            meta: em.meta.clone(),
+            positions: em.positions,
+            angles_rel_deg: em.angles_rel_deg.clone(),
+            headings_deg: em.headings_deg.clone(),
+            bins: em.bins,
+            first: em.first,
             data: e,
-            ..self.em.clone()
         };
         let nan = Draw {
             t: [f64::NAN; 7],
