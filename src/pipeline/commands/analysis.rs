@@ -287,6 +287,14 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
     let params = cmd.params.check()?;
     let correction = cmd.correction.map(|p| p.check()).transpose()?;
     let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
+    let fit_truth = || -> Result<Option<ChannelFit>> {
+        (cmd.truth.as_ref())
+            .map(|dir| crate::fit::channel::fit_truth(dir, &c, &params))
+            .transpose()
+    };
+    // read before the correction when it runs (a bad folder fails before minutes of
+    // simulation), else after the levels
+    let mut truth_read = None;
     match energy {
         Some(energy) => {
             let em = crate::energy::EnergyMatrix::read(&energy)?;
@@ -296,9 +304,7 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
                 crate::correction::check_correctable(&fit, &cmd.clusters)?;
                 // the cheap reads first: a bad input fails before minutes of simulation
                 let stability_inputs = data_stability_inputs(&cmd.clusters)?;
-                if let Some(dir) = &cmd.truth {
-                    crate::fit::channel::fit_truth(dir, &c, &params)?;
-                }
+                truth_read = Some(fit_truth()?);
                 let mut corr = crate::correction::correct(&c, &em, &energy, &fit, p, &|d, t| {
                     progress(d, t)
                 })?;
@@ -316,9 +322,9 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
             ))
         }
     }
-    let truth = match &cmd.truth {
-        Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),
-        None => None,
+    let truth = match truth_read {
+        Some(t) => t,
+        None => fit_truth()?,
     };
     // the table first, the model last: a model file on disk means the run completed
     let out = fit.model_out();
