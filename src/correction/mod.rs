@@ -34,7 +34,16 @@
 //! common draws. Its diagonal Jᵢᵢ is quantity i's own slope; below `min_slope` (0.25) the
 //! quantity is not identifiable — the chain's estimate barely moves with it — and it is
 //! held at its raw value (drawn as stated, flagged in the model file), as is one the chain
-//! reads in fewer than half of the draws. Then steps on the identifiable set S from the
+//! reads in fewer than half of the draws. The fold check, in the same batch: each
+//! quantity also at 1/F and F times its fitted value (F = `far_factor`, 3; Γ's rate
+//! likewise, from rate 0 only up), on the first ⌈R/3⌉ (at least 2) of the common draws;
+//! the secant slope (mean change of T̄ᵢ over those draws / the move) below `min_slope` on
+//! either side flags the quantity too: values a factor F apart read alike, so the data's
+//! value may sit on either branch of a fold. Why: the local slope alone cannot see a fold —
+//! on zoo `z01-office` the chain reads d_c 7.6 m at the truth 1.42 m and again when
+//! simulated at 7.6 m, with slope 1.46 there (`docs/correction.md`). A flagged far point
+//! costs ⌈R/3⌉ runs; a side outside the schema's range is not checked. Then steps on the
+//! identifiable set S from the
 //! best point so far, two candidates evaluated together at each: the Levenberg–Marquardt
 //! step (Levenberg 1944; Marquardt 1963) Δ = (JᵀWJ + μ·diag(JᵀWJ))⁻¹ JᵀW (t − T̄),
 //! W = diag(1/sⱼ²) with sⱼ the draws' spread of estimate j, μ from 1, divided by 3 after
@@ -49,8 +58,8 @@
 //! they dominate (the unit test's function), yet on that hall the diagonal steps lowered
 //! the remaining bias to 38 where the damped whole-J steps reached 57 (the function is
 //! rugged over a step: K-means' choices jump): `docs/correction.md`. Cost:
-//! R·(1 + |S| + 2·iterations) chain runs; the defaults (R 8, 3 iterations) make at most
-//! 112.
+//! R·(1 + n + 2·iterations) + ⌈R/3⌉·2n chain runs for n quantities moved; the defaults
+//! (R 8, 3 iterations, n = 7) make at most 154.
 //!
 //! The interval. Linearised at the kept point û, the corrected value moves as
 //! (tᵢ − T̄ᵢ)/Jᵢᵢ (the diagonal: the whole J⁻¹ carries its noise into every interval), and the chain's estimate on a campaign drawn at û scatters as the R
@@ -307,6 +316,27 @@ impl<'a> Chain<'a> {
     }
 }
 
+/// Whether `PRADAR_CORRECTION_TRACE` asks for the iteration's trace on stderr.
+fn trace_on() -> bool {
+    std::env::var_os("PRADAR_CORRECTION_TRACE").is_some()
+}
+
+/// Quantity `i`'s far points from its fitted value `u` (natural scale): the quantity at
+/// 1/`factor` and `factor` times its value (the rate 1/Γ likewise; from rate 0, Γ = ∞,
+/// only up, to `factor` slope steps `step`), inside the schema's range; None for a side
+/// the range leaves no room on.
+fn far_points(i: usize, u: f64, step: f64, factor: f64) -> [Option<f64>; 2] {
+    let (down, up) = match MOVED[i].1 {
+        Scale::Log => (u - factor.ln(), u + factor.ln()),
+        Scale::Rate if u <= 0.0 => (u, factor * step),
+        Scale::Rate => (u / factor, (u * factor).max(factor * step)),
+    };
+    [down, up].map(|v| {
+        let v = within_bounds(i, v);
+        ((v - u).abs() > 1e-9).then_some(v)
+    })
+}
+
 /// The seed of draw r.
 fn draw_seed(seed: u64, r: usize) -> u64 {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
@@ -414,18 +444,37 @@ fn solve_binding(
     active: &[usize],
     steps: &[f64],
     params: &CorrectionValid,
-    mut evaluate: impl FnMut(&[[f64; 7]]) -> Result<Vec<Vec<Draw>>>,
+    mut evaluate: impl FnMut(&[([f64; 7], usize)]) -> Result<Vec<Vec<Draw>>>,
 ) -> Result<Solved> {
-    // the start and the slopes, one batch
+    // the start, the slopes and the far points, one batch
     let t = *t;
+    let r_draws = params.draws;
     let mut points = vec![t];
     for &i in active {
         let mut u = t;
         u[i] = within_bounds(i, u[i] + steps[i]);
         points.push(u);
     }
-    let batch = evaluate(&points)?;
-    let r_draws = params.draws;
+    // the far points: each quantity at 1/F and F times the fitted value (fewer draws)
+    let far: Vec<(usize, usize, [f64; 7])> = active
+        .iter()
+        .flat_map(|&i| {
+            far_points(i, t[i], steps[i], params.far_factor)
+                .into_iter()
+                .enumerate()
+                .filter_map(move |(side, v)| {
+                    let mut u = t;
+                    u[i] = v?;
+                    Some((i, side, u))
+                })
+        })
+        .collect();
+    let far_draws = params.far_draws();
+    let asked: Vec<([f64; 7], usize)> = (points.iter().map(|u| (*u, r_draws)))
+        .chain(far.iter().map(|(_, _, u)| (*u, far_draws)))
+        .collect();
+    let mut batch = evaluate(&asked)?;
+    let far_batch = batch.split_off(points.len());
     let start = &batch[0];
     // J[j][i]: the mean over common draws of the change of T_j per unit step of u_i
     let mut jac = vec![vec![0.0; MOVED.len()]; MOVED.len()];
@@ -464,12 +513,41 @@ fn solve_binding(
             ));
         }
     }
+    // the secants to the far points, common draws: a fold of the binding function
+    for ((i, side, u), moved) in far.iter().zip(&far_batch) {
+        let (i, side) = (*i, *side);
+        if reasons[i].is_some() {
+            continue;
+        }
+        let d: Vec<f64> = (start.iter().zip(moved))
+            .map(|(a, b)| b.t[i] - a.t[i])
+            .filter(|x| x.is_finite())
+            .collect();
+        // the chain reads nothing there: the far point is told apart from the data
+        if d.is_empty() {
+            continue;
+        }
+        let secant = moments_of(&d).0 / (u[i] - t[i]);
+        if secant < params.min_slope {
+            let f = params.far_factor;
+            reasons[i] = Some(format!(
+                "not identifiable from this campaign: between the fitted value and {} it the chain's estimate moves {:.2} times the quantity's move (secant slope below {}; local slope {:.2}): values that far apart read alike",
+                if side == 0 { format!("1/{f} times") } else { format!("{f} times") },
+                secant,
+                params.min_slope,
+                jac[i][i]
+            ));
+        }
+        if trace_on() {
+            eprintln!("far {i} side {side} u {} secant {secant:.3}", u[i]);
+        }
+    }
     let set: Vec<usize> = active
         .iter()
         .copied()
         .filter(|&i| reasons[i].is_none())
         .collect();
-    let trace = std::env::var_os("PRADAR_CORRECTION_TRACE").is_some();
+    let trace = trace_on();
     if trace {
         eprintln!("t      {:?}", t);
         for (k, row) in jac.iter().enumerate() {
@@ -522,7 +600,8 @@ fn solve_binding(
                 u
             })
             .collect();
-        let evaluated = evaluate(&candidates)?;
+        let asked: Vec<([f64; 7], usize)> = candidates.iter().map(|u| (*u, r_draws)).collect();
+        let evaluated = evaluate(&asked)?;
         iterations += 1;
         let mut improved_whole = false;
         for (c, (u, draws)) in candidates.iter().zip(evaluated).enumerate() {
@@ -595,12 +674,19 @@ pub fn correct(
             Scale::Rate => (params.step * t[j]).max(1.0 / span_ns),
         })
         .collect();
-    let total = r_draws * (1 + active.len() + 2 * params.iterations);
+    let far_runs: usize = (active.iter())
+        .map(|&i| {
+            let n = far_points(i, t[i], steps[i], params.far_factor);
+            n.iter().flatten().count()
+        })
+        .sum();
+    let total =
+        r_draws * (1 + active.len() + 2 * params.iterations) + params.far_draws() * far_runs;
     let done = AtomicUsize::new(0);
     progress(0, total);
-    let evaluate = |points: &[[f64; 7]]| -> Result<Vec<Vec<Draw>>> {
-        let jobs: Vec<(usize, usize)> = (0..points.len())
-            .flat_map(|p| (0..r_draws).map(move |r| (p, r)))
+    let evaluate = |points: &[([f64; 7], usize)]| -> Result<Vec<Vec<Draw>>> {
+        let jobs: Vec<(usize, usize)> = (points.iter().enumerate())
+            .flat_map(|(p, (_, n))| (0..*n).map(move |r| (p, r)))
             .collect();
         // a few runs per thread at a time, so progress is called from this thread only
         let chunk = 2 * rayon::current_num_threads().max(1);
@@ -608,7 +694,7 @@ pub fn correct(
         for part in jobs.chunks(chunk) {
             let drawn: Vec<Draw> = part
                 .par_iter()
-                .map(|&(p, r)| chain.run(&model_at(&base, &points[p]), seeds[r]))
+                .map(|&(p, r)| chain.run(&model_at(&base, &points[p].0), seeds[r]))
                 .collect::<Result<_>>()?;
             out.extend(drawn);
             progress(
@@ -616,7 +702,15 @@ pub fn correct(
                 total,
             );
         }
-        Ok(out.chunks(r_draws).map(|c| c.to_vec()).collect())
+        let mut rest = out.as_slice();
+        Ok(points
+            .iter()
+            .map(|(_, n)| {
+                let (head, tail) = rest.split_at(*n);
+                rest = tail;
+                head.to_vec()
+            })
+            .collect())
     };
     let Solved {
         jac,
@@ -847,8 +941,8 @@ mod tests {
                 calls += points.len();
                 Ok(points
                     .iter()
-                    .map(|u| {
-                        (0..params.draws)
+                    .map(|(u, n)| {
+                        (0..*n)
                             .map(|r| Draw {
                                 t: binding(u, r),
                                 log_lambda_chain: 0.0,
@@ -878,7 +972,64 @@ mod tests {
         }
         // the flat quantity stays where the data put it
         assert_eq!(solved.u_hat[6], data[6]);
-        assert_eq!(calls, 8 + 2 * solved.iterations);
+        // the start, 7 slopes, 14 far points (every quantity has room both ways)
+        assert_eq!(calls, 8 + 14 + 2 * solved.iterations);
+    }
+
+    /// A binding function that folds: quantity 2 reads the same (1.4) at every value
+    /// below 1.4, so data drawn at 0.5 read 1.4, and at 1.4 the local slope is 1 (the step
+    /// goes up). The fold check (at a third of it) flags it with its secant; the linear
+    /// ones, with slope 1 both ways, are kept.
+    #[test]
+    fn the_fold_check_flags_a_quantity_that_reads_alike_far_below() {
+        let binding = |u: &[f64; 7], r: usize| -> [f64; 7] {
+            let mut t = *u;
+            t[2] = u[2].max(1.4);
+            for (j, x) in t.iter_mut().enumerate() {
+                *x += 0.005 * ((r * 7 + j) as f64).sin();
+            }
+            t
+        };
+        let truth = [-0.3, 2.5, 0.5, -1.4, 0.05, 1.6, 1.8];
+        let data = binding(&truth, 99);
+        let params = CorrectionValid::default();
+        let solved = solve_binding(
+            &data,
+            &[0, 1, 2, 3, 4, 5, 6],
+            &[0.22, 0.22, 0.22, 0.22, 0.01, 0.22, 0.22],
+            &params,
+            |points| {
+                Ok(points
+                    .iter()
+                    .map(|(u, n)| {
+                        (0..*n)
+                            .map(|r| Draw {
+                                t: binding(u, r),
+                                log_lambda_chain: 0.0,
+                                log_lambda_truth: 0.0,
+                            })
+                            .collect()
+                    })
+                    .collect())
+            },
+        )
+        .unwrap();
+        assert!((solved.jac[2][2] - 1.0).abs() < 0.05, "{}", solved.jac[2][2]);
+        let why = solved.reasons[2].as_deref().expect("d_c flagged");
+        assert!(why.contains("1/3 times") && why.contains("0.00"), "{why}");
+        assert_eq!(solved.set, vec![0, 1, 3, 4, 5, 6], "{:?}", solved.reasons);
+        // held where the data put it
+        assert_eq!(solved.u_hat[2], data[2]);
+    }
+
+    #[test]
+    fn far_points_are_a_factor_either_side_inside_the_range() {
+        let [d, u] = far_points(0, 0.0, 0.2, 3.0);
+        assert!((d.unwrap() + 3f64.ln()).abs() < 1e-12 && (u.unwrap() - 3f64.ln()).abs() < 1e-12);
+        // Γ = ∞ (rate 0): only up, to three slope steps
+        assert_eq!(far_points(4, 0.0, 0.01, 3.0), [None, Some(0.03)]);
+        let [d, u] = far_points(4, 0.1, 0.025, 3.0);
+        assert!((d.unwrap() - 0.1 / 3.0).abs() < 1e-12 && (u.unwrap() - 0.3).abs() < 1e-12);
     }
 
     #[test]

@@ -13,6 +13,12 @@
 //! * `min_slope` — a quantity whose own slope is below this is not identifiable: the
 //!   chain's estimate moves by less than this fraction of the quantity's move, so the
 //!   data's sampling error is magnified more than 1/min_slope times. 0.25, a stated choice.
+//! * `far_factor` — F, how far the fold check looks: the binding function is also
+//!   evaluated with each quantity at 1/F and F times its fitted value (on
+//!   [`CorrectionParams::far_draws`] of the common draws), and a secant slope below
+//!   `min_slope` on either side flags the quantity as not identifiable (values that far
+//!   apart read alike). In [1.5, 10]; 3, a stated choice: the z01 office's d_c read the same
+//!   at 5.4 times apart (`docs/correction.md`).
 //! * `resamples` — random 80 % subsamples of each position's MPCs for the partition
 //!   stability (0: not measured).
 //! * `seed` — the draws' seed (default: the campaign's).
@@ -31,6 +37,8 @@ pub struct CorrectionParams {
     pub step: f64,
     /// Slope below which a quantity is not identifiable.
     pub min_slope: f64,
+    /// How far the fold check looks (the quantity at 1/F and F times its value).
+    pub far_factor: f64,
     /// Subsamples of the partition stability (0: none).
     pub resamples: usize,
     /// Seed of the draws (None: the campaign's).
@@ -51,6 +59,7 @@ impl Default for CorrectionParams {
             iterations: 3,
             step: 0.25,
             min_slope: 0.25,
+            far_factor: 3.0,
             resamples: 5,
             seed: None,
         }
@@ -67,6 +76,12 @@ impl CorrectionParams {
             resamples: 3,
             ..Default::default()
         }
+    }
+
+    /// Draws at each far point of the fold check: a third of R (common draws, so the
+    /// secant's noise is the difference's, not each point's), at least 2.
+    pub fn far_draws(&self) -> usize {
+        self.draws.div_ceil(3).max(2)
     }
 }
 
@@ -104,6 +119,12 @@ impl ParamGuard for CorrectionParams {
                 format!("must be in (0, 1), got {}", self.min_slope),
             ));
         }
+        if !(self.far_factor.is_finite() && (1.5..=10.0).contains(&self.far_factor)) {
+            return Err(Error::param(
+                "far_factor",
+                format!("must be in [1.5, 10], got {}", self.far_factor),
+            ));
+        }
         Ok(Valid::new(*self))
     }
 }
@@ -138,5 +159,12 @@ mod tests {
             ..d
         })
         .contains("min_slope"));
+        assert!(bad(CorrectionParams {
+            far_factor: 1.0,
+            ..d
+        })
+        .contains("far_factor"));
+        assert_eq!(CorrectionParams::default().far_draws(), 3);
+        assert_eq!(CorrectionParams::quick().far_draws(), 2);
     }
 }
