@@ -34,8 +34,8 @@
 //! common draws. Its diagonal Jᵢᵢ is quantity i's own slope; below `min_slope` (0.25) the
 //! quantity is not identifiable — the chain's estimate barely moves with it — and it is
 //! held at its raw value (drawn as stated, flagged in the model file), as is one the chain
-//! reads in fewer than half of the draws. The fold check, in the same batch: each
-//! quantity also at 1/F and F times its fitted value (F = `far_factor`, 3; Γ's rate
+//! reads in fewer than half of the draws. The fold check, a second batch on the
+//! quantities the local rule keeps: each also at 1/F and F times its fitted value (F = `far_factor`, 3; Γ's rate
 //! likewise, from rate 0 only up), on the first ⌈R/3⌉ (at least 2) of the common draws;
 //! the secant slope (mean change of T̄ᵢ over those draws / the move) below `min_slope` on
 //! either side flags the quantity too: values a factor F apart read alike, so the data's
@@ -58,8 +58,8 @@
 //! they dominate (the unit test's function), yet on that hall the diagonal steps lowered
 //! the remaining bias to 38 where the damped whole-J steps reached 57 (the function is
 //! rugged over a step: K-means' choices jump): `docs/correction.md`. Cost:
-//! R·(1 + n + 2·iterations) + ⌈R/3⌉·2n chain runs for n quantities moved; the defaults
-//! (R 8, 3 iterations, n = 7) make at most 154.
+//! R·(1 + n + 2·iterations) + ⌈R/3⌉·2m chain runs for n quantities moved, m of them kept
+//! by the local rule; the defaults (R 8, 3 iterations, n = 7) make at most 154.
 //!
 //! The interval. Linearised at the kept point û, the corrected value moves as
 //! (tᵢ − T̄ᵢ)/Jᵢᵢ (the diagonal: the whole J⁻¹ carries its noise into every interval), and the chain's estimate on a campaign drawn at û scatters as the R
@@ -446,7 +446,7 @@ fn solve_binding(
     params: &CorrectionValid,
     mut evaluate: impl FnMut(&[([f64; 7], usize)]) -> Result<Vec<Vec<Draw>>>,
 ) -> Result<Solved> {
-    // the start, the slopes and the far points, one batch
+    // the start and the slopes, one batch
     let t = *t;
     let r_draws = params.draws;
     let mut points = vec![t];
@@ -455,26 +455,7 @@ fn solve_binding(
         u[i] = within_bounds(i, u[i] + steps[i]);
         points.push(u);
     }
-    // the far points: each quantity at 1/F and F times the fitted value (fewer draws)
-    let far: Vec<(usize, usize, [f64; 7])> = active
-        .iter()
-        .flat_map(|&i| {
-            far_points(i, t[i], steps[i], params.far_factor)
-                .into_iter()
-                .enumerate()
-                .filter_map(move |(side, v)| {
-                    let mut u = t;
-                    u[i] = v?;
-                    Some((i, side, u))
-                })
-        })
-        .collect();
-    let far_draws = params.far_draws();
-    let asked: Vec<([f64; 7], usize)> = (points.iter().map(|u| (*u, r_draws)))
-        .chain(far.iter().map(|(_, _, u)| (*u, far_draws)))
-        .collect();
-    let mut batch = evaluate(&asked)?;
-    let far_batch = batch.split_off(points.len());
+    let batch = evaluate(&points.iter().map(|u| (*u, r_draws)).collect::<Vec<_>>())?;
     let start = &batch[0];
     // J[j][i]: the mean over common draws of the change of T_j per unit step of u_i
     let mut jac = vec![vec![0.0; MOVED.len()]; MOVED.len()];
@@ -513,7 +494,31 @@ fn solve_binding(
             ));
         }
     }
-    // the secants to the far points, common draws: a fold of the binding function
+    // the fold check on what the local rule keeps: each quantity at 1/F and F times the
+    // fitted value, on the first draws; the secants, common draws
+    let far: Vec<(usize, usize, [f64; 7])> = active
+        .iter()
+        .filter(|&&i| reasons[i].is_none())
+        .flat_map(|&i| {
+            far_points(i, t[i], steps[i], params.far_factor)
+                .into_iter()
+                .enumerate()
+                .filter_map(move |(side, v)| {
+                    let mut u = t;
+                    u[i] = v?;
+                    Some((i, side, u))
+                })
+        })
+        .collect();
+    let far_batch = if far.is_empty() {
+        Vec::new()
+    } else {
+        evaluate(
+            &far.iter()
+                .map(|(_, _, u)| (*u, params.far_draws()))
+                .collect::<Vec<_>>(),
+        )?
+    };
     for ((i, side, u), moved) in far.iter().zip(&far_batch) {
         let (i, side) = (*i, *side);
         if reasons[i].is_some() {
@@ -972,8 +977,8 @@ mod tests {
         }
         // the flat quantity stays where the data put it
         assert_eq!(solved.u_hat[6], data[6]);
-        // the start, 7 slopes, 14 far points (every quantity has room both ways)
-        assert_eq!(calls, 8 + 14 + 2 * solved.iterations);
+        // the start, 7 slopes, 12 far points (the six the local rule keeps, both ways)
+        assert_eq!(calls, 8 + 12 + 2 * solved.iterations);
     }
 
     /// A binding function that folds: quantity 2 reads the same (1.4) at every value
@@ -1014,7 +1019,11 @@ mod tests {
             },
         )
         .unwrap();
-        assert!((solved.jac[2][2] - 1.0).abs() < 0.05, "{}", solved.jac[2][2]);
+        assert!(
+            (solved.jac[2][2] - 1.0).abs() < 0.05,
+            "{}",
+            solved.jac[2][2]
+        );
         let why = solved.reasons[2].as_deref().expect("d_c flagged");
         assert!(why.contains("1/3 times") && why.contains("0.00"), "{why}");
         assert_eq!(solved.set, vec![0, 1, 3, 4, 5, 6], "{:?}", solved.reasons);
