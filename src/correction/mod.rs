@@ -791,6 +791,7 @@ pub fn correct(
         seconds: t0.elapsed().as_secs_f64(),
         seed,
         min_slope: params.min_slope,
+        far_factor: params.far_factor,
         stability: None,
     })
 }

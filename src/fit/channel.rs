@@ -779,6 +779,7 @@ mod tests {
             seconds: 3.0,
             seed: 9,
             min_slope: 0.25,
+            far_factor: 3.0,
             stability: None,
         });
         let t = crate::fit::table1::table(&f, None);

@@ -65,6 +65,8 @@ pub struct Corrected {
     pub seed: u64,
     /// The slope below which a quantity is not identifiable.
     pub min_slope: f64,
+    /// How far the fold check looked: secants to 1/F and F times each value.
+    pub far_factor: f64,
     /// The partition stability of the data's clustering, when measured.
     pub stability: Option<PartitionStability>,
 }
@@ -120,7 +122,7 @@ impl Corrected {
     /// time: the same inputs give the same bytes).
     pub fn summary_line(&self) -> String {
         let mut s = format!(
-            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} step{} ({}); a quantity whose binding slope is below {} is not identifiable from this campaign.",
+            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} step{} ({}); a quantity whose binding slope is below {} (at the fitted point, or as a secant to 1/{} or {} times it) is not identifiable from this campaign.",
             self.chain_runs,
             self.draws,
             self.iterations,
@@ -130,7 +132,9 @@ impl Corrected {
             } else {
                 "stopped at the step cap, or nothing identifiable to move"
             },
-            self.min_slope
+            self.min_slope,
+            self.far_factor,
+            self.far_factor
         );
         if let Some(st) = &self.stability {
             let low = st
