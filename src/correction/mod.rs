@@ -28,38 +28,37 @@
 //! R environments' random numbers, so differences between points are not drawn noise).
 //! t = the chain on the data (the fit's raw values), so u₀ = t.
 //!
-//! The iteration. One batch evaluates T̄ at u₀ and at u₀ + hᵢeᵢ for each quantity
-//! (h = ln 1.25 on the log scale; on Γ's rate 0.25 times the rate, at least the rate whose
-//! e-fold is the table's delay span): the Jacobian J of T̄ by forward differences of the
-//! common draws. Its diagonal Jᵢᵢ is quantity i's own slope; below `min_slope` (0.25) the
-//! quantity is not identifiable — the chain's estimate barely moves with it — and it is
-//! held at its raw value (drawn as stated, flagged in the model file), as is one the chain
-//! reads in fewer than half of the draws. The fold check, a second batch on the
-//! quantities the local rule keeps: each also at 1/F and F times its fitted value (F = `far_factor`, 3; Γ's rate
-//! likewise, from rate 0 only up), on the first ⌈R/3⌉ (at least 2) of the common draws;
-//! the secant slope (mean change of T̄ᵢ over those draws / the move) below `min_slope` on
+//! The iteration. One batch evaluates T̄ at u₀ and at u₀ + hᵢeᵢ for each quantity (h = ln
+//! 1.25 on the log scale; on Γ's rate 0.25 times the rate, at least the rate whose e-fold
+//! is the table's delay span): the Jacobian J of T̄ by forward differences of the common
+//! draws. Its diagonal Jᵢᵢ is quantity i's own slope; below `min_slope` (0.25) the quantity
+//! is not identifiable — the chain's estimate barely moves with it — and it is held at its
+//! raw value (drawn as stated, flagged in the model file), as is one the chain reads in
+//! fewer than half of the draws. The fold check, a second batch on the quantities the local
+//! rule keeps: each also at 1/F and F times its fitted value (F = `far_factor`, 3; Γ's rate
+//! likewise, from rate 0 only up), on the first ⌈R/3⌉ (at least 2) of the common draws; the
+//! secant slope (mean change of T̄ᵢ over those draws / the move) below `min_slope` on
 //! either side flags the quantity too: values a factor F apart read alike, so the data's
 //! value may sit on either branch of a fold. Why: the local slope alone cannot see a fold —
 //! on zoo `z01-office` the chain reads d_c 7.6 m at the truth 1.42 m and again when
-//! simulated at 7.6 m, with slope 1.46 there (`docs/correction.md`). A flagged far point
-//! costs ⌈R/3⌉ runs; a side outside the schema's range is not checked. Then steps on the
-//! identifiable set S from the
-//! best point so far, two candidates evaluated together at each: the Levenberg–Marquardt
-//! step (Levenberg 1944; Marquardt 1963) Δ = (JᵀWJ + μ·diag(JᵀWJ))⁻¹ JᵀW (t − T̄),
-//! W = diag(1/sⱼ²) with sⱼ the draws' spread of estimate j, μ from 1, divided by 3 after
-//! this step won and multiplied by 4 otherwise; and the diagonal step Δᵢ = (tᵢ − T̄ᵢ)/Jᵢᵢ.
-//! Each component at most a factor 2 (Γ's rate between half of itself and the larger of
-//! twice itself and itself plus two slope steps, so it can leave 0) and inside the
-//! schema's range. R draws per candidate, until every remaining bias
-//! |tⱼ − T̄ⱼ| is within the simulation noise of its mean sⱼ/√R (settled) or `iterations`
-//! steps are made; the point with the smallest Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. Why two:
-//! the binding function's cross terms are large and real on a 150-pose hall (d_p's
-//! estimate moves −3 times the AoA's log), so the diagonal alone cannot converge where
-//! they dominate (the unit test's function), yet on that hall the diagonal steps lowered
-//! the remaining bias to 38 where the damped whole-J steps reached 57 (the function is
-//! rugged over a step: K-means' choices jump): `docs/correction.md`. Cost:
-//! R·(1 + n + 2·iterations) + ⌈R/3⌉·2m chain runs for n quantities moved, m of them kept
-//! by the local rule; the defaults (R 8, 3 iterations, n = 7) make at most 154.
+//! simulated at 7.6 m, with slope 1.46 there (`docs/correction.md`). Each far point costs
+//! ⌈R/3⌉ runs; a side outside the schema's range is not checked. Then steps on the
+//! identifiable set S from the best point so far, two candidates evaluated together at
+//! each: the Levenberg–Marquardt step (Levenberg 1944; Marquardt 1963) Δ = (JᵀWJ +
+//! μ·diag(JᵀWJ))⁻¹ JᵀW (t − T̄), W = diag(1/sⱼ²) with sⱼ the draws' spread of estimate j, μ
+//! from 1, divided by 3 after this step won and multiplied by 4 otherwise; and the diagonal
+//! step Δᵢ = (tᵢ − T̄ᵢ)/Jᵢᵢ. Each component at most a factor 2 (Γ's rate between half of
+//! itself and the larger of twice itself and itself plus two slope steps, so it can leave
+//! 0) and inside the schema's range. R draws per candidate, until every remaining bias |tⱼ
+//! − T̄ⱼ| is within the simulation noise of its mean sⱼ/√R (settled) or `iterations` steps
+//! are made; the point with the smallest Σ ((tⱼ − T̄ⱼ)/(sⱼ/√R))² is kept. Why two: the
+//! binding function's cross terms are large and real on a 150-pose hall (d_p's estimate
+//! moves −3 times the AoA's log), so the diagonal alone cannot converge where they dominate
+//! (the unit test's function), yet on that hall the diagonal steps lowered the remaining
+//! bias to 38 where the damped whole-J steps reached 57 (the function is rugged over a
+//! step: K-means' choices jump): `docs/correction.md`. Cost: R·(1 + n + 2·iterations) +
+//! ⌈R/3⌉·2m chain runs for n quantities moved, m of them kept by the local rule; the
+//! defaults (R 8, 3 iterations, n = 7) make at most 154.
 //!
 //! The interval. Linearised at the kept point û, the corrected value moves as
 //! (tᵢ − T̄ᵢ)/Jᵢᵢ (the diagonal: the whole J⁻¹ carries its noise into every interval), and the chain's estimate on a campaign drawn at û scatters as the R
@@ -537,7 +536,12 @@ fn solve_binding(
             let f = params.far_factor;
             reasons[i] = Some(format!(
                 "not identifiable from this campaign: between the fitted value and {} it the chain's estimate moves {:.2} times the quantity's move (secant slope below {}; local slope {:.2}): values that far apart read alike",
-                if side == 0 { format!("1/{f} times") } else { format!("{f} times") },
+                // the rate's down side is Γ's up side
+                if (side == 0) == (MOVED[i].1 == Scale::Log) {
+                    format!("1/{f} times")
+                } else {
+                    format!("{f} times")
+                },
                 secant,
                 params.min_slope,
                 jac[i][i]
