@@ -911,6 +911,24 @@ mod tests {
         assert!(to_u(Scale::Log, f64::NAN).is_nan());
     }
 
+    /// A known binding function's draws at the points asked (each its number of draws).
+    fn draws_of(
+        binding: &impl Fn(&[f64; 7], usize) -> [f64; 7],
+        points: &[([f64; 7], usize)],
+    ) -> Vec<Vec<Draw>> {
+        (points.iter())
+            .map(|(u, n)| {
+                (0..*n)
+                    .map(|r| Draw {
+                        t: binding(u, r),
+                        log_lambda_chain: 0.0,
+                        log_lambda_truth: 0.0,
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
     /// The iteration on a known binding function T(u) = A u + b (+ a fixed per-draw
     /// noise, the common draws): A with a diagonal of 0.5–1.5 and cross terms of 0.1 (the
     /// diagonal alone does not converge there: row 5 is 0.5 against 0.5 off it), a
@@ -949,18 +967,7 @@ mod tests {
             &params,
             |points| {
                 calls += points.len();
-                Ok(points
-                    .iter()
-                    .map(|(u, n)| {
-                        (0..*n)
-                            .map(|r| Draw {
-                                t: binding(u, r),
-                                log_lambda_chain: 0.0,
-                                log_lambda_truth: 0.0,
-                            })
-                            .collect()
-                    })
-                    .collect())
+                Ok(draws_of(&binding, points))
             },
         )
         .unwrap();
@@ -988,19 +995,21 @@ mod tests {
 
     /// A binding function that folds: quantity 2 reads the same (1.4) at every value
     /// below 1.4, so data drawn at 0.5 read 1.4, and at 1.4 the local slope is 1 (the step
-    /// goes up). The fold check (at a third of it) flags it with its secant; the linear
-    /// ones, with slope 1 both ways, are kept.
+    /// goes up). The fold check (at a third of it) flags it with its secant; likewise Γ's
+    /// rate (4) reads 0.05 at every rate below, so at 3 times Γ; the linear ones, with
+    /// slope 1 both ways, are kept.
     #[test]
     fn the_fold_check_flags_a_quantity_that_reads_alike_far_below() {
         let binding = |u: &[f64; 7], r: usize| -> [f64; 7] {
             let mut t = *u;
             t[2] = u[2].max(1.4);
+            t[4] = u[4].max(0.05);
             for (j, x) in t.iter_mut().enumerate() {
                 *x += 0.005 * ((r * 7 + j) as f64).sin();
             }
             t
         };
-        let truth = [-0.3, 2.5, 0.5, -1.4, 0.05, 1.6, 1.8];
+        let truth = [-0.3, 2.5, 0.5, -1.4, 0.01, 1.6, 1.8];
         let data = binding(&truth, 99);
         let params = CorrectionValid::default();
         let solved = solve_binding(
@@ -1008,20 +1017,7 @@ mod tests {
             &[0, 1, 2, 3, 4, 5, 6],
             &[0.22, 0.22, 0.22, 0.22, 0.01, 0.22, 0.22],
             &params,
-            |points| {
-                Ok(points
-                    .iter()
-                    .map(|(u, n)| {
-                        (0..*n)
-                            .map(|r| Draw {
-                                t: binding(u, r),
-                                log_lambda_chain: 0.0,
-                                log_lambda_truth: 0.0,
-                            })
-                            .collect()
-                    })
-                    .collect())
-            },
+            |points| Ok(draws_of(&binding, points)),
         )
         .unwrap();
         assert!(
@@ -1031,9 +1027,12 @@ mod tests {
         );
         let why = solved.reasons[2].as_deref().expect("d_c flagged");
         assert!(why.contains("1/3 times") && why.contains("0.00"), "{why}");
-        assert_eq!(solved.set, vec![0, 1, 3, 4, 5, 6], "{:?}", solved.reasons);
-        // held where the data put it
-        assert_eq!(solved.u_hat[2], data[2]);
+        // Γ's rate falls to a third: Γ three times
+        let why = solved.reasons[4].as_deref().expect("Γ flagged");
+        assert!(why.contains("and 3 times") && why.contains("0.00"), "{why}");
+        assert_eq!(solved.set, vec![0, 1, 3, 5, 6], "{:?}", solved.reasons);
+        // held where the data put them
+        assert_eq!((solved.u_hat[2], solved.u_hat[4]), (data[2], data[4]));
     }
 
     #[test]
