@@ -321,19 +321,29 @@ fn trace_on() -> bool {
 }
 
 /// Quantity `i`'s far points from its fitted value `u` (natural scale): the quantity at
-/// 1/`factor` and `factor` times its value (the rate 1/Γ likewise; from rate 0, Γ = ∞,
-/// only up, to `factor` slope steps `step`), inside the schema's range; None for a side
-/// the range leaves no room on.
+/// 1/`factor` and `factor` times its value (the rate 1/Γ likewise, its up side at least
+/// `factor` slope steps `step`, so from rate 0, Γ = ∞, it goes only up), inside the
+/// schema's range; None for a side the range cuts to less than half its move (a secant
+/// over a sliver of the range would be the chain's noise over it).
 fn far_points(i: usize, u: f64, step: f64, factor: f64) -> [Option<f64>; 2] {
     let (down, up) = match MOVED[i].1 {
         Scale::Log => (u - factor.ln(), u + factor.ln()),
         Scale::Rate if u <= 0.0 => (u, factor * step),
         Scale::Rate => (u / factor, (u * factor).max(factor * step)),
     };
-    [down, up].map(|v| {
-        let v = within_bounds(i, v);
-        ((v - u).abs() > 1e-9).then_some(v)
+    [down, up].map(|target| {
+        let v = within_bounds(i, target);
+        ((v - u).abs() >= 0.5 * (target - u).abs() && (v - u).abs() > 1e-9).then_some(v)
     })
+}
+
+/// A quantity's value as the fold check's reason names it (∞ for Γ without excess decay).
+fn shown_value(v: f64) -> String {
+    if v.is_infinite() {
+        "∞".to_string()
+    } else {
+        format!("{v:.3}")
+    }
 }
 
 /// The seed of draw r.
@@ -527,21 +537,30 @@ fn solve_binding(
             .map(|(a, b)| b.t[i] - a.t[i])
             .filter(|x| x.is_finite())
             .collect();
-        // the chain reads nothing there: the far point is told apart from the data
+        // no draw reads it at both points (these few start draws, or the far point): the
+        // side is not checked
         if d.is_empty() {
             continue;
         }
         let secant = moments_of(&d).0 / (u[i] - t[i]);
         if secant < params.min_slope {
             let f = params.far_factor;
+            let scale = MOVED[i].1;
+            let (at, far_at) = (from_u(scale, t[i]), from_u(scale, u[i]));
+            // named by the values (the rate's down side is Γ's up side; its floor or a
+            // bound can make the move other than the factor)
+            let ratio = far_at / at;
+            let factor = if (ratio * f - 1.0).abs() < 1e-6 {
+                format!(", 1/{f} times it,")
+            } else if (ratio / f - 1.0).abs() < 1e-6 {
+                format!(", {f} times it,")
+            } else {
+                String::new()
+            };
             reasons[i] = Some(format!(
-                "not identifiable from this campaign: between the fitted value and {} it the chain's estimate moves {:.2} times the quantity's move (secant slope below {}; local slope {:.2}): values that far apart read alike",
-                // the rate's down side is Γ's up side
-                if (side == 0) == (MOVED[i].1 == Scale::Log) {
-                    format!("1/{f} times")
-                } else {
-                    format!("{f} times")
-                },
+                "not identifiable from this campaign: between the fitted value {} and {}{factor} the chain's estimate moves {:.2} times the quantity's move (secant slope below {}; local slope {:.2}): values that far apart read alike",
+                shown_value(at),
+                shown_value(far_at),
                 secant,
                 params.min_slope,
                 jac[i][i]
@@ -966,7 +985,7 @@ mod tests {
             &[0.22, 0.22, 0.22, 0.22, 0.01, 0.22, 0.22],
             &params,
             |points| {
-                calls += points.len();
+                calls += points.iter().map(|(_, n)| n).sum::<usize>();
                 Ok(draws_of(&binding, points))
             },
         )
@@ -989,8 +1008,13 @@ mod tests {
         }
         // the flat quantity stays where the data put it
         assert_eq!(solved.u_hat[6], data[6]);
-        // the start, 7 slopes, 12 far points (the six the local rule keeps, both ways)
-        assert_eq!(calls, 8 + 12 + 2 * solved.iterations);
+        // runs: R at the start and 7 slopes, ⌈R/3⌉ at 12 far points (the six the local
+        // rule keeps, both ways), R at two candidates per step
+        let r = params.draws;
+        assert_eq!(
+            calls,
+            8 * r + 12 * params.far_draws() + 2 * r * solved.iterations
+        );
     }
 
     /// A binding function that folds: quantity 2 reads the same (1.4) at every value
@@ -1026,10 +1050,26 @@ mod tests {
             solved.jac[2][2]
         );
         let why = solved.reasons[2].as_deref().expect("d_c flagged");
-        assert!(why.contains("1/3 times") && why.contains("0.00"), "{why}");
+        let dc = from_u(Scale::Log, data[2]);
+        let want = format!(
+            "between the fitted value {dc:.3} and {:.3}, 1/3 times it,",
+            dc / 3.0
+        );
+        assert!(
+            why.contains(&want) && why.contains("0.00 times the quantity"),
+            "{why}"
+        );
         // Γ's rate falls to a third: Γ three times
         let why = solved.reasons[4].as_deref().expect("Γ flagged");
-        assert!(why.contains("and 3 times") && why.contains("0.00"), "{why}");
+        let g = from_u(Scale::Rate, data[4]);
+        let want = format!(
+            "between the fitted value {g:.3} and {:.3}, 3 times it,",
+            3.0 * g
+        );
+        assert!(
+            why.contains(&want) && why.contains("0.00 times the quantity"),
+            "{why}"
+        );
         assert_eq!(solved.set, vec![0, 1, 3, 5, 6], "{:?}", solved.reasons);
         // held where the data put them
         assert_eq!((solved.u_hat[2], solved.u_hat[4]), (data[2], data[4]));
@@ -1043,6 +1083,14 @@ mod tests {
         assert_eq!(far_points(4, 0.0, 0.01, 3.0), [None, Some(0.03)]);
         let [d, u] = far_points(4, 0.1, 0.025, 3.0);
         assert!((d.unwrap() - 0.1 / 3.0).abs() < 1e-12 && (u.unwrap() - 0.3).abs() < 1e-12);
+        // at the schema's bounds: 1.2 rays per cluster has no room down (rays ≥ 1), an
+        // AoA of 100° keeps its up side cut at 180° (more than half the move)
+        let [d, u] = far_points(6, 1.2f64.ln(), 0.2, 3.0);
+        assert!(d.is_none() && (u.unwrap() - 3.6f64.ln()).abs() < 1e-12);
+        let [_, u] = far_points(1, 100f64.ln(), 0.2, 3.0);
+        assert!((u.unwrap() - 180f64.ln()).abs() < 1e-12);
+        // Γ at the schema's 10 µs (rate 1e-4): three times Γ is out of range
+        assert!(far_points(4, 1e-4, 1e-5, 3.0)[0].is_none());
     }
 
     #[test]

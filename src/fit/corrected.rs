@@ -122,7 +122,7 @@ impl Corrected {
     /// time: the same inputs give the same bytes).
     pub fn summary_line(&self) -> String {
         let mut s = format!(
-            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point, {} step{} ({}); a quantity whose binding slope is below {} (at the fitted point, or as a secant to 1/{} or {} times it) is not identifiable from this campaign.",
+            "Bias-corrected: indirect inference, the whole chain (synth → extract → cluster → these estimators) run {} times, R = {} draws per point (⌈R/3⌉ at the fold check's), {} step{} ({}); a quantity whose binding slope is below {} (at the fitted point, or as a secant to 1/{} or {} times it) is not identifiable from this campaign.",
             self.chain_runs,
             self.draws,
             self.iterations,
