@@ -315,11 +315,6 @@ impl<'a> Chain<'a> {
     }
 }
 
-/// Whether `PRADAR_CORRECTION_TRACE` asks for the iteration's trace on stderr.
-fn trace_on() -> bool {
-    std::env::var_os("PRADAR_CORRECTION_TRACE").is_some()
-}
-
 /// Quantity `i`'s far points from its fitted value `u` (natural scale): the quantity at
 /// 1/`factor` and `factor` times its value (the rate 1/Γ likewise, its up side at least
 /// `factor` slope steps `step`, so from rate 0, Γ = ∞, it goes only up), inside the
@@ -503,6 +498,7 @@ fn solve_binding(
             ));
         }
     }
+    let trace = std::env::var_os("PRADAR_CORRECTION_TRACE").is_some();
     // the fold check on what the local rule keeps: each quantity at 1/F and F times the
     // fitted value, on the first draws; the secants, common draws
     let far: Vec<(usize, usize, [f64; 7])> = active
@@ -566,7 +562,7 @@ fn solve_binding(
                 jac[i][i]
             ));
         }
-        if trace_on() {
+        if trace {
             eprintln!("far {i} side {side} u {} secant {secant:.3}", u[i]);
         }
     }
@@ -575,7 +571,6 @@ fn solve_binding(
         .copied()
         .filter(|&i| reasons[i].is_none())
         .collect();
-    let trace = trace_on();
     if trace {
         eprintln!("t      {:?}", t);
         for (k, row) in jac.iter().enumerate() {
