@@ -4,8 +4,8 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use num_complex::Complex64;
 use pradar::campaign::manifest::{ArrayConfig, Band, Processing, Steering};
-use pradar::campaign::pattern::{ArrayPattern, TABLE_STEP_DEG};
 use pradar::energy::EnergyProcessor;
+use pradar::pattern::{ArrayPattern, TABLE_STEP_DEG};
 use std::f64::consts::PI;
 
 fn bench(c: &mut Criterion) {

@@ -3,30 +3,23 @@
 //!
 //! Data flows one way: [`campaign`] (manifest, formats) and [`simulate`] (the physics simulator) → [`energy`] →
 //! [`mpc`] → [`cluster`] → [`fit`] → [`model`] → [`check`] → [`mapping`] → [`report`].
+//!
+//! The layers are the workspace's crates (README, "Layout"): `pradar-formats` →
+//! `pradar-radar` → `pradar-simulate` → `pradar-channel` → `pradar-mapping` → this crate
+//! (the pipeline glue, the report and the CLI). This crate re-exports their modules under the
+//! paths above, so `pradar::campaign::…` names the same item as `pradar_formats::campaign::…`.
 #![deny(missing_docs)]
 
-pub mod calibrate;
-pub mod campaign;
-pub mod check;
-pub mod cluster;
-pub mod correction;
-pub mod energy;
-pub mod error;
-pub mod explore;
-pub mod export;
-pub mod fit;
+pub use pradar_channel::{calibrate, check, cluster, correction, fit, model, mpc};
+pub use pradar_formats::{campaign, error, export, io, model_file, params, stats, table, units};
+pub use pradar_mapping as mapping;
+pub use pradar_mapping::explore;
+pub use pradar_radar::{energy, pattern};
+pub use pradar_simulate as simulate;
+
 #[cfg(feature = "fuzz")]
 pub mod fuzz;
-pub mod io;
-pub mod mapping;
-pub mod model;
-pub mod mpc;
-pub mod params;
 pub mod pipeline;
 pub mod report;
-pub mod simulate;
-pub mod stats;
-pub mod table;
-pub mod units;
 
 pub use error::{Error, Result};

@@ -16,7 +16,7 @@ use pradar::mapping::ekf::{
 };
 use pradar::mapping::grid::{GridParams, ObservationModel};
 use pradar::mapping::metrics::evaluate;
-use pradar::mapping::reference::{CellClass, GridSpec};
+use pradar::mapping::reference::{CellClass, GridSpec, LayoutRaster};
 use pradar::mapping::score::{observable_region, score_binary};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands::map::{load_run, window_kernel, MapRun};

@@ -10,6 +10,7 @@ use pradar::energy;
 use pradar::mapping::metrics::{evaluate, psi};
 use pradar::mapping::og::{fuse, og_map, sigmoid, LogOddsMap, Method, OgParams};
 use pradar::mapping::output::{soft_grey, write_map_files};
+use pradar::mapping::reference::LayoutRaster;
 use pradar::mapping::score::{observable_region, score};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands::map::{load_run, LoadedRun, MapRun};

@@ -4,10 +4,10 @@ use crate::common;
 
 use common::*;
 use pradar::campaign::manifest::{Campaign, SweepFormat, C0};
-use pradar::campaign::pattern::{beam_metrics, ArrayPattern};
 use pradar::energy::{EnergyMatrix, EnergyProcessor};
 use pradar::mpc::{extract, ExtractParams, ExtractValid, Method, Mpc};
 use pradar::params::ParamGuard;
+use pradar::pattern::{beam_metrics, ArrayPattern};
 
 /// Checked extraction parameters.
 fn checked(p: ExtractParams) -> ExtractValid {

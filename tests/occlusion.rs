@@ -9,7 +9,7 @@ use crate::common;
 use common::*;
 use pradar::campaign::layout::Layout;
 use pradar::campaign::manifest::SweepFormat;
-use pradar::mapping::reference::CellClass;
+use pradar::mapping::reference::{CellClass, LayoutRaster};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

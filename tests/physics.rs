@@ -6,8 +6,8 @@ use common::*;
 use num_complex::Complex64;
 use pradar::campaign::layout::Layout;
 use pradar::campaign::manifest::{Campaign, SweepFormat, C0};
-use pradar::campaign::pattern::ArrayPattern;
 use pradar::energy::{EnergyMatrix, EnergyProcessor};
+use pradar::pattern::ArrayPattern;
 use std::f64::consts::PI;
 
 fn run_chain(dir: &std::path::Path, t: &toml::Table) -> (Campaign, EnergyMatrix) {

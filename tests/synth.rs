@@ -411,9 +411,9 @@ fn synth_diffuse_walls_follow_the_radar_equation() {
     // Σ_walls ∫ σ'·cos^n ψ·ḡ²(θ − θ_d) / ((4π)³ d⁴) · K(τ) ds (K a unit echo's energy in
     // the window), in a near-normal and an oblique group of directions
     use pradar::campaign::layout::Layout;
-    use pradar::campaign::pattern::ArrayPattern;
     use pradar::energy::EnergyProcessor;
     use pradar::model::BandPattern;
+    use pradar::pattern::ArrayPattern;
     use std::f64::consts::PI;
     let tmp = tempfile::tempdir().unwrap();
     let mut t = fixture("tests/point_target.toml");

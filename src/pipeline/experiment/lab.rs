@@ -23,7 +23,7 @@ pub use crate::mapping::experiment::score_columns;
 pub use crate::mapping::experiment::{
     Case, CaseFigures, DataSource, ExperimentResult, Figure, Panel, PanelTile,
 };
-use crate::mapping::reference::{CellClass, ReferenceMap};
+use crate::mapping::reference::{CellClass, LayoutRaster, ReferenceMap};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
@@ -34,59 +34,56 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-impl Case {
-    /// Folder name under `maps/`: data, N, mapper, and whatever differs from the base.
-    pub fn key(&self, base: &ExperimentValid) -> String {
-        let mut k = match self.source {
-            DataSource::Sweeps => format!("sweeps_n{}_{}", self.elements, self.method),
-            DataSource::Model(s) => format!("model_s{s}_n{}_{}", self.elements, self.method),
-        };
-        if self.method == "og" && self.og_prior != base.og.prior {
-            k.push_str(&format!("_prior{:.3}", self.og_prior));
-        }
-        if self.method == "ekf" && self.mu0 != base.ekf.mu0 {
-            k.push_str(&format!("_mu{:.4}", self.mu0));
-        }
-        if self.pose_noise.position_m > 0.0 {
-            k.push_str(&format!("_pos{:.0}mm", self.pose_noise.position_m * 1000.0));
-        }
-        if self.pose_noise.heading_deg > 0.0 {
-            k.push_str(&format!("_hdg{:.1}deg", self.pose_noise.heading_deg));
-        }
-        k
+/// A case's folder name under `maps/`: data, N, mapper, and whatever differs from the base.
+pub fn case_key(case: &Case, base: &ExperimentValid) -> String {
+    let mut k = match case.source {
+        DataSource::Sweeps => format!("sweeps_n{}_{}", case.elements, case.method),
+        DataSource::Model(s) => format!("model_s{s}_n{}_{}", case.elements, case.method),
+    };
+    if case.method == "og" && case.og_prior != base.og.prior {
+        k.push_str(&format!("_prior{:.3}", case.og_prior));
     }
+    if case.method == "ekf" && case.mu0 != base.ekf.mu0 {
+        k.push_str(&format!("_mu{:.4}", case.mu0));
+    }
+    if case.pose_noise.position_m > 0.0 {
+        k.push_str(&format!("_pos{:.0}mm", case.pose_noise.position_m * 1000.0));
+    }
+    if case.pose_noise.heading_deg > 0.0 {
+        k.push_str(&format!("_hdg{:.1}deg", case.pose_noise.heading_deg));
+    }
+    k
 }
 
 fn count(rate: f64, cells: usize) -> usize {
     (rate * cells as f64).round() as usize
 }
 
-impl CaseFigures {
-    fn new(key: String, case: Case, r: &MapReport) -> CaseFigures {
-        let m = &r.metrics;
-        let i = &m.building;
-        CaseFigures {
-            psi_interior: i.psi,
-            wrong_interior: count(i.wrong_cell_rate, i.cells),
-            f1_interior: i.f1,
-            interior_cells: i.cells,
-            key,
-            case,
-            psi_whole: m.whole.psi,
-            psi_observable: m.observable.psi,
-            f1_whole: m.whole.f1,
-            f1_observable: m.observable.f1,
-            wrong_whole: count(m.whole.wrong_cell_rate, m.whole.cells),
-            wrong_observable: count(m.observable.wrong_cell_rate, m.observable.cells),
-            observable_cells: m.observable.cells,
-            map_occupied: m.whole.map_occupied,
-            all_free_psi_whole: m.whole_all_free.psi,
-            all_free_psi_observable: m.observable_all_free.psi,
-            all_free_wrong_whole: count(m.whole_all_free.wrong_cell_rate, m.whole_all_free.cells),
-            all_free_wrong_interior: count(m.building_all_free.wrong_cell_rate, i.cells),
-            classes: m.classes,
-            three_class: m.three_class,
-        }
+/// A mapped case's figures from its map report.
+fn case_figures(key: String, case: Case, r: &MapReport) -> CaseFigures {
+    let m = &r.metrics;
+    let i = &m.building;
+    CaseFigures {
+        psi_interior: i.psi,
+        wrong_interior: count(i.wrong_cell_rate, i.cells),
+        f1_interior: i.f1,
+        interior_cells: i.cells,
+        key,
+        case,
+        psi_whole: m.whole.psi,
+        psi_observable: m.observable.psi,
+        f1_whole: m.whole.f1,
+        f1_observable: m.observable.f1,
+        wrong_whole: count(m.whole.wrong_cell_rate, m.whole.cells),
+        wrong_observable: count(m.observable.wrong_cell_rate, m.observable.cells),
+        observable_cells: m.observable.cells,
+        map_occupied: m.whole.map_occupied,
+        all_free_psi_whole: m.whole_all_free.psi,
+        all_free_psi_observable: m.observable_all_free.psi,
+        all_free_wrong_whole: count(m.whole_all_free.wrong_cell_rate, m.whole_all_free.cells),
+        all_free_wrong_interior: count(m.building_all_free.wrong_cell_rate, i.cells),
+        classes: m.classes,
+        three_class: m.three_class,
     }
 }
 
@@ -285,7 +282,7 @@ impl<'a> Lab<'a> {
         let mut todo: Vec<(String, MapValid)> = Vec::new();
         // the model data of the maps not made yet, all at once (in parallel)
         let wanted: Vec<(usize, u64)> = (cases.iter())
-            .filter(|c| !self.map_cache.contains_key(&c.key(&self.params)))
+            .filter(|c| !self.map_cache.contains_key(&case_key(c, &self.params)))
             .filter_map(|c| match c.source {
                 DataSource::Model(s) => Some((c.elements, s)),
                 DataSource::Sweeps => None,
@@ -293,7 +290,7 @@ impl<'a> Lab<'a> {
             .collect();
         self.make_model_data(&wanted)?;
         for c in cases {
-            let key = c.key(&self.params);
+            let key = case_key(c, &self.params);
             if !self.map_cache.contains_key(&key) && todo.iter().all(|(k, _)| *k != key) {
                 let opts = self.map_options(c, &key)?;
                 todo.push((key, opts));
@@ -326,9 +323,9 @@ impl<'a> Lab<'a> {
         Ok(cases
             .iter()
             .map(|c| {
-                let key = c.key(&self.params);
+                let key = case_key(c, &self.params);
                 let r = &self.map_cache[&key];
-                (CaseFigures::new(key, *c, r), r.binary.clone())
+                (case_figures(key, *c, r), r.binary.clone())
             })
             .collect())
     }

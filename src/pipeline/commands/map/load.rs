@@ -16,7 +16,7 @@ use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
 use crate::mapping::memo::Memo;
 use crate::mapping::objects::{find_truth, load_objects};
 use crate::mapping::og::{detection_threshold, Detector, OgValid};
-use crate::mapping::reference::{GridSpec, ReferenceMap};
+use crate::mapping::reference::{GridSpec, LayoutRaster, ReferenceMap};
 use crate::mapping::score::{building_region, observable_region, Regions};
 use std::path::PathBuf;
 

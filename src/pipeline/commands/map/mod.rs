@@ -14,7 +14,7 @@
 //!   figures for the first n runs, n = 1..R (metrics vs number of runs).
 //!
 //! Choices:
-//! * the grid is the reference raster's ([`Layout::rasterize`](crate::campaign::layout::Layout::rasterize): cell 0.1 m, margin 0.5 m);
+//! * the grid is the reference raster's ([`LayoutRaster::rasterize`](crate::mapping::reference::LayoutRaster::rasterize): cell 0.1 m, margin 0.5 m);
 //!   fused runs must share the layout's grid;
 //! * regions ([`crate::mapping::score`]): observable = cells in line of sight of a pose through
 //!   the layout's walls, inside the −3 dB main lobe of one of its directions, within the
@@ -201,19 +201,20 @@ impl ParamGuard for MapOptions {
 }
 
 // The parameter sets inside checked options were checked with them: these hand them out
-// as their checked types without checking again.
-impl Valid<MapOptions> {
+// as their checked types without checking again (called on the checked [`MapValid`], which
+// derefs to the options).
+impl MapOptions {
     /// The grid parameters (checked).
     pub fn grid(&self) -> GridValid {
-        Valid::new(self.params().grid)
+        Valid::new(self.grid)
     }
     /// The occupancy-grid parameters (checked).
     pub fn og(&self) -> OgValid {
-        Valid::new(self.params().og)
+        Valid::new(self.og)
     }
     /// The EKF parameters (checked).
     pub fn ekf(&self) -> EkfValid {
-        Valid::new(self.params().ekf)
+        Valid::new(self.ekf)
     }
 }
 
