@@ -240,7 +240,7 @@ fn bench(cells: usize) -> Bench {
         min_bin,
     )
     .unwrap();
-    let kernel = pradar::pipeline::commands::map::window_kernel(&c).unwrap();
+    let kernel = pradar::mapping::job::window_kernel(&c).unwrap();
     let n = spec.len();
     let base = peak_mb();
     Bench {

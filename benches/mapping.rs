@@ -13,7 +13,7 @@ use pradar::energy::{EnergyMatrix, EnergyMeta, EnergyProcessor};
 use pradar::mapping::grid::{GridParams, ObservationModel};
 use pradar::mapping::og::{og_map_stats, Detector, LogOddsMap, Method, OgParams, OgStats};
 use pradar::params::ParamGuard;
-use pradar::pipeline::commands::map::{load_run, MapRun};
+use pradar::mapping::job::{load_run, MapRun};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Gamma};
 use std::path::Path;
@@ -281,12 +281,12 @@ fn floor(dir: &Path) {
         &fc.manifest,
         em.bins,
         em.meta.bin_width_ns,
-        pradar::pipeline::commands::map::min_bin(&em),
+        pradar::mapping::job::min_bin(&em),
     )
     .unwrap();
     let thr =
         pradar::mapping::og::detection_threshold(&em.meta, 1e-3, Path::new("synthetic")).unwrap();
-    let kernel = pradar::pipeline::commands::map::window_kernel(&fc).unwrap();
+    let kernel = pradar::mapping::job::window_kernel(&fc).unwrap();
     let det = Detector::new(thr, &kernel, 10.0, model.min_bin);
     let mut maps = Vec::new();
     for method in [Method::Og, Method::OgBoresight] {

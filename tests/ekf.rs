@@ -19,7 +19,7 @@ use pradar::mapping::metrics::evaluate;
 use pradar::mapping::reference::{CellClass, GridSpec, LayoutRaster};
 use pradar::mapping::score::{observable_region, score_binary};
 use pradar::params::ParamGuard;
-use pradar::pipeline::commands::map::{load_run, window_kernel, MapRun};
+use pradar::mapping::job::{load_run, window_kernel, MapRun};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -38,7 +38,7 @@ fn corridor100() -> &'static (PathBuf, PathBuf) {
     })
 }
 
-fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::pipeline::commands::map::LoadedRun {
+fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::mapping::job::LoadedRun {
     let run = MapRun {
         campaign: c.to_path_buf(),
         energy: e.to_path_buf(),
@@ -57,7 +57,7 @@ fn load(c: &Path, e: &Path, cell_m: f64) -> pradar::pipeline::commands::map::Loa
     .unwrap()
 }
 
-fn noise_of(l: &pradar::pipeline::commands::map::LoadedRun, p: &EkfParams) -> NoiseModel {
+fn noise_of(l: &pradar::mapping::job::LoadedRun, p: &EkfParams) -> NoiseModel {
     NoiseModel::new(&l.energy.header().meta, p.model_error, &l.energy_path).unwrap()
 }
 
@@ -288,7 +288,7 @@ fn prediction_matches_the_simulated_point_echo() {
         subsamples: 8,
         ..Default::default()
     };
-    let mb = pradar::pipeline::commands::map::min_bin(&em);
+    let mb = pradar::mapping::job::min_bin(&em);
     let model = ObservationModel::new(
         spec,
         &gp.check().unwrap(),
@@ -402,7 +402,7 @@ fn dense_update_equals_a_textbook_ekf_on_a_real_beam() {
         margin_m: 0.0,
         ..Default::default()
     };
-    let mb = pradar::pipeline::commands::map::min_bin(&em);
+    let mb = pradar::mapping::job::min_bin(&em);
     let model = ObservationModel::new(
         spec,
         &gp.check().unwrap(),
@@ -451,7 +451,7 @@ fn dense_update_equals_a_textbook_ekf_on_a_real_beam() {
 
 /// Run a filter over a loaded run.
 fn run_filter(
-    l: &pradar::pipeline::commands::map::LoadedRun,
+    l: &pradar::mapping::job::LoadedRun,
     params: &pradar::mapping::EkfValid,
     f: &mut dyn RrcsFilter,
 ) -> pradar::mapping::ekf::EkfStats {

@@ -13,7 +13,7 @@ use pradar::mapping::output::{soft_grey, write_map_files};
 use pradar::mapping::reference::LayoutRaster;
 use pradar::mapping::score::{observable_region, score};
 use pradar::params::ParamGuard;
-use pradar::pipeline::commands::map::{load_run, LoadedRun, MapRun};
+use pradar::mapping::job::{load_run, LoadedRun, MapRun};
 use pradar::simulate::simulate;
 use std::path::{Path, PathBuf};
 use std::process::Command;

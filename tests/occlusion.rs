@@ -575,7 +575,7 @@ fn walls_the_echoes_can_show() {
     use pradar::mapping::score::score_binary;
     use pradar::mapping::{EkfParams, GridParams, Method, OgParams};
     use pradar::params::ParamGuard;
-    use pradar::pipeline::commands::map::{load_runs, runs_regions, MapOptions, MapRun};
+    use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
     let figs = figures();
     let mut failures = Vec::new();
     for (name, n, c, e) in scenes() {

@@ -23,7 +23,7 @@ use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
 };
 use pradar::mpc::{DiffuseParams, ExtractParams, Method as ExtractMethod};
-use pradar::pipeline::commands::map::PoseNoise;
+use pradar::mapping::job::PoseNoise;
 use pradar::pipeline::experiment::ExperimentParams;
 use std::path::PathBuf;
 

@@ -11,7 +11,7 @@ use anyhow::Result;
 use pradar::mapping::{EkfParams, GridParams, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
-use pradar::pipeline::commands::map::{MapOptions, MapRun, PoseNoise};
+use pradar::mapping::job::{MapOptions, MapRun, PoseNoise};
 use pradar::pipeline::commands::{ImportParams, SweepFiles};
 use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
@@ -309,7 +309,7 @@ mod tests {
     use super::super::{Cli, Cmd};
     use clap::Parser;
     use pradar::mapping::{EkfParams, GridParams, OgParams};
-    use pradar::pipeline::commands::map::PoseNoise;
+    use pradar::mapping::job::PoseNoise;
     use pradar::pipeline::experiment::ExperimentParams;
 
     /// One subcommand parsed from its required arguments only.

@@ -450,7 +450,7 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
     timings.time("report plots", || write_plots(&s, &a, out, progress))?;
     let maps = timings.time("maps (OG, OG boresight, EKF)", || {
         Ok(
-            super::commands::map::report_maps(&s.campaign.path, &s.energy_path, &out.join("maps"))
+            crate::mapping::job::report_maps(&s.campaign.path, &s.energy_path, &out.join("maps"))
                 .map(|maps| crate::report::maps::report_section(&maps, "maps"))
                 .unwrap_or_else(|e| Section {
                     title: "Maps".into(),

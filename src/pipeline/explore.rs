@@ -14,7 +14,7 @@ use crate::explore::{
 use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
-use crate::pipeline::commands::map::{run_map, MapOptions, MapRun, PoseNoise};
+use crate::mapping::job::{run_map, MapOptions, MapRun, PoseNoise};
 use crate::pipeline::Progress;
 use crate::simulate::{has_scene, simulate, write_campaign};
 use std::path::{Path, PathBuf};

@@ -18,8 +18,8 @@
 //!   objects for the three-class figures;
 //! * [`output`]: PNG, PGM + YAML (ROS map_server).
 //!
-//! The `pradar map` command (runs, fusion, metrics.json) is
-//! `pipeline::commands::map`; it uses these modules, never the other way.
+//! * [`job`]: the map job (runs, fusion, the map files, `metrics.json`) that the `pradar map`
+//!   command, the experiments, the explorer and the report run.
 //!
 //! Parameters are checked once, by type ([`crate::params::ParamGuard`]): [`GridParams`] →
 //! [`GridValid`], [`OgParams`] → [`OgValid`], [`EkfParams`] → [`EkfValid`]; the algorithms
@@ -28,6 +28,7 @@
 #![deny(missing_docs)]
 
 pub mod explore;
+pub mod job;
 
 // the lower layers' modules under their old paths (`crate::campaign::…`)
 use pradar_channel::model;

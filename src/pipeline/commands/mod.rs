@@ -86,7 +86,7 @@
 //! )?;
 //! println!("{synth}");
 //! let map = commands::Map {
-//!     options: pradar::pipeline::commands::map::MapOptions {
+//!     options: pradar::mapping::job::MapOptions {
 //!         method: pradar::mapping::Method::Og,
 //!         runs: vec![],
 //!         out: "map".into(),
@@ -115,7 +115,7 @@ mod campaign;
 mod experiments;
 mod explore;
 pub(crate) mod import;
-pub mod map;
+mod map;
 mod model;
 mod zoo;
 

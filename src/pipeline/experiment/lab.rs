@@ -28,7 +28,7 @@ use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
-use crate::pipeline::commands::map::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
+use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::simulate::simulate;
 use rayon::prelude::*;
 use std::collections::HashMap;

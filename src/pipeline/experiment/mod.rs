@@ -46,7 +46,7 @@
 //!   it moves its prior); relative change Δψ/ψ = (ψ̄(changed) − ψ̄(base))/ψ̄(base) of the mean ψ
 //!   over seeds;
 //! * **pose-noise**: at N = 100 on model data, the mapper is given poses with Gaussian noise
-//!   ([`PoseNoise`](crate::pipeline::commands::map::PoseNoise): σ per axis 0, 2, 5, 10 cm with no heading
+//!   ([`PoseNoise`](crate::mapping::job::PoseNoise): σ per axis 0, 2, 5, 10 cm with no heading
 //!   noise, and heading σ 0, 1, 2, 5° with no position noise; one draw per pose, keyed by the
 //!   data seed) while the data were taken at the true poses; mean ψ over seeds.
 //!

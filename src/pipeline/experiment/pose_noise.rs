@@ -9,7 +9,7 @@ use super::lab::{join_u, mean, result, Case, CaseFigures, DataSource, Figure, La
 use super::ExperimentResult;
 use crate::error::Result;
 use crate::export::LineChart;
-use crate::pipeline::commands::map::PoseNoise;
+use crate::mapping::job::PoseNoise;
 
 impl Lab<'_> {
     pub(super) fn pose_noise(&mut self) -> Result<ExperimentResult> {

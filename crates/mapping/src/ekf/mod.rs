@@ -32,7 +32,7 @@
 //!   c̃_{k,i} = Σ_m c_{m,i}·K(k − m),
 //! c_{m,i} the observation model's radar-equation coefficient of cell i in bin m (share of its
 //! sub-samples whose delay rounds to bin m) and K(j) the bin-averaged energy of a unit point
-//! echo at the centre of a bin, j bins away (`pipeline::commands::map::window_kernel`, the
+//! echo at the centre of a bin, j bins away ([`crate::job::window_kernel`], the
 //! simulator's and `energy`'s own window, IFFT and bin integration), kept for |j| ≤ J where
 //! K(j) ≥ `kernel_floor_db` relative to K(0) (−30 dB: the Hann kernel's main lobe). So a point
 //! target of RRCS x at the centre of bin m predicts exactly `point_echo_energy(c·x², τ_m)`,
@@ -164,7 +164,7 @@
 //! Layout: [`params`] ([`EkfParams`] → [`EkfValid`]), [`observation`] (noise model, kernel,
 //! [`Observation`], [`Linearized`]), [`dense`] ([`DenseEkf`]) over [`linalg`], [`tiled`]
 //! ([`TiledEkf`]), [`run`] ([`ekf_run`], [`EkfMap`]). The `map --method ekf` job that
-//! writes the files is `pipeline::commands::map` (it uses this module, never the other way).
+//! writes the files is [`crate::job`] (it uses this module, never the other way).
 //!
 //! ```
 //! use pradar_mapping::ekf::{DenseEkf, EkfParams, Linearized, NoiseModel, Observation, RrcsFilter};

@@ -96,7 +96,7 @@ pub enum Method {
     #[value(name = "og-boresight", help = "Boresight-only baseline")]
     OgBoresight,
     /// EKF over the RRCS per cell ([`crate::ekf`]; not an inverse sensor model:
-    /// [`og_map`] refuses it, `pipeline::commands::map::run_map` dispatches it).
+    /// [`og_map`] refuses it, [`crate::job::run_map`] dispatches it).
     #[value(name = "ekf", help = "EKF over the RRCS per cell")]
     Ekf,
 }

@@ -1,8 +1,9 @@
-//! The `pradar map` command: one or several runs (campaign + energy table) → one map, its
-//! files and its metrics against the reference map. The experiments and the report's maps
-//! run the same job ([`run_map`]).
+//! The map job: one or several runs (campaign + energy table) → one map, its files and its
+//! metrics against the reference map. The `pradar map` command ([`crate::job`]),
+//! the experiments, the explorer and the report's maps all run this job ([`run_map`]).
 //!
-//! Takes [`Map`] (the CLI's [`MapOptions`] and `--run` values) or [`MapOptions`] (method, runs, output folder, `--elements`, grid and OG parameters);
+//! Takes [`MapOptions`] (method, runs, output folder, element override, grid, OG and EKF
+//! parameters, pose noise);
 //! gives in the output folder, for method `<m>` (`og` or `og-boresight`):
 //! * `<m>.png/.pgm/.yaml` — the soft map (grey = 1 − p), YAML `occupied_thresh` = η = 0.5,
 //!   `free_thresh` = 0.45 (cells left at the prior read as unknown in map_server);
@@ -10,13 +11,13 @@
 //! * `reference.png/.pgm/.yaml` — the reference map rasterised from the layout on the same
 //!   grid (occupied 0, free 254, outside 205);
 //! * `metrics.json` — figures on the observable region, the building and the whole map, each
-//!   beside the all-free map's, and the per-class figures ([`crate::mapping::score`]); with several runs also every single run's figures and the fused map's
+//!   beside the all-free map's, and the per-class figures ([`crate::score`]); with several runs also every single run's figures and the fused map's
 //!   figures for the first n runs, n = 1..R (metrics vs number of runs).
 //!
 //! Choices:
-//! * the grid is the reference raster's ([`LayoutRaster::rasterize`](crate::mapping::reference::LayoutRaster::rasterize): cell 0.1 m, margin 0.5 m);
+//! * the grid is the reference raster's ([`LayoutRaster::rasterize`](crate::reference::LayoutRaster::rasterize): cell 0.1 m, margin 0.5 m);
 //!   fused runs must share the layout's grid;
-//! * regions ([`crate::mapping::score`]): observable = cells in line of sight of a pose through
+//! * regions ([`crate::score`]): observable = cells in line of sight of a pose through
 //!   the layout's walls, inside the −3 dB main lobe of one of its directions, within the
 //!   usable bins (coupling gate to the last bin); building = inside the perimeter or on a
 //!   wall; whole map = every cell, `Outside` reference cells counted as free. None comes
@@ -28,18 +29,17 @@
 //! * the energy table must match the campaign: positions = poses, directions and their
 //!   angles, headings, bin width = 1/B, and (when the metadata records it) the element count
 //!   (`--elements` overrides the manifest's).
-
 //!
 //! Layout: [`load`] (runs → [`LoadedRun`]s on one grid, the first usable bin, the window
 //! kernel, the runs' scoring regions), [`ekf`] (the `--method ekf` job); the scoring
-//! against the reference is [`crate::mapping::score`]. This file holds the command, the
+//! against the reference is [`crate::score`]. This file holds the
 //! options, the occupancy-grid job and the report written to `metrics.json`. The report
 //! page is rendered by `report::maps` from [`report_maps`].
 //!
 //! ```no_run
-//! use pradar::mapping::Method;
-//! use pradar::pipeline::commands::map::{run_map, MapOptions, MapRun};
-//! use pradar::params::ParamGuard;
+//! use pradar_formats::params::ParamGuard;
+//! use pradar_mapping::job::{run_map, MapOptions, MapRun};
+//! use pradar_mapping::Method;
 //! let opts = MapOptions {
 //!     method: Method::Og,
 //!     runs: vec![MapRun::parse("campaign.toml=energy.parquet")?],
@@ -52,7 +52,7 @@
 //! };
 //! let report = run_map(&opts.check()?, &|_, _| {})?;
 //! println!("psi {:.3}", report.metrics.observable.psi);
-//! # Ok::<(), pradar::error::Error>(())
+//! # Ok::<(), pradar_formats::error::Error>(())
 //! ```
 
 pub mod ekf;
@@ -61,68 +61,18 @@ pub mod load;
 pub use ekf::run_map_ekf;
 pub use load::{load_run, load_runs, min_bin, runs_regions, window_kernel, LoadedRun};
 
-pub use crate::mapping::pose_noise::{PoseNoise, PoseNoiseValid};
-use crate::mapping::score::{score, MetricsPair};
+pub use crate::pose_noise::{PoseNoise, PoseNoiseValid};
+use crate::score::{score, MetricsPair};
 
 use crate::error::{Error, Result};
-use crate::mapping::ekf::{EkfParams, EkfReport, EkfValid};
-use crate::mapping::grid::{GridParams, GridValid};
-use crate::mapping::og::{fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats, OgValid};
-use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
-use crate::mapping::reference::{CellClass, ReferenceMap};
+use crate::ekf::{EkfParams, EkfReport, EkfValid};
+use crate::grid::{GridParams, GridValid};
+use crate::og::{fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats, OgValid};
+use crate::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
+use crate::reference::{CellClass, ReferenceMap};
 use crate::params::{ParamGuard, Valid};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-
-/// `pradar map`: the map options plus the `--run` specifications still to parse.
-#[derive(Debug, Clone)]
-pub struct Map {
-    /// Everything but the `--run` runs (`options.runs` holds the `--campaign` +
-    /// `--energy` run, if given).
-    pub options: MapOptions,
-    /// `--run campaign.toml=energy.parquet` values, appended after `options.runs`.
-    pub run_specs: Vec<String>,
-}
-
-/// What `map` wrote.
-#[derive(Debug, Clone)]
-pub struct MapSummary {
-    /// The stage's report.
-    pub report: MapReport,
-    /// The output folder.
-    pub out: PathBuf,
-}
-
-impl std::fmt::Display for MapSummary {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let r = &self.report;
-        let m = &r.metrics.observable;
-        write!(
-            f,
-            "{} map {}x{} -> {} (observable: psi {:.3}, F1 {:.3}; all-free psi {:.3})",
-            r.method,
-            r.rows,
-            r.cols,
-            self.out.display(),
-            m.psi,
-            m.f1,
-            r.metrics.observable_all_free.psi
-        )
-    }
-}
-
-/// Run `pradar map` ([`run_map`]); `progress` counts poses over all runs.
-pub fn map(cmd: &Map, progress: super::StepProgress) -> Result<MapSummary> {
-    let mut opts = cmd.options.clone();
-    for r in &cmd.run_specs {
-        opts.runs.push(MapRun::parse(r)?);
-    }
-    let report = run_map(&opts.check()?, progress)?;
-    Ok(MapSummary {
-        report,
-        out: opts.out,
-    })
-}
 
 /// One run: a campaign manifest and its energy table.
 #[derive(Debug, Clone, PartialEq)]

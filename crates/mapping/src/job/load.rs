@@ -12,12 +12,12 @@ use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, Pose};
 use crate::energy::{EnergyMatrix, EnergySource, EnergyTable};
 use crate::error::{Error, Result};
-use crate::mapping::grid::{GridValid, ObservationModel, Occlusion};
-use crate::mapping::memo::Memo;
-use crate::mapping::objects::{find_truth, load_objects};
-use crate::mapping::og::{detection_threshold, Detector, OgValid};
-use crate::mapping::reference::{GridSpec, LayoutRaster, ReferenceMap};
-use crate::mapping::score::{building_region, observable_region, Regions};
+use crate::grid::{GridValid, ObservationModel, Occlusion};
+use crate::memo::Memo;
+use crate::objects::{find_truth, load_objects};
+use crate::og::{detection_threshold, Detector, OgValid};
+use crate::reference::{GridSpec, LayoutRaster, ReferenceMap};
+use crate::score::{building_region, observable_region, Regions};
 use std::path::PathBuf;
 
 /// A loaded, checked run ready to map.
@@ -67,7 +67,7 @@ pub fn window_kernel(c: &Campaign) -> Result<Vec<f64>> {
     WINDOW_MEMO.get_or(key, || window_kernel_of(c))
 }
 
-/// Window kernels already made in this process ([`crate::mapping::memo`]).
+/// Window kernels already made in this process ([`crate::memo`]).
 static WINDOW_MEMO: Memo<Vec<f64>> = Memo::new();
 
 /// [`window_kernel`] without the memo.

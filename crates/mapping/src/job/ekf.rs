@@ -1,5 +1,5 @@
 //! The `pradar map --method ekf` job: the runs filtered in order by one EKF
-//! ([`crate::mapping::ekf`]), its maps written and scored.
+//! ([`crate::ekf`]), its maps written and scored.
 //!
 //! Fusion = the same filter continued over the next run; the fusion table snapshots the map
 //! after each run; with several runs each run is also mapped alone by a fresh filter.
@@ -17,14 +17,14 @@ use super::{
 };
 use crate::energy::EnergySource;
 use crate::error::{Error, Result};
-use crate::mapping::ekf::{
+use crate::ekf::{
     ekf_run_with_arcs, mean_grey, new_filter, std_grey, truncate_kernel, EchoArcs, EkfMap,
     EkfReport, EkfStats, EkfValid, EkfVariant, NoiseModel, RrcsFilter, Sight,
 };
-use crate::mapping::grid::Occlusion;
-use crate::mapping::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
-use crate::mapping::reference::{GridSpec, ReferenceMap};
-use crate::mapping::score::{score_binary, MetricsPair, Regions};
+use crate::grid::Occlusion;
+use crate::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
+use crate::reference::{GridSpec, ReferenceMap};
+use crate::score::{score_binary, MetricsPair, Regions};
 use std::path::Path;
 
 /// The runs with their window kernels and noise models.
