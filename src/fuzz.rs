@@ -11,7 +11,7 @@
 //! (`ModelConfig::from_str`), and the energy, MPC and clustered-MPC Parquet readers
 //! (`EnergyMatrix::read` and `EnergyTable::open` + `load`, `read_mpcs` + `read_sector_deg`, `read_clustered`; the bytes are
 //! written to a scratch file first, as the readers take paths), the import's poses and
-//! index CSV readers (`commands::import::parse_poses`, `parse_index`, on the text decoded as
+//! index CSV readers (`campaign::import::parse_poses`, `parse_index`, on the text decoded as
 //! `import` decodes it), and the calibration step (`Calibration::from_sweeps` + `apply` on
 //! measured, background and reference sweeps decoded from the bytes as f64 pairs, see
 //! `calibration_step`; an accepted calibration leaving a non-finite value is a failure). An execution passes when
@@ -262,12 +262,12 @@ fn parse(target: Target, bytes: &[u8], scratch: &Scratch) -> Result<()> {
         Target::Poses => {
             let p = scratch.dir.join("poses.csv");
             let text = crate::campaign::touchstone::decode(bytes);
-            crate::pipeline::commands::import::parse_poses(&text, &p).map(|_| ())
+            crate::campaign::import::parse_poses(&text, &p).map(|_| ())
         }
         Target::Index => {
             let p = scratch.dir.join("index.csv");
             let text = crate::campaign::touchstone::decode(bytes);
-            crate::pipeline::commands::import::parse_index(&text, &p).map(|_| ())
+            crate::campaign::import::parse_index(&text, &p).map(|_| ())
         }
         Target::Calibration => calibration_step(bytes, &scratch.dir),
         Target::Energy | Target::Mpc | Target::Cluster => {

@@ -11,7 +11,9 @@
 #![deny(missing_docs)]
 
 pub use pradar_channel::{calibrate, check, cluster, correction, fit, model, mpc};
-pub use pradar_formats::{campaign, error, export, io, model_file, params, stats, table, units};
+pub use pradar_formats::{
+    campaign, error, export, io, model_file, params, progress, stats, table, units,
+};
 pub use pradar_mapping as mapping;
 pub use pradar_mapping::explore;
 pub use pradar_radar::{energy, pattern};

@@ -15,11 +15,11 @@ use pradar::mapping::ekf::{
     RrcsFilter, TiledEkf,
 };
 use pradar::mapping::grid::{GridParams, ObservationModel};
+use pradar::mapping::job::{load_run, window_kernel, MapRun};
 use pradar::mapping::metrics::evaluate;
 use pradar::mapping::reference::{CellClass, GridSpec, LayoutRaster};
 use pradar::mapping::score::{observable_region, score_binary};
 use pradar::params::ParamGuard;
-use pradar::mapping::job::{load_run, window_kernel, MapRun};
 use rand::{Rng, SeedableRng};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

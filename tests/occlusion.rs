@@ -572,10 +572,10 @@ fn read_binary_pgm(path: &Path) -> Vec<bool> {
 #[test]
 fn walls_the_echoes_can_show() {
     use pradar::energy::EnergySource;
+    use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
     use pradar::mapping::score::score_binary;
     use pradar::mapping::{EkfParams, GridParams, Method, OgParams};
     use pradar::params::ParamGuard;
-    use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
     let figs = figures();
     let mut failures = Vec::new();
     for (name, n, c, e) in scenes() {

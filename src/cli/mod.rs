@@ -19,11 +19,11 @@ use pradar::cluster::{ClusterParams, Criterion};
 use pradar::correction::CorrectionParams;
 use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
+use pradar::mapping::job::PoseNoise;
 use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
 };
 use pradar::mpc::{DiffuseParams, ExtractParams, Method as ExtractMethod};
-use pradar::mapping::job::PoseNoise;
 use pradar::pipeline::experiment::ExperimentParams;
 use std::path::PathBuf;
 

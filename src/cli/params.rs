@@ -8,10 +8,10 @@ use super::{
     ExtractArgs, FitArgs, ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use anyhow::Result;
+use pradar::mapping::job::{MapOptions, MapRun, PoseNoise};
 use pradar::mapping::{EkfParams, GridParams, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
-use pradar::mapping::job::{MapOptions, MapRun, PoseNoise};
 use pradar::pipeline::commands::{ImportParams, SweepFiles};
 use pradar::pipeline::experiment::{ExperimentParams, InputOptions};
 use pradar::pipeline::{ReportOptions, ReportValid, ReproduceOptions, ReproduceValid};
@@ -308,8 +308,8 @@ impl ExploreArgs {
 mod tests {
     use super::super::{Cli, Cmd};
     use clap::Parser;
-    use pradar::mapping::{EkfParams, GridParams, OgParams};
     use pradar::mapping::job::PoseNoise;
+    use pradar::mapping::{EkfParams, GridParams, OgParams};
     use pradar::pipeline::experiment::ExperimentParams;
 
     /// One subcommand parsed from its required arguments only.

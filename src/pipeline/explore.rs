@@ -11,10 +11,10 @@ use crate::explore::{
     Config, DataKind, EnergyModelValid, ExploreOutput, ExploreRow, ExploreValid, ScanShape, Scores,
     Timing, PAPER_ELEMENTS, PAPER_PULSES, PAPER_STEP_DEG,
 };
+use crate::mapping::job::{run_map, MapOptions, MapRun, PoseNoise};
 use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
-use crate::mapping::job::{run_map, MapOptions, MapRun, PoseNoise};
 use crate::pipeline::Progress;
 use crate::simulate::{has_scene, simulate, write_campaign};
 use std::path::{Path, PathBuf};

@@ -114,7 +114,7 @@ mod analysis;
 mod campaign;
 mod experiments;
 mod explore;
-pub(crate) mod import;
+mod import;
 mod map;
 mod model;
 mod zoo;
@@ -141,8 +141,7 @@ use crate::campaign::manifest::Campaign;
 use crate::error::Result;
 use std::path::{Path, PathBuf};
 
-/// Progress of a single-stage command: called with (done, total) after each step.
-pub type StepProgress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+pub use crate::progress::StepProgress;
 
 /// The files a campaign's analysis reads: the manifest and its layout.
 fn campaign_inputs(c: &Campaign) -> [(PathBuf, &'static str); 2] {

@@ -23,12 +23,12 @@ pub use crate::mapping::experiment::score_columns;
 pub use crate::mapping::experiment::{
     Case, CaseFigures, DataSource, ExperimentResult, Figure, Panel, PanelTile,
 };
+use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::mapping::reference::{CellClass, LayoutRaster, ReferenceMap};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
-use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
 use crate::simulate::simulate;
 use rayon::prelude::*;
 use std::collections::HashMap;

@@ -15,12 +15,12 @@ use super::{
     load_runs, runs_regions, write_metrics_json, write_reference, FusionRow, LoadedRun, MapReport,
     MapValid, RunSummary,
 };
-use crate::energy::EnergySource;
-use crate::error::{Error, Result};
 use crate::ekf::{
     ekf_run_with_arcs, mean_grey, new_filter, std_grey, truncate_kernel, EchoArcs, EkfMap,
     EkfReport, EkfStats, EkfValid, EkfVariant, NoiseModel, RrcsFilter, Sight,
 };
+use crate::energy::EnergySource;
+use crate::error::{Error, Result};
 use crate::grid::Occlusion;
 use crate::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED};
 use crate::reference::{GridSpec, ReferenceMap};

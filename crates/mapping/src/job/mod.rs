@@ -64,13 +64,13 @@ pub use load::{load_run, load_runs, min_bin, runs_regions, window_kernel, Loaded
 pub use crate::pose_noise::{PoseNoise, PoseNoiseValid};
 use crate::score::{score, MetricsPair};
 
-use crate::error::{Error, Result};
 use crate::ekf::{EkfParams, EkfReport, EkfValid};
+use crate::error::{Error, Result};
 use crate::grid::{GridParams, GridValid};
 use crate::og::{fuse, og_map_stats, LogOddsMap, Method, OgParams, OgStats, OgValid};
 use crate::output::{self, soft_grey, GREY_FREE, GREY_OCCUPIED, GREY_UNKNOWN};
-use crate::reference::{CellClass, ReferenceMap};
 use crate::params::{ParamGuard, Valid};
+use crate::reference::{CellClass, ReferenceMap};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

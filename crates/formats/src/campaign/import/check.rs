@@ -18,7 +18,7 @@ use crate::campaign::manifest::limits::{MAX_PULSES, MAX_SWEEPS};
 use crate::campaign::manifest::Directions;
 use crate::campaign::touchstone::{decode, parse_touchstone, SParam};
 use crate::error::{Error, Result};
-use crate::pipeline::commands::StepProgress;
+use crate::progress::StepProgress;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! `pradar import`: a campaign manifest built and validated from what a measurement
+//! Import (`pradar import`): a campaign manifest built and validated from what a measurement
 //! campaign leaves on disk.
 //!
 //! Takes ([`ImportParams`]):
@@ -77,12 +77,12 @@ mod reader;
 mod write;
 
 #[cfg(feature = "fuzz")]
-pub(crate) use reader::{parse_index, parse_poses};
+pub use reader::{parse_index, parse_poses};
 pub use reader::{MAX_INDEX_ROWS, MAX_POSES};
 
-use super::StepProgress;
 use crate::campaign::manifest::Directions;
 use crate::error::Result;
+use crate::progress::StepProgress;
 use std::path::{Path, PathBuf};
 
 /// Where the sweep files are and how they are named.

@@ -224,9 +224,9 @@ pub(super) fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
 
 /// The poses of a poses CSV's text, as `import --poses` reads them (`path` names the file
 /// in errors): `(label, x_m, y_m, heading_deg)` in manifest order (see [`order_poses`]).
-/// The entry point of the poses target of the fuzz harness (`crate::fuzz`, feature `fuzz`).
+/// The entry point of the poses target of the fuzz harness (`pradar::fuzz`, feature `fuzz`).
 #[cfg(any(test, feature = "fuzz"))]
-pub(crate) fn parse_poses(text: &str, path: &Path) -> Result<Vec<(String, f64, f64, f64)>> {
+pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<(String, f64, f64, f64)>> {
     poses_from(path, parse_csv(text, path)?)
 }
 
@@ -302,10 +302,10 @@ fn poses_from(path: &Path, (h, rows): CsvRows) -> Result<Vec<PoseRow>> {
 /// the file in errors, and relative paths are taken from its folder): columns `position`
 /// (or `pos`, `label`), `direction` (an index) or `angle_deg` (signed degrees), optionally
 /// `pulse`, and `path`. The entry point of the index target of the fuzz harness
-/// (`crate::fuzz`, feature `fuzz`).
+/// (`pradar::fuzz`, feature `fuzz`); gives the number of files listed.
 #[cfg(feature = "fuzz")]
-pub(crate) fn parse_index(text: &str, path: &Path) -> Result<Vec<SweepEntry>> {
-    index_from(path, parse_csv(text, path)?)
+pub fn parse_index(text: &str, path: &Path) -> Result<usize> {
+    index_from(path, parse_csv(text, path)?).map(|entries| entries.len())
 }
 
 /// The sweep files of an index CSV, as `import --index` reads them.
