@@ -219,12 +219,18 @@ fn import(a: ImportArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-/// `check`: the summary, then with `--fail-below` an error when the check fails.
+/// `check`: the summary (with `--quiet` its verdict line only), then with `--fail-below` an
+/// error when the check fails.
 fn check(a: CheckArgs, quiet: bool) -> Result<()> {
     let fail_below = a.fail_below;
     let cmd = a.into_command();
     let summary = with_bar(quiet, "check", |p| commands::check(&cmd, p))?;
-    report(quiet, &summary);
+    if quiet {
+        // `--quiet` silences progress and the table, never the verdict
+        println!("{}", summary.result.verdict());
+    } else {
+        report(quiet, &summary);
+    }
     if let Some(msg) = fail_below.and_then(|p| summary.failure(p)) {
         anyhow::bail!(msg);
     }

@@ -291,9 +291,9 @@ impl Prior {
     /// The model at ln parameters `x`.
     pub fn model_at(&self, x: &[f64]) -> ModelConfig {
         let mut m = self.template.clone();
-        for (name, v) in self.free.iter().zip(x) {
+        for (k, (name, v)) in self.free.iter().zip(x).enumerate() {
             if let Some(q) = m.quantity_mut(name) {
-                q.value = v.exp();
+                q.value = in_range(v.exp(), self.lo[k], self.hi[k]);
             }
         }
         m
@@ -336,6 +336,14 @@ impl Calibration {
         self.width_share(k) < UNINFORMED_SHARE
     }
 
+    /// Free quantity `k`'s value (schema units) at ln value `ln_v`, kept inside its prior
+    /// range: a particle on the range's edge comes back from ln units a rounding error
+    /// outside it (Γ at 1e4 read as 10000.00000000001 ns), which `check --posterior` and
+    /// the model schema refuse.
+    pub fn value(&self, k: usize, ln_v: f64) -> f64 {
+        in_range(ln_v.exp(), self.prior_lo[k], self.prior_hi[k])
+    }
+
     /// The particles reported (adjusted or raw, as the model file), ln units.
     pub fn particles(&self) -> &[Vec<f64>] {
         if self
@@ -364,7 +372,11 @@ impl Calibration {
             self.free.clone(),
             self.posterior.weights.clone(),
             (self.particles().iter())
-                .map(|x| x.iter().map(|v| v.exp()).collect())
+                .map(|x| {
+                    (x.iter().enumerate())
+                        .map(|(k, v)| self.value(k, *v))
+                        .collect()
+                })
                 .collect(),
         )
     }
@@ -381,8 +393,8 @@ impl Calibration {
         let post = &self.posterior;
         for (i, (w, d)) in post.weights.iter().zip(&post.distances).enumerate() {
             t.push_str(&format!("{w:e},{d:e}"));
-            for (a, r) in rep[i].iter().zip(&post.theta[i]) {
-                t.push_str(&format!(",{:e},{:e}", a.exp(), r.exp()));
+            for (k, (a, r)) in rep[i].iter().zip(&post.theta[i]).enumerate() {
+                t.push_str(&format!(",{:e},{:e}", self.value(k, *a), self.value(k, *r)));
             }
             t.push('\n');
         }
@@ -478,9 +490,13 @@ pub fn calibrate(
         let q = model.quantity_mut(name).expect("a free quantity exists");
         let w = &post.weights;
         let at = |p: f64| weighted_quantile(&x, w, p).expect("a non-empty population");
+        let (lo, hi) = (prior.lo[k], prior.hi[k]);
         *q = Quantity {
-            value: at(0.5).exp(),
-            interval: Some([at(0.025).exp(), at(0.975).exp()]),
+            value: in_range(at(0.5).exp(), lo, hi),
+            interval: Some([
+                in_range(at(0.025).exp(), lo, hi),
+                in_range(at(0.975).exp(), lo, hi),
+            ]),
             n: Some(w.len()),
             ks: None,
             ks_p: None,
@@ -535,6 +551,13 @@ pub fn calibrate(
         prior_lo: prior.lo.clone(),
         prior_hi: prior.hi.clone(),
     })
+}
+
+/// `v` moved into [lo, hi] (a value from ln units on the range's edge is a rounding error
+/// outside it; a regression-adjusted particle may lie anywhere, and the prior gives no
+/// weight outside its range).
+fn in_range(v: f64, lo: f64, hi: f64) -> f64 {
+    v.clamp(lo, hi)
 }
 
 #[cfg(test)]
@@ -677,6 +700,40 @@ mod tests {
         let read = crate::check::PosteriorSample::read(&p).unwrap();
         assert_eq!(cal.posterior_sample(), read);
         assert_eq!(read.values[1][0], (0.7f64 / 3.0).exp());
+    }
+
+    /// A particle on the prior's upper edge (Γ = 1e4 ns: ln then exp gives
+    /// 10000.00000000001) is written inside the range, and `check --posterior` reads it.
+    #[test]
+    fn a_particle_on_the_prior_edge_stays_inside_the_schema() {
+        assert!(1e4f64.ln().exp() > 1e4, "the rounding this test is about");
+        let ln_hi = 1e4f64.ln();
+        let cal = Calibration {
+            model: ModelConfig::table1_defaults(),
+            posterior: Posterior {
+                theta: vec![vec![ln_hi], vec![2f64.ln()]],
+                adjusted: vec![vec![ln_hi + 0.5], vec![2f64.ln() - 0.5]],
+                regression_adjusted: false,
+                weights: vec![0.5, 0.5],
+                distances: vec![0.1, 0.2],
+                epsilon: 0.3,
+                generations: 1,
+                simulations: 2,
+                acceptance: 1.0,
+                heldout_r2: Vec::new(),
+            },
+            free: vec!["cluster_decay".into()],
+            wall_s: 1.0,
+            prior_lo: vec![2.0],
+            prior_hi: vec![1e4],
+        };
+        assert_eq!(cal.value(0, ln_hi), 1e4);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("cal_posterior.csv");
+        cal.write_posterior_csv(&p).unwrap();
+        let read = crate::check::PosteriorSample::read(&p).unwrap();
+        assert_eq!(read.values[0][0], 1e4);
+        assert_eq!(read.values[1][0], 2.0);
     }
 
     #[test]
