@@ -2,6 +2,7 @@
 //! (Touchstone, Parquet). The physics simulator is [`crate::simulate`], the model file's schema
 //! [`crate::model_file`].
 
+pub mod fold;
 pub mod import;
 pub mod layout;
 pub mod manifest;

@@ -31,7 +31,9 @@
 //! negative delays of the circular IFFT, where the coupling's kernel tail wraps to). When
 //! the manifest's `[noise]` floor implies an N0 more than 3 dB from the data's, `energy`
 //! warns with both values ([`EnergyReport::warnings`]; `report` and `reproduce` print the
-//! same line and show it on the page beside N0).
+//! same line and show it on the page beside N0). When the layout reaches beyond the sweep's
+//! unambiguous range c/(2Δf) it warns too, naming the reach and the points that would cover
+//! the building (`campaign::fold`): echoes from farther fold back into the kept delays.
 //! The window kernel's null-to-null width (≈ 4/B for Hann) is the "pulse" duration.
 //!
 //! Refused, naming the manifest and the step: an energy that is not finite (a calibration
@@ -236,8 +238,13 @@ pub fn run(
     let mut meta = table_metadata(m, &proc, &est);
     meta.extend(cal.metadata());
     writer.finish(meta)?;
-    let warnings = manifest_noise_warning(campaign, &proc, &cal, n0)
-        .into_iter()
+    // the layout is optional to the processing: a campaign whose layout cannot be read
+    // gets no fold warning here (the chain's later stages refuse it by name)
+    let fold = crate::campaign::layout::Layout::load(&campaign.layout_path())
+        .ok()
+        .and_then(|l| crate::campaign::fold::fold_warning(m, &l));
+    let warnings = (manifest_noise_warning(campaign, &proc, &cal, n0).into_iter())
+        .chain(fold)
         .collect();
     Ok(EnergyReport {
         sweeps: (np * nd - m.missing().len()) * m.pulses,

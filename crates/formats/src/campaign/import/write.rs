@@ -33,6 +33,10 @@ pub(super) fn write(
     let text = toml::to_string(&t).map_err(|e| Error::input(&p.out, e.to_string()))?;
     // validate as `energy` will read it (layout present, every field in range)
     let c = Campaign::from_str(&text, &p.out)?;
+    let layout = crate::campaign::layout::Layout::load(&c.layout_path())?;
+    outcome
+        .warnings
+        .extend(crate::campaign::fold::fold_warning(&c.manifest, &layout));
     if p.to_parquet {
         let pq = out_dir.join("sweeps.parquet");
         let reader = SweepReader::open(&c)?;
