@@ -3,22 +3,26 @@
 //!
 //! One `…Args` struct per subcommand; their flag names, defaults and help texts are the
 //! command contract of DESIGN §3 and the README's "Commands". The enumerated flags
-//! (`--format`, `--method`, `--criterion`, `--ekf`) parse straight into the library's enums
-//! (`clap::ValueEnum` is derived there, with the flag spellings in `#[value(name)]`).
+//! (`--format`, `--method`, `--criterion`, `--ekf`, …) parse straight into the library's
+//! enums, which know nothing of clap: [`choice`] lists their values by the enums' own
+//! names (`ALL`, `name`, the `Display` a default is shown with).
 //! Numeric flags with a range are checked while parsing ([`ranges`]), so an out-of-range
 //! value fails before any file is read, with a message naming the flag.
 
+pub mod choice;
 pub mod params;
 pub mod ranges;
 
+use choice::choice;
 use clap::{Args, Parser, Subcommand};
-use pradar::calibrate::CalibrateParams;
+use pradar::calibrate::{CalibrateParams, Distance, Ridge};
 use pradar::campaign::manifest::SweepFormat;
 use pradar::check::CheckParams;
 use pradar::cluster::{ClusterParams, Criterion};
 use pradar::correction::CorrectionParams;
 use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
+use pradar::mapping::grid::SilentBound;
 use pradar::mapping::job::PoseNoise;
 use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
@@ -156,7 +160,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub elements: Option<usize>,
     /// Sweep file format.
-    #[arg(long, value_enum, default_value_t = SweepFormat::default())]
+    #[arg(long, default_value_t = SweepFormat::default(), value_parser = choice(&SweepFormat::ALL, SweepFormat::name))]
     pub format: SweepFormat,
 }
 
@@ -239,11 +243,11 @@ pub struct CalibrateArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
     /// The ABC distance (docs/cli.md).
-    #[arg(long, value_enum, default_value_t = CalibrateParams::default().distance)]
-    pub distance: pradar::calibrate::Distance,
+    #[arg(long, default_value_t = CalibrateParams::default().distance, value_parser = choice(&Distance::ALL, Distance::name))]
+    pub distance: Distance,
     /// The summaries' projection's ridge penalty (docs/cli.md).
-    #[arg(long, value_enum, default_value_t = CalibrateParams::default().ridge)]
-    pub ridge: pradar::calibrate::Ridge,
+    #[arg(long, default_value_t = CalibrateParams::default().ridge, value_parser = choice(&Ridge::ALL, Ridge::name))]
+    pub ridge: Ridge,
 }
 
 // `pradar check`
@@ -281,7 +285,7 @@ pub struct CheckArgs {
 #[derive(Args)]
 pub struct MapArgs {
     /// Mapper: og, og-boresight or ekf.
-    #[arg(long, value_enum, default_value_t = MapMethod::default(), hide_possible_values = true, help_heading = "Input")]
+    #[arg(long, default_value_t = MapMethod::default(), value_parser = choice(&MapMethod::ALL, MapMethod::name), hide_possible_values = true, help_heading = "Input")]
     pub method: MapMethod,
     /// Campaign manifest of a single run (with --energy).
     #[arg(
@@ -313,16 +317,17 @@ pub struct MapArgs {
     #[arg(long, default_value_t = OgParams::default().prior, value_parser = ranges::open_unit, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub prior: f64,
     /// Where a direction without an occluder bounds the visibility polygon: off, leak or nearer.
-    #[arg(long, value_enum, default_value_t = OgParams::default().bound_silent, hide_possible_values = true, help_heading = "Occupancy grid (og, og-boresight)")]
-    pub og_bound_silent: pradar::mapping::grid::SilentBound,
+    // `false` and `true`, the values of the flag when it was a switch, stay `off` and `leak`
+    #[arg(long, default_value_t = OgParams::default().bound_silent, value_parser = choice(&SilentBound::ALL, SilentBound::name).alias("off", "false").alias("leak", "true"), hide_possible_values = true, help_heading = "Occupancy grid (og, og-boresight)")]
+    pub og_bound_silent: SilentBound,
     /// Deepest behind the visibility polygon a cell gets occupancy credit, m, or `guard`.
     #[arg(long, default_value_t = credit_depth_default(), value_parser = ranges::credit_depth, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub og_credit_depth: f64,
     /// EKF implementation: dense (exact) or scalable (tiled).
-    #[arg(long, value_enum, default_value_t = EkfParams::default().variant, hide_possible_values = true, help_heading = "EKF (ekf)")]
+    #[arg(long, default_value_t = EkfParams::default().variant, value_parser = choice(&EkfVariant::ALL, EkfVariant::name), hide_possible_values = true, help_heading = "EKF (ekf)")]
     pub ekf: EkfVariant,
     /// EKF linearisation of the energy rows: first-order or second-order.
-    #[arg(long, value_enum, default_value_t = EkfParams::default().update, hide_possible_values = true, help_heading = "EKF (ekf)")]
+    #[arg(long, default_value_t = EkfParams::default().update, value_parser = choice(&EkfUpdate::ALL, EkfUpdate::name), hide_possible_values = true, help_heading = "EKF (ekf)")]
     pub ekf_update: EkfUpdate,
     /// Prior mean of the RRCS μ0, m.
     #[arg(long, default_value_t = EkfParams::default().mu0, value_parser = ranges::positive, allow_negative_numbers = true, help_heading = "EKF (ekf)")]
@@ -365,7 +370,7 @@ pub struct ExtractArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Method.
-    #[arg(long, value_enum, default_value_t = ExtractParams::default().method)]
+    #[arg(long, default_value_t = ExtractParams::default().method, value_parser = choice(&ExtractMethod::ALL, ExtractMethod::name))]
     pub method: ExtractMethod,
     /// Keep components above the floor plus this margin, dB.
     #[arg(long, default_value_t = ExtractParams::default().margin_db, value_parser = ranges::non_negative, allow_negative_numbers = true)]
@@ -407,7 +412,7 @@ pub struct ClusterArgs {
     #[arg(long, allow_negative_numbers = true, default_value_t = ClusterParams::default().seed)]
     pub seed: u64,
     /// Criterion choosing K.
-    #[arg(long, value_enum, default_value_t = ClusterParams::default().criterion)]
+    #[arg(long, default_value_t = ClusterParams::default().criterion, value_parser = choice(&Criterion::ALL, Criterion::name))]
     pub criterion: Criterion,
 }
 
@@ -548,6 +553,7 @@ pub struct ExploreArgs {
         long,
         value_delimiter = ',',
         default_value = "og",
+        value_parser = choice(&MapMethod::ALL, MapMethod::name),
         hide_possible_values = true
     )]
     pub mapper: Vec<MapMethod>,

@@ -24,7 +24,7 @@
 //! assert_eq!(Gate { gate_ns: 3.0 }.check().unwrap().gate_ns, 3.0);
 //! ```
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use std::ops::Deref;
 
 /// A parameter set that validates itself once.
@@ -73,4 +73,21 @@ impl<P> Deref for Valid<P> {
     fn deref(&self) -> &P {
         &self.0
     }
+}
+
+/// The value of `all` whose name (`name`) is `s`: the `FromStr` of an enumerated parameter,
+/// whose `name` is its one spelling (its `Display`, its command-line value and, where it
+/// has one, its serde name). Otherwise an [`Error::Param`] for `field`:
+/// ``unknown {what} `s` (a|b|c)``, listing the names.
+pub fn parse_name<T: Copy>(
+    s: &str,
+    all: &[T],
+    name: fn(&T) -> &'static str,
+    field: &str,
+    what: &str,
+) -> Result<T> {
+    all.iter().copied().find(|v| name(v) == s).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(name).collect();
+        Error::param(field, format!("unknown {what} `{s}` ({})", names.join("|")))
+    })
 }

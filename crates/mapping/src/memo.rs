@@ -19,6 +19,12 @@ pub struct Memo<T> {
     slots: Mutex<Vec<(String, T)>>,
 }
 
+impl<T: Clone> Default for Memo<T> {
+    fn default() -> Memo<T> {
+        Memo::new()
+    }
+}
+
 impl<T: Clone> Memo<T> {
     /// An empty memo (for a `static`).
     pub const fn new() -> Memo<T> {

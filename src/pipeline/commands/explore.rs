@@ -3,7 +3,7 @@
 //! plots, `index.html` and `report_section.html` (the section `report --explore` shows). Takes its command struct and gives a summary whose `Display` is
 //! printed.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::explore::summary::{
     rows_table, summarize, summary_table, timing_table, verdict_text, verdicts,
 };
@@ -60,9 +60,33 @@ impl fmt::Display for ExploreSummary {
     }
 }
 
+/// The flag of each [`ExploreParams`] field the command line sets.
+const FLAGS: [(&str, &str); 8] = [
+    ("elements", "--elements"),
+    ("pulses", "--pulses"),
+    ("step_deg", "--step-deg"),
+    ("bandwidth_ghz", "--bandwidth-ghz"),
+    ("tx_power_dbm", "--tx-power-dbm"),
+    ("mappers", "--mapper"),
+    ("seeds", "--seeds"),
+    ("max_minutes", "--max-minutes"),
+];
+
+/// An error of [`ExploreParams`]'s check naming the flag instead of the field (the map
+/// parameters' errors, whose fields are no flag of `explore`, as they are).
+fn flag_named(e: Error) -> Error {
+    match e {
+        Error::Param { field, msg } => match FLAGS.iter().find(|(f, _)| *f == field) {
+            Some((_, flag)) => Error::param(*flag, msg),
+            None => Error::Param { field, msg },
+        },
+        e => e,
+    }
+}
+
 /// Run `pradar explore`.
 pub fn explore(cmd: &Explore, progress: Progress) -> Result<ExploreSummary> {
-    let params = cmd.params.check()?;
+    let params = cmd.params.check().map_err(flag_named)?;
     // a constant out of range names the file it came from
     let model = match &cmd.energy_model {
         Some(p) => EnergyModel::load(p)?
@@ -162,4 +186,77 @@ pub fn explore(cmd: &Explore, progress: Progress) -> Result<ExploreSummary> {
         verdicts: v.iter().map(|x| verdict_text(&s, x)).collect(),
         index: cmd.out.join("index.html"),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each list's error names the flag the user gave it with.
+    #[test]
+    fn check_errors_name_the_flags() {
+        let d = ExploreParams::default();
+        let cases = [
+            (
+                ExploreParams {
+                    elements: vec![20],
+                    ..d.clone()
+                },
+                "`--elements`",
+            ),
+            (
+                ExploreParams {
+                    pulses: vec![0],
+                    ..d.clone()
+                },
+                "`--pulses`",
+            ),
+            (
+                ExploreParams {
+                    step_deg: vec![-5.0],
+                    ..d.clone()
+                },
+                "`--step-deg`",
+            ),
+            (
+                ExploreParams {
+                    bandwidth_ghz: vec![7.0],
+                    ..d.clone()
+                },
+                "`--bandwidth-ghz`",
+            ),
+            (
+                ExploreParams {
+                    tx_power_dbm: vec![f64::NAN],
+                    ..d.clone()
+                },
+                "`--tx-power-dbm`",
+            ),
+            (
+                ExploreParams {
+                    mappers: vec![crate::mapping::Method::OgBoresight],
+                    ..d.clone()
+                },
+                "`--mapper`",
+            ),
+            (
+                ExploreParams {
+                    seeds: vec![1, 1],
+                    ..d.clone()
+                },
+                "`--seeds`",
+            ),
+            (
+                ExploreParams {
+                    max_minutes: 0.0,
+                    ..d.clone()
+                },
+                "`--max-minutes`",
+            ),
+        ];
+        for (p, flag) in cases {
+            let e = flag_named(p.check().unwrap_err()).to_string();
+            assert!(e.contains(flag), "{e}");
+        }
+    }
 }

@@ -28,21 +28,57 @@ use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 
 /// The ABC distance between the data and a simulation (`--distance`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Distance {
     /// Semi-automatic summaries: 42 pooled statistics of the matrix regressed onto the
     /// parameters ([`summaries`](super::summaries)).
-    #[value(name = "summaries", help = None::<&str>)]
     Summaries,
     /// The semi-automatic summaries with 45 more raw statistics: the quantiles 10, 25,
     /// 50, 75, 90 % of the predictive check's per-profile and per-position statistics
     /// ([`quantile_summaries`](super::summaries::quantile_summaries)).
-    #[value(name = "summaries-quantiles", help = None::<&str>)]
     SummariesQuantiles,
     /// The MMD between the per-profile and per-position statistics' distributions
     /// ([`mmd`](super::mmd)).
-    #[value(name = "mmd", help = None::<&str>)]
     Mmd,
+}
+
+impl Distance {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [Distance; 3] = [
+        Distance::Summaries,
+        Distance::SummariesQuantiles,
+        Distance::Mmd,
+    ];
+
+    /// Name (`summaries`, `summaries-quantiles`, `mmd`): the command-line value and the
+    /// `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Distance::Summaries => "summaries",
+            Distance::SummariesQuantiles => "summaries-quantiles",
+            Distance::Mmd => "mmd",
+        }
+    }
+}
+
+impl std::fmt::Display for Distance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Distance {
+    type Err = Error;
+    /// Parse a [`Distance::name`].
+    fn from_str(s: &str) -> Result<Distance> {
+        crate::params::parse_name(
+            s,
+            &Self::ALL,
+            Self::name,
+            "calibrate.distance",
+            "ABC distance",
+        )
+    }
 }
 
 /// The largest population N (the first generation alone is N simulations, and the kernel
@@ -211,5 +247,33 @@ mod tests {
             let e = p.check().unwrap_err().to_string();
             assert!(e.contains("calibrate."), "{e}");
         }
+    }
+
+    /// Each value reads back from its name, the command-line spelling.
+    #[test]
+    fn distance_names_round_trip() {
+        assert_eq!(
+            Distance::ALL.map(|v| v.to_string()),
+            ["summaries", "summaries-quantiles", "mmd"]
+        );
+        for v in Distance::ALL {
+            assert_eq!(v.to_string().parse::<Distance>().unwrap(), v);
+        }
+        let e = "x".parse::<Distance>().unwrap_err().to_string();
+        assert!(e.contains("(summaries|summaries-quantiles|mmd)"), "{e}");
+    }
+
+    /// Each value reads back from its name, the command-line spelling.
+    #[test]
+    fn ridge_names_round_trip() {
+        assert_eq!(
+            Ridge::ALL.map(|v| v.to_string()),
+            ["fixed", "cv", "cv-drop"]
+        );
+        for v in Ridge::ALL {
+            assert_eq!(v.to_string().parse::<Ridge>().unwrap(), v);
+        }
+        let e = "x".parse::<Ridge>().unwrap_err().to_string();
+        assert!(e.contains("(fixed|cv|cv-drop)"), "{e}");
     }
 }

@@ -9,35 +9,69 @@ use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 
 /// Criterion that picks K among 2..K_max.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Criterion {
     /// Largest mean silhouette.
-    #[value(name = "silhouette", help = None::<&str>)]
     Silhouette,
     /// Largest Calinski–Harabasz index.
-    #[value(name = "ch", help = None::<&str>)]
     CalinskiHarabasz,
     /// Gap statistic (Tibshirani, Walther & Hastie 2001) against `gap_refs` uniform
     /// reference sets over the data's bounding box: the smallest K with
     /// Gap(K) ≥ Gap(K+1) − s(K+1); handles K = 1 natively.
-    #[value(name = "gap", help = None::<&str>)]
     Gap,
     /// Smallest BIC of an exponential-delay × Laplacian-angle mixture (the channel model's
     /// cluster shape); handles K = 1 natively.
-    #[value(name = "channel-bic", help = None::<&str>)]
     ChannelBic,
     /// Smallest BIC of a diagonal-Gaussian mixture (X-means); handles K = 1 natively.
-    #[value(name = "gauss-bic", help = None::<&str>)]
     GaussBic,
     /// Largest leave-one-out log-likelihood of a Gaussian-delay × Laplacian-angle mixture;
     /// handles K = 1 natively.
-    #[value(name = "cv", help = None::<&str>)]
     CrossValidated,
     /// `CrossValidated` with the delay spread and the angular scale shared by the clusters
     /// of a position (pooled within-cluster MLEs; the channel model's clusters share λ and
     /// the AoA law), each cluster keeping its own location and weight.
-    #[value(name = "cv-shared", help = None::<&str>)]
     CrossValidatedShared,
+}
+
+impl Criterion {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [Criterion; 7] = [
+        Criterion::Silhouette,
+        Criterion::CalinskiHarabasz,
+        Criterion::Gap,
+        Criterion::ChannelBic,
+        Criterion::GaussBic,
+        Criterion::CrossValidated,
+        Criterion::CrossValidatedShared,
+    ];
+
+    /// Name (`silhouette`, `ch`, `gap`, `channel-bic`, `gauss-bic`, `cv`, `cv-shared`): the
+    /// command-line value and the `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Criterion::Silhouette => "silhouette",
+            Criterion::CalinskiHarabasz => "ch",
+            Criterion::Gap => "gap",
+            Criterion::ChannelBic => "channel-bic",
+            Criterion::GaussBic => "gauss-bic",
+            Criterion::CrossValidated => "cv",
+            Criterion::CrossValidatedShared => "cv-shared",
+        }
+    }
+}
+
+impl std::fmt::Display for Criterion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Criterion {
+    type Err = Error;
+    /// Parse a [`Criterion::name`].
+    fn from_str(s: &str) -> Result<Criterion> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "criterion", "criterion")
+    }
 }
 
 impl Criterion {
@@ -260,5 +294,30 @@ mod tests {
             assert!(e.contains(field) && e.contains(range), "{e}");
             assert_eq!(e.lines().count(), 1, "{e}");
         }
+    }
+
+    /// Each value reads back from its name, the command-line spelling.
+    #[test]
+    fn criterion_names_round_trip() {
+        assert_eq!(
+            Criterion::ALL.map(|v| v.to_string()),
+            [
+                "silhouette",
+                "ch",
+                "gap",
+                "channel-bic",
+                "gauss-bic",
+                "cv",
+                "cv-shared"
+            ]
+        );
+        for v in Criterion::ALL {
+            assert_eq!(v.to_string().parse::<Criterion>().unwrap(), v);
+        }
+        let e = "x".parse::<Criterion>().unwrap_err().to_string();
+        assert!(
+            e.contains("(silhouette|ch|gap|channel-bic|gauss-bic|cv|cv-shared)"),
+            "{e}"
+        );
     }
 }

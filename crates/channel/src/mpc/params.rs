@@ -9,14 +9,39 @@ use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 
 /// Extraction method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Method {
     /// Iterative 2-D CLEAN.
-    #[value(name = "clean", help = None::<&str>)]
     Clean,
     /// Local maxima (baseline).
-    #[value(name = "peaks", help = None::<&str>)]
     Peaks,
+}
+
+impl Method {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [Method; 2] = [Method::Clean, Method::Peaks];
+
+    /// Name (`clean`, `peaks`): the command-line value and the `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Clean => "clean",
+            Method::Peaks => "peaks",
+        }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = Error;
+    /// Parse a [`Method::name`].
+    fn from_str(s: &str) -> Result<Method> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "method", "extraction method")
+    }
 }
 
 /// Extraction parameters (unchecked; [`ParamGuard::check`] gives the [`ExtractValid`] the
@@ -172,5 +197,16 @@ mod tests {
             assert!(e.contains(field) && e.contains(range), "{e}");
             assert_eq!(e.lines().count(), 1, "{e}");
         }
+    }
+
+    /// Each value reads back from its name, the command-line spelling.
+    #[test]
+    fn method_names_round_trip() {
+        assert_eq!(Method::ALL.map(|v| v.to_string()), ["clean", "peaks"]);
+        for v in Method::ALL {
+            assert_eq!(v.to_string().parse::<Method>().unwrap(), v);
+        }
+        let e = "x".parse::<Method>().unwrap_err().to_string();
+        assert!(e.contains("(clean|peaks)"), "{e}");
     }
 }

@@ -10,19 +10,21 @@ use crate::error::{Error, Result};
 use crate::params::{ParamGuard, Valid};
 
 /// Which implementation of the EKF.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EkfVariant {
     /// Exact dense covariance ([`crate::ekf::DenseEkf`]).
-    #[value(name = "dense", help = None::<&str>)]
     Dense,
     /// Block-diagonal covariance by tiles ([`crate::ekf::TiledEkf`]).
-    #[value(name = "scalable", help = None::<&str>)]
     Scalable,
 }
 
 impl EkfVariant {
-    /// Name (`dense`, `scalable`).
+    /// Every variant, in the order the command line lists them.
+    pub const ALL: [EkfVariant; 2] = [EkfVariant::Dense, EkfVariant::Scalable];
+
+    /// Name (`dense`, `scalable`): the command-line value, the serde name and the
+    /// `Display`.
     pub fn name(&self) -> &'static str {
         match self {
             EkfVariant::Dense => "dense",
@@ -31,28 +33,61 @@ impl EkfVariant {
     }
     /// Parse `dense` / `scalable`.
     pub fn parse(s: &str) -> Result<EkfVariant> {
-        match s {
-            "dense" => Ok(EkfVariant::Dense),
-            "scalable" => Ok(EkfVariant::Scalable),
-            o => Err(Error::param(
-                "ekf",
-                format!("unknown EKF variant `{o}` (dense|scalable)"),
-            )),
-        }
+        crate::params::parse_name(s, &Self::ALL, Self::name, "ekf", "EKF variant")
+    }
+}
+
+impl std::fmt::Display for EkfVariant {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for EkfVariant {
+    type Err = Error;
+    /// Parse a [`EkfVariant::name`] (as [`EkfVariant::parse`]).
+    fn from_str(s: &str) -> Result<EkfVariant> {
+        EkfVariant::parse(s)
     }
 }
 
 /// How an energy row enters the filter ([`crate::ekf`] module docs, "Update").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum EkfUpdate {
     /// Linearised once at the mean (the EKF; the maps' default).
-    #[value(name = "first-order", help = None::<&str>)]
     FirstOrder,
     /// The Gaussian second-order filter: the quadratic term's mean and variance added
     /// ([`crate::ekf::Linearized::second_order`]; the consistent confidence).
-    #[value(name = "second-order", help = None::<&str>)]
     SecondOrder,
+}
+
+impl EkfUpdate {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [EkfUpdate; 2] = [EkfUpdate::FirstOrder, EkfUpdate::SecondOrder];
+
+    /// Name (`first-order`, `second-order`): the command-line value, the serde name and the
+    /// `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            EkfUpdate::FirstOrder => "first-order",
+            EkfUpdate::SecondOrder => "second-order",
+        }
+    }
+}
+
+impl std::fmt::Display for EkfUpdate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for EkfUpdate {
+    type Err = Error;
+    /// Parse a [`EkfUpdate::name`].
+    fn from_str(s: &str) -> Result<EkfUpdate> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "update", "EKF update")
+    }
 }
 
 /// EKF parameters (see the module docs for the reasons of the defaults).
@@ -230,5 +265,33 @@ mod tests {
         // κ = Φ⁻¹(1 − 10⁻³): η = 0.999
         assert!((EkfParams::default().eta() - 0.999).abs() < 1e-6);
         assert!(EkfVariant::parse("dense").is_ok() && EkfVariant::parse("x").is_err());
+    }
+
+    /// Each value reads back from its name, the command-line spelling.
+    #[test]
+    fn variant_names_round_trip() {
+        assert_eq!(
+            EkfVariant::ALL.map(|v| v.to_string()),
+            ["dense", "scalable"]
+        );
+        for v in EkfVariant::ALL {
+            assert_eq!(v.to_string().parse::<EkfVariant>().unwrap(), v);
+        }
+        let e = "x".parse::<EkfVariant>().unwrap_err().to_string();
+        assert!(e.contains("(dense|scalable)"), "{e}");
+    }
+
+    /// Each value reads back from its name, the command-line spelling.
+    #[test]
+    fn update_names_round_trip() {
+        assert_eq!(
+            EkfUpdate::ALL.map(|v| v.to_string()),
+            ["first-order", "second-order"]
+        );
+        for v in EkfUpdate::ALL {
+            assert_eq!(v.to_string().parse::<EkfUpdate>().unwrap(), v);
+        }
+        let e = "x".parse::<EkfUpdate>().unwrap_err().to_string();
+        assert!(e.contains("(first-order|second-order)"), "{e}");
     }
 }

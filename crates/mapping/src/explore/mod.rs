@@ -30,7 +30,7 @@
 //! * **time estimate**: the cheapest job of the grid is run first on one thread and timed,
 //!   and the grid's time is that time scaled by each job's work (directions × samples ×
 //!   (1 + a share per pulse and per mapper), `Job::work` in the run) over the threads; a
-//!   grid above `--max-minutes` is then refused with the estimate.
+//!   grid above [`ExploreParams::max_minutes`] is then refused with the estimate.
 
 pub mod energy_model;
 pub mod summary;
@@ -142,24 +142,25 @@ impl ParamGuard for ExploreParams {
 
     /// Every list non-empty (bandwidth and power may be empty: the campaign's) and without
     /// repeats; N perfect squares; pulses ≥ 1; steps, bandwidths positive and finite; power
-    /// finite; `max_minutes` positive; the mappers' parameters.
+    /// finite; `max_minutes` positive; the mappers' parameters. An error names the field
+    /// (`elements`, `mappers`, …; the command line names its flag instead).
     fn check(&self) -> Result<ExploreValid> {
         let lists = [
             (
-                "--elements",
+                "elements",
                 self.elements.is_empty(),
                 distinct(&self.elements),
             ),
-            ("--pulses", self.pulses.is_empty(), distinct(&self.pulses)),
+            ("pulses", self.pulses.is_empty(), distinct(&self.pulses)),
             (
-                "--step-deg",
+                "step_deg",
                 self.step_deg.is_empty(),
                 distinct(&self.step_deg),
             ),
-            ("--bandwidth-ghz", false, distinct(&self.bandwidth_ghz)),
-            ("--tx-power-dbm", false, distinct(&self.tx_power_dbm)),
-            ("--mapper", self.mappers.is_empty(), distinct(&self.mappers)),
-            ("--seeds", self.seeds.is_empty(), distinct(&self.seeds)),
+            ("bandwidth_ghz", false, distinct(&self.bandwidth_ghz)),
+            ("tx_power_dbm", false, distinct(&self.tx_power_dbm)),
+            ("mappers", self.mappers.is_empty(), distinct(&self.mappers)),
+            ("seeds", self.seeds.is_empty(), distinct(&self.seeds)),
         ];
         for (name, empty, unique) in lists {
             if empty {
@@ -173,17 +174,17 @@ impl ParamGuard for ExploreParams {
             let s = (n as f64).sqrt().round() as usize;
             if n == 0 || s.checked_mul(s) != Some(n) {
                 return Err(Error::param(
-                    "--elements",
+                    "elements",
                     format!("{n} is not a perfect square (e.g. 16, 36, 64, 100, 196, 400)"),
                 ));
             }
         }
         if self.pulses.contains(&0) {
-            return Err(Error::param("--pulses", "pulses must be >= 1"));
+            return Err(Error::param("pulses", "pulses must be >= 1"));
         }
         for (name, v) in [
-            ("--step-deg", &self.step_deg),
-            ("--bandwidth-ghz", &self.bandwidth_ghz),
+            ("step_deg", &self.step_deg),
+            ("bandwidth_ghz", &self.bandwidth_ghz),
         ] {
             if v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
                 return Err(Error::param(name, "values must be finite and > 0"));
@@ -192,18 +193,18 @@ impl ParamGuard for ExploreParams {
         // the band is drawn inside 57.5–63.5 GHz: more than 6 GHz is no personal radar's
         if self.bandwidth_ghz.iter().any(|x| *x > 6.0) {
             return Err(Error::param(
-                "--bandwidth-ghz",
+                "bandwidth_ghz",
                 "values must be at most 6 GHz (57.5–63.5 GHz)",
             ));
         }
         if self.tx_power_dbm.iter().any(|x| !x.is_finite()) {
-            return Err(Error::param("--tx-power-dbm", "values must be finite"));
+            return Err(Error::param("tx_power_dbm", "values must be finite"));
         }
         if !(self.max_minutes.is_finite() && self.max_minutes > 0.0) {
-            return Err(Error::param("--max-minutes", "must be > 0"));
+            return Err(Error::param("max_minutes", "must be > 0"));
         }
         if self.mappers.contains(&Method::OgBoresight) {
-            return Err(Error::param("--mapper", "og or ekf"));
+            return Err(Error::param("mappers", "og or ekf"));
         }
         self.grid.check()?;
         self.og.check()?;
@@ -371,21 +372,21 @@ mod tests {
             elements: vec![16, 20],
             ..Default::default()
         };
-        assert!(p.check().unwrap_err().to_string().contains("--elements"));
+        assert!(p.check().unwrap_err().to_string().contains("`elements`"));
         let p = ExploreParams {
             pulses: vec![0],
             ..Default::default()
         };
-        assert!(p.check().unwrap_err().to_string().contains("--pulses"));
+        assert!(p.check().unwrap_err().to_string().contains("`pulses`"));
         let p = ExploreParams {
             seeds: vec![1, 1],
             ..Default::default()
         };
-        assert!(p.check().unwrap_err().to_string().contains("--seeds"));
+        assert!(p.check().unwrap_err().to_string().contains("`seeds`"));
         let p = ExploreParams {
             step_deg: vec![-5.0],
             ..Default::default()
         };
-        assert!(p.check().unwrap_err().to_string().contains("--step-deg"));
+        assert!(p.check().unwrap_err().to_string().contains("`step_deg`"));
     }
 }

@@ -83,20 +83,46 @@ pub struct Occlusion {
 
 /// How a direction without an occluder (no detection not explained by a side lobe: a
 /// *silent* direction) bounds the visibility polygon (module docs, "silent directions").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SilentBound {
     /// At the maximum range, as if the beam had seen through everything.
-    #[value(name = "off", alias = "false")]
     Off,
     /// At its first detection (a side-lobe-explained leak); without one, left out of the
     /// polygon like a missing sweep (its neighbours bound it).
-    #[value(name = "leak", alias = "true")]
     Leak,
     /// At the nearer of its first detection and the range interpolated (linear in 1/R)
     /// between the nearest directions with an occluder on either side.
-    #[value(name = "nearer")]
     Nearer,
+}
+
+impl SilentBound {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [SilentBound; 3] = [SilentBound::Off, SilentBound::Leak, SilentBound::Nearer];
+
+    /// Name (`off`, `leak`, `nearer`): the command-line value, the serde name and the
+    /// `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SilentBound::Off => "off",
+            SilentBound::Leak => "leak",
+            SilentBound::Nearer => "nearer",
+        }
+    }
+}
+
+impl std::fmt::Display for SilentBound {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SilentBound {
+    type Err = crate::error::Error;
+    /// Parse a [`SilentBound::name`].
+    fn from_str(s: &str) -> crate::error::Result<SilentBound> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "bound_silent", "silent bound")
+    }
 }
 
 /// The detections of one pose's scan with their occluders.
@@ -540,17 +566,29 @@ mod tests {
     /// `"Scalable"`).
     #[test]
     fn mapping_choices_serialise_as_their_flag_values() {
-        use crate::ekf::EkfVariant;
-        use clap::ValueEnum;
-        fn same<T: ValueEnum + serde::Serialize>() {
-            for v in T::value_variants() {
-                let flag = v.to_possible_value().unwrap().get_name().to_string();
+        use crate::ekf::{EkfUpdate, EkfVariant};
+        fn same<T>(all: &[T])
+        where
+            T: std::fmt::Display
+                + std::str::FromStr
+                + serde::Serialize
+                + PartialEq
+                + std::fmt::Debug,
+            T::Err: std::fmt::Debug,
+        {
+            for v in all {
+                let flag = v.to_string();
                 assert_eq!(serde_json::to_string(v).unwrap(), format!("\"{flag}\""));
+                assert_eq!(&flag.parse::<T>().unwrap(), v);
             }
         }
-        same::<EkfVariant>();
-        same::<crate::ekf::EkfUpdate>();
-        same::<SilentBound>();
+        same(&EkfVariant::ALL);
+        same(&EkfUpdate::ALL);
+        same(&SilentBound::ALL);
+        assert_eq!(
+            SilentBound::ALL.map(|b| b.to_string()),
+            ["off", "leak", "nearer"]
+        );
     }
 
     #[test]

@@ -86,23 +86,23 @@ pub use scan::{og_map, og_map_stats};
 use crate::error::{Error, Result};
 
 /// Inverse sensor model (`og` by default).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Method {
     /// Side-lobe-aware occupancy grid (responsibilities over the range ring).
-    #[value(name = "og", help = "Side-lobe-aware occupancy grid")]
     #[default]
     Og,
     /// Boresight-only baseline.
-    #[value(name = "og-boresight", help = "Boresight-only baseline")]
     OgBoresight,
     /// EKF over the RRCS per cell ([`crate::ekf`]; not an inverse sensor model:
     /// [`og_map`] refuses it, [`crate::job::run_map`] dispatches it).
-    #[value(name = "ekf", help = "EKF over the RRCS per cell")]
     Ekf,
 }
 
 impl Method {
-    /// Command-line / file name.
+    /// Every mapper, in the order the command line lists them.
+    pub const ALL: [Method; 3] = [Method::Og, Method::OgBoresight, Method::Ekf];
+
+    /// Command-line / file name (and the `Display`).
     pub fn name(&self) -> &'static str {
         match self {
             Method::Og => "og",
@@ -112,15 +112,21 @@ impl Method {
     }
     /// Parse a name (`og`, `og-boresight`, `ekf`).
     pub fn parse(s: &str) -> Result<Method> {
-        match s {
-            "og" => Ok(Method::Og),
-            "og-boresight" => Ok(Method::OgBoresight),
-            "ekf" => Ok(Method::Ekf),
-            other => Err(Error::param(
-                "method",
-                format!("unknown method `{other}` (og|og-boresight|ekf)"),
-            )),
-        }
+        crate::params::parse_name(s, &Self::ALL, Self::name, "method", "method")
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = Error;
+    /// Parse a [`Method::name`] (as [`Method::parse`]).
+    fn from_str(s: &str) -> Result<Method> {
+        Method::parse(s)
     }
 }
 
@@ -211,10 +217,19 @@ mod tests {
 
     #[test]
     fn method_names_round_trip() {
-        for m in [Method::Og, Method::OgBoresight, Method::Ekf] {
+        assert_eq!(
+            Method::ALL.map(|m| m.to_string()),
+            ["og", "og-boresight", "ekf"]
+        );
+        for m in Method::ALL {
             assert_eq!(Method::parse(m.name()).unwrap(), m);
+            assert_eq!(m.to_string().parse::<Method>().unwrap(), m);
         }
-        assert!(Method::parse("ekf2").is_err());
+        let e = Method::parse("ekf2").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown method `ekf2` (og|og-boresight|ekf)"),
+            "{e}"
+        );
     }
 
     #[test]

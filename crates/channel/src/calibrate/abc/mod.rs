@@ -88,20 +88,45 @@ pub struct AbcOptions {
 }
 
 /// The ridge penalty of the semi-automatic projection (`--ridge`; no effect with the MMD).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Ridge {
     /// λ = 1e-3·n for every parameter.
-    #[value(name = "fixed", help = None::<&str>)]
     Fixed,
     /// λ_k = c_k·n per parameter, c_k from [`RIDGE_GRID`] by 5-fold cross-validation on
     /// the particles the projection is fitted on.
-    #[value(name = "cv", help = None::<&str>)]
     Cv,
     /// As [`Ridge::Cv`], and a parameter whose projection's held-out R² is ≤ 0 (it
     /// predicts its parameter no better than the mean) is left out of the distance (all
     /// kept when every R² is ≤ 0); it stays in the regression adjustment.
-    #[value(name = "cv-drop", help = None::<&str>)]
     CvDrop,
+}
+
+impl Ridge {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [Ridge; 3] = [Ridge::Fixed, Ridge::Cv, Ridge::CvDrop];
+
+    /// Name (`fixed`, `cv`, `cv-drop`): the command-line value and the `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Ridge::Fixed => "fixed",
+            Ridge::Cv => "cv",
+            Ridge::CvDrop => "cv-drop",
+        }
+    }
+}
+
+impl std::fmt::Display for Ridge {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Ridge {
+    type Err = Error;
+    /// Parse a [`Ridge::name`].
+    fn from_str(s: &str) -> Result<Ridge> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "calibrate.ridge", "ridge")
+    }
 }
 
 /// The relative ridge penalties c (λ = c·n) the cross-validation chooses from: 1e-3 …

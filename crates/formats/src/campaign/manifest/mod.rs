@@ -49,16 +49,42 @@ mod sections;
 pub use sections::*;
 
 /// Sweep file format.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum SweepFormat {
     /// One Touchstone file (v1 `.sNp` or v2) per (position, direction, pulse).
     #[default]
-    #[value(name = "touchstone", help = None::<&str>)]
     Touchstone,
     /// One Parquet long table (position, direction, pulse, frequency_hz, re, im).
-    #[value(name = "parquet", help = None::<&str>)]
     Parquet,
+}
+
+impl SweepFormat {
+    /// Every format, in the order the command line lists them.
+    pub const ALL: [SweepFormat; 2] = [SweepFormat::Touchstone, SweepFormat::Parquet];
+
+    /// Name (`touchstone`, `parquet`): the manifest's `[sweeps] format`, the command-line
+    /// value, the `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SweepFormat::Touchstone => "touchstone",
+            SweepFormat::Parquet => "parquet",
+        }
+    }
+}
+
+impl std::fmt::Display for SweepFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SweepFormat {
+    type Err = Error;
+    /// Parse a [`SweepFormat::name`].
+    fn from_str(s: &str) -> Result<SweepFormat> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "sweeps.format", "sweep format")
+    }
 }
 
 /// One explicitly listed sweep file.
@@ -675,5 +701,25 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("array.elements"));
+    }
+
+    /// Each format reads back from its name, which is the manifest's (serde) spelling and
+    /// the command-line value.
+    #[test]
+    fn sweep_format_names_round_trip_and_match_the_manifest() {
+        let names = SweepFormat::ALL.map(|f| f.to_string());
+        assert_eq!(names, ["touchstone", "parquet"]);
+        for f in SweepFormat::ALL {
+            assert_eq!(f.to_string().parse::<SweepFormat>().unwrap(), f);
+            let sweeps = SweepsConfig {
+                format: f,
+                ..SweepsConfig::default()
+            };
+            let text = toml::to_string(&sweeps).unwrap();
+            assert!(text.contains(&format!("format = \"{f}\"")), "{text}");
+            assert_eq!(toml::from_str::<SweepsConfig>(&text).unwrap().format, f);
+        }
+        let e = "Parquet".parse::<SweepFormat>().unwrap_err().to_string();
+        assert!(e.contains("(touchstone|parquet)"), "{e}");
     }
 }
