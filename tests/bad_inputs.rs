@@ -439,9 +439,33 @@ macro_rules! import_out {
 
 fn nothing(_: &Path) {}
 
+/// The campaign manifest every case runs on (in the copied base folder).
+const M: &str = "sim/campaign.toml";
+/// The sweep pattern of [`M`].
+const PAT: &str = "sweeps/p{position:03}_d{direction:02}_k{pulse:02}.s2p";
+
+/// Every bad-input case, in order: the groups below, each a table of cases (a command
+/// line, what its one-line error must name, and the setup that breaks the input).
 fn cases() -> Vec<Case> {
-    const M: &str = "sim/campaign.toml";
-    const PAT: &str = "sweeps/p{position:03}_d{direction:02}_k{pulse:02}.s2p";
+    [
+        output_names_input_cases(),
+        manifest_and_size_cases(),
+        layout_model_and_flag_cases(),
+        file_cases(),
+        output_is_input_cases(),
+        not_regular_file_cases(),
+        bound_and_overflow_cases(),
+        format_and_label_cases(),
+        order_and_path_cases(),
+        usage_cases(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// Bad-input cases: the outputs that name an input of the same run.
+fn output_names_input_cases() -> Vec<Case> {
     vec![
         // ---- an output naming an input of the same run
         case(
@@ -584,6 +608,12 @@ fn cases() -> Vec<Case> {
             &["model.toml", "input --model", "--truth"],
             nothing,
         ),
+    ]
+}
+
+/// Bad-input cases: the manifest against the files, and sizes bounded before allocation.
+fn manifest_and_size_cases() -> Vec<Case> {
+    vec![
         // ---- the manifest against the files
         case(
             "step 10° over 5° files",
@@ -724,6 +754,12 @@ fn cases() -> Vec<Case> {
             &["e.parquet", "column `energy`", "1e300"],
             |d| parquet_edit(d, "e.parquet", |df| set_cell(df, "energy", 7, 1e300)),
         ),
+    ]
+}
+
+/// Bad-input cases: layout geometry, model files and flags.
+fn layout_model_and_flag_cases() -> Vec<Case> {
+    vec![
         // ---- layout geometry
         case(
             "self-intersecting perimeter",
@@ -853,6 +889,13 @@ fn cases() -> Vec<Case> {
             &["--bootstrap", "[40, 100000]"],
             nothing,
         ),
+    ]
+}
+
+/// Bad-input cases: corrupt Parquet, messages naming the user's file, and outputs that are
+/// not regular files.
+fn file_cases() -> Vec<Case> {
+    vec![
         // ---- corrupt Parquet
         case("truncated energy table", EXTRACT, &["e.parquet"], |d| {
             corrupt(d, "e.parquet", -100, None)
@@ -958,6 +1001,12 @@ fn cases() -> Vec<Case> {
             &["/dev/full", "No space left on device"],
             nothing,
         ),
+    ]
+}
+
+/// Bad-input cases: an output that is an input, also one an input names.
+fn output_is_input_cases() -> Vec<Case> {
+    vec![
         // ---- an output that is an input, also one an input names
         case(
             "energy --out = a hard link of its manifest",
@@ -1038,6 +1087,12 @@ fn cases() -> Vec<Case> {
                 std::fs::copy(d.join("poses.csv"), d.join("imp/sweeps.parquet")).unwrap();
             },
         ),
+    ]
+}
+
+/// Bad-input cases: sweep files and index entries that are not regular files.
+fn not_regular_file_cases() -> Vec<Case> {
+    vec![
         // ---- sweep files and index entries that are not regular files
         case(
             "sweep file is a FIFO",
@@ -1143,6 +1198,12 @@ fn cases() -> Vec<Case> {
                 edit(d, "index.csv", "0,0,0,sim", "0,NaN,0,sim");
             },
         ),
+    ]
+}
+
+/// Bad-input cases: sizes bounded, values that overflow and calibrations that leave nothing.
+fn bound_and_overflow_cases() -> Vec<Case> {
+    vec![
         // ---- sizes bounded
         case(
             "poses CSV of 10^6 rows",
@@ -1288,6 +1349,13 @@ fn cases() -> Vec<Case> {
                 std::fs::copy(fixture, d.join("e.parquet")).unwrap();
             },
         ),
+    ]
+}
+
+/// Bad-input cases: a v2 two-port without its data order, energy metadata out of range,
+/// labels, missing sweeps and NaN energies.
+fn format_and_label_cases() -> Vec<Case> {
+    vec![
         // ---- a v2 two-port without its data order, energy metadata out of range
         case(
             "Touchstone v2 two-port without [Two-Port Data Order]",
@@ -1388,6 +1456,12 @@ fn cases() -> Vec<Case> {
             &["e.parquet", "lists as `missing`", "NaN expected"],
             |d| energy_meta(d, "missing", "0:0"),
         ),
+    ]
+}
+
+/// Bad-input cases: rows out of order and commas in index paths.
+fn order_and_path_cases() -> Vec<Case> {
+    vec![
         // ---- rows out of order, commas in index paths
         case(
             "Touchstone frequency rows swapped",
@@ -1470,6 +1544,12 @@ fn cases() -> Vec<Case> {
                 )
             },
         ),
+    ]
+}
+
+/// Bad-input cases: clap's usage errors, one line each.
+fn usage_cases() -> Vec<Case> {
+    vec![
         // ---- clap's usage errors, one line
         case(
             "import with --index and --sweeps",

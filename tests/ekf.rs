@@ -957,11 +957,35 @@ fn apply<F: RrcsFilter>(f: &mut F, o: &Observation, noise: &NoiseModel, upd: Upd
 
 /// [`nees`] with the update `upd` for both filters.
 fn nees_with(scene: Scene, reg: Regime, runs: usize, seed0: u64, upd: Update) -> Nees {
-    use rand_distr::{Distribution, StandardNormal};
     use rayon::prelude::*;
     use statrs::distribution::{ChiSquared, ContinuousCDF};
     let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path();
+    let c = nees_room(tmp.path(), scene);
+    let setup = NeesSetup::new(&c, scene, reg);
+    let per_run: Vec<(usize, f64, f64, f64)> = (0..runs)
+        .into_par_iter()
+        .map(|r| setup.run(seed0 + r as u64, upd))
+        .collect();
+    let nu = per_run[0].0;
+    assert!(
+        per_run.iter().all(|r| r.0 == nu),
+        "the updated cells depend on the geometry only"
+    );
+    let dof = (nu * runs) as f64;
+    let chi = ChiSquared::new(dof).unwrap();
+    Nees {
+        n: nu,
+        runs,
+        band: (chi.inverse_cdf(0.025), chi.inverse_cdf(0.975)),
+        dense: per_run.iter().map(|r| r.1).sum(),
+        tiled: per_run.iter().map(|r| r.2).sum(),
+        min_std_ratio: per_run.iter().map(|r| r.3).fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// Takes a folder and the scene; writes the 6 m room's layout and campaign (8 poses
+/// around the centre, the scene's direction step) into it and gives the campaign.
+fn nees_room(dir: &Path, scene: Scene) -> pradar::campaign::Campaign {
     std::fs::write(
         dir.join("room.geojson"),
         r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"perimeter"},"geometry":{"type":"Polygon","coordinates":[[[0,0],[6,0],[6,6],[0,6],[0,0]]]}}]}"#,
@@ -986,160 +1010,193 @@ fn nees_with(scene: Scene, reg: Regime, runs: usize, seed0: u64, upd: Update) ->
         ));
     }
     std::fs::write(dir.join("campaign.toml"), t).unwrap();
-    let c = pradar::campaign::Campaign::load(&dir.join("campaign.toml")).unwrap();
-    let m = &c.manifest;
-    let proc = pradar::energy::EnergyProcessor::new(m.band, m.processing).unwrap();
-    let tb = proc.bin_width_ns();
-    let min_bin = 2 + (m.processing.gate_ns / tb).ceil() as usize;
-    let (cell, side) = (scene.cell_m, scene.side);
-    let spec = GridSpec {
-        x0_m: 3.0 - cell * side as f64 / 2.0,
-        y0_m: 3.0 - cell * side as f64 / 2.0,
-        cell_m: cell,
-        cols: side,
-        rows: side,
-    };
-    let gp = GridParams {
-        cell_m: cell,
-        margin_m: 0.0,
-        ..Default::default()
-    };
-    let model =
-        ObservationModel::new(spec, &gp.check().unwrap(), m, proc.nbins(), tb, min_bin).unwrap();
-    // dense and tiled share the parameters
-    let pd = EkfParams {
-        mu0: reg.mu0,
-        sigma0: reg.sigma0,
-        model_error: reg.model_error,
-        ..Default::default()
-    }
-    .check()
-    .unwrap();
-    let ps = pd.clone();
-    let kern =
-        pradar::mapping::ekf::truncate_kernel(&window_kernel(&c).unwrap(), pd.kernel_floor_db);
-    let noise = NoiseModel {
-        n0: 1e-12,
-        tw: proc.tw(),
-        pulses: 1.0,
-        model_error: reg.model_error,
-    };
-    let n = spec.len();
-    // the observations' rows and coefficients (the truth only sets z)
-    let mut rows = Vec::new();
-    for p in 0..model.poses.len() {
-        let geom = model.pose_geometry(p);
-        for d in 0..model.directions() {
-            let mut scratch = vec![0.0; n];
-            let o = Observation::build(
-                &model.beam(&geom, d),
-                &vec![0.0; model.bins],
-                &kern,
-                model.min_bin,
-                &mut scratch,
-            );
-            if o.rows() > 0 {
-                rows.push(o);
+    pradar::campaign::Campaign::load(&dir.join("campaign.toml")).unwrap()
+}
+
+/// What every NEES run shares: the regime, the filters' parameters, the noise model, the
+/// observations' rows and coefficients (the truth only sets z), the grid's size and the
+/// prior variance.
+struct NeesSetup {
+    /// The prior and model error.
+    reg: Regime,
+    /// The dense filter's parameters.
+    pd: pradar::mapping::EkfValid,
+    /// The tiled filter's (the same).
+    ps: pradar::mapping::EkfValid,
+    /// The noise model.
+    noise: NoiseModel,
+    /// Every (pose, direction) observation with rows, z unset.
+    rows: Vec<Observation>,
+    /// Cells.
+    n: usize,
+    /// Grid side, cells.
+    side: usize,
+    /// Prior variance σ0².
+    v0: f64,
+}
+
+impl NeesSetup {
+    /// Takes the room's campaign, the scene and the regime; gives the grid at the room's
+    /// centre, its observation model's rows and the filters' parameters.
+    fn new(c: &pradar::campaign::Campaign, scene: Scene, reg: Regime) -> NeesSetup {
+        let m = &c.manifest;
+        let proc = pradar::energy::EnergyProcessor::new(m.band, m.processing).unwrap();
+        let tb = proc.bin_width_ns();
+        let min_bin = 2 + (m.processing.gate_ns / tb).ceil() as usize;
+        let (cell, side) = (scene.cell_m, scene.side);
+        let spec = GridSpec {
+            x0_m: 3.0 - cell * side as f64 / 2.0,
+            y0_m: 3.0 - cell * side as f64 / 2.0,
+            cell_m: cell,
+            cols: side,
+            rows: side,
+        };
+        let gp = GridParams {
+            cell_m: cell,
+            margin_m: 0.0,
+            ..Default::default()
+        };
+        let model = ObservationModel::new(spec, &gp.check().unwrap(), m, proc.nbins(), tb, min_bin)
+            .unwrap();
+        // dense and tiled share the parameters
+        let pd = EkfParams {
+            mu0: reg.mu0,
+            sigma0: reg.sigma0,
+            model_error: reg.model_error,
+            ..Default::default()
+        }
+        .check()
+        .unwrap();
+        let ps = pd.clone();
+        let kern =
+            pradar::mapping::ekf::truncate_kernel(&window_kernel(c).unwrap(), pd.kernel_floor_db);
+        let noise = NoiseModel {
+            n0: 1e-12,
+            tw: proc.tw(),
+            pulses: 1.0,
+            model_error: reg.model_error,
+        };
+        let n = spec.len();
+        // the observations' rows and coefficients (the truth only sets z)
+        let mut rows = Vec::new();
+        for p in 0..model.poses.len() {
+            let geom = model.pose_geometry(p);
+            for d in 0..model.directions() {
+                let mut scratch = vec![0.0; n];
+                let o = Observation::build(
+                    &model.beam(&geom, d),
+                    &vec![0.0; model.bins],
+                    &kern,
+                    model.min_bin,
+                    &mut scratch,
+                );
+                if o.rows() > 0 {
+                    rows.push(o);
+                }
             }
         }
-    }
-    let v0 = reg.sigma0 * reg.sigma0;
-    // NEES of a filter over the cells `upd`, block by block of what it holds
-    let nees_of = |f: &dyn RrcsFilter, x: &[f64], upd: &[usize]| -> f64 {
-        let mut blocks: Vec<Vec<usize>> = Vec::new();
-        for &i in upd {
-            match blocks.iter_mut().find(|b| f.covariance(b[0], i).is_some()) {
-                Some(b) => b.push(i),
-                None => blocks.push(vec![i]),
-            }
+        let v0 = reg.sigma0 * reg.sigma0;
+        NeesSetup {
+            reg,
+            pd,
+            ps,
+            noise,
+            rows,
+            n,
+            side,
+            v0,
         }
-        blocks
-            .iter()
-            .map(|b| {
-                let k = b.len();
-                let pm = nalgebra::DMatrix::from_fn(k, k, |a, c| f.covariance(b[a], b[c]).unwrap());
-                let e = nalgebra::DVector::from_fn(k, |a, _| f.mean()[b[a]] - x[b[a]]);
-                e.dot(
-                    &nalgebra::Cholesky::new(pm)
-                        .expect("P positive definite")
-                        .solve(&e),
-                )
+    }
+
+    /// One run at `seed`: takes the seed and the update; draws a truth from the prior and
+    /// the observations from the model at it, runs the dense and the tiled filter, and
+    /// gives (updated cells, dense NEES, tiled NEES, smallest tiled/dense std ratio).
+    fn run(&self, seed: u64, upd: Update) -> (usize, f64, f64, f64) {
+        use rand_distr::{Distribution, StandardNormal};
+        let (reg, pd, ps, noise) = (self.reg, &self.pd, &self.ps, &self.noise);
+        let (rows, n, side, v0) = (&self.rows, self.n, self.side, self.v0);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let x: Vec<f64> = (0..n)
+            .map(|_| {
+                let w: f64 = StandardNormal.sample(&mut rng);
+                let v = reg.mu0 + reg.sigma0 * w;
+                if reg.fold {
+                    v.abs()
+                } else {
+                    v
+                }
             })
-            .sum()
-    };
-    fn run<F: RrcsFilter>(
-        f: &mut F,
-        obs: &[Observation],
-        p: &pradar::mapping::EkfValid,
-        noise: &NoiseModel,
-        upd: Update,
-    ) {
-        for o in obs {
-            apply(f, o, noise, upd);
-            f.project_positive(p.x_min());
+            .collect();
+        let obs: Vec<Observation> = rows
+            .iter()
+            .map(|o| {
+                let mut o = o.clone();
+                let at_truth = Linearized::new(&o, &x, noise);
+                for j in 0..o.rows() {
+                    let w: f64 = StandardNormal.sample(&mut rng);
+                    o.z[j] = at_truth.h[j] + at_truth.r[j].sqrt() * w;
+                }
+                o
+            })
+            .collect();
+        let mut dense = DenseEkf::new(n, pd).unwrap();
+        run_updates(&mut dense, &obs, pd, noise, upd);
+        let mut tiled = TiledEkf::new(side, side, ps.tile, ps).unwrap();
+        run_updates(&mut tiled, &obs, ps, noise, upd);
+        let upd: Vec<usize> = (0..n)
+            .filter(|&i| dense.variances()[i] < v0 * (1.0 - 1e-9))
+            .collect();
+        let (vd, vt) = (dense.variances(), tiled.variances());
+        let ratio = upd
+            .iter()
+            .map(|&i| (vt[i] / vd[i]).sqrt())
+            .fold(f64::INFINITY, f64::min);
+        (
+            upd.len(),
+            nees_of(&dense, &x, &upd),
+            nees_of(&tiled, &x, &upd),
+            ratio,
+        )
+    }
+}
+
+/// Takes a filter, the truth and the updated cells; gives the filter's NEES over those
+/// cells, block by block of what it holds.
+fn nees_of(f: &dyn RrcsFilter, x: &[f64], upd: &[usize]) -> f64 {
+    let mut blocks: Vec<Vec<usize>> = Vec::new();
+    for &i in upd {
+        match blocks.iter_mut().find(|b| f.covariance(b[0], i).is_some()) {
+            Some(b) => b.push(i),
+            None => blocks.push(vec![i]),
         }
     }
-    let per_run: Vec<(usize, f64, f64, f64)> = (0..runs)
-        .into_par_iter()
-        .map(|r| {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed0 + r as u64);
-            let x: Vec<f64> = (0..n)
-                .map(|_| {
-                    let w: f64 = StandardNormal.sample(&mut rng);
-                    let v = reg.mu0 + reg.sigma0 * w;
-                    if reg.fold {
-                        v.abs()
-                    } else {
-                        v
-                    }
-                })
-                .collect();
-            let obs: Vec<Observation> = rows
-                .iter()
-                .map(|o| {
-                    let mut o = o.clone();
-                    let at_truth = Linearized::new(&o, &x, &noise);
-                    for j in 0..o.rows() {
-                        let w: f64 = StandardNormal.sample(&mut rng);
-                        o.z[j] = at_truth.h[j] + at_truth.r[j].sqrt() * w;
-                    }
-                    o
-                })
-                .collect();
-            let mut dense = DenseEkf::new(n, &pd).unwrap();
-            run(&mut dense, &obs, &pd, &noise, upd);
-            let mut tiled = TiledEkf::new(side, side, ps.tile, &ps).unwrap();
-            run(&mut tiled, &obs, &ps, &noise, upd);
-            let upd: Vec<usize> = (0..n)
-                .filter(|&i| dense.variances()[i] < v0 * (1.0 - 1e-9))
-                .collect();
-            let (vd, vt) = (dense.variances(), tiled.variances());
-            let ratio = upd
-                .iter()
-                .map(|&i| (vt[i] / vd[i]).sqrt())
-                .fold(f64::INFINITY, f64::min);
-            (
-                upd.len(),
-                nees_of(&dense, &x, &upd),
-                nees_of(&tiled, &x, &upd),
-                ratio,
+    blocks
+        .iter()
+        .map(|b| {
+            let k = b.len();
+            let pm = nalgebra::DMatrix::from_fn(k, k, |a, c| f.covariance(b[a], b[c]).unwrap());
+            let e = nalgebra::DVector::from_fn(k, |a, _| f.mean()[b[a]] - x[b[a]]);
+            e.dot(
+                &nalgebra::Cholesky::new(pm)
+                    .expect("P positive definite")
+                    .solve(&e),
             )
         })
-        .collect();
-    let nu = per_run[0].0;
-    assert!(
-        per_run.iter().all(|r| r.0 == nu),
-        "the updated cells depend on the geometry only"
-    );
-    let dof = (nu * runs) as f64;
-    let chi = ChiSquared::new(dof).unwrap();
-    Nees {
-        n: nu,
-        runs,
-        band: (chi.inverse_cdf(0.025), chi.inverse_cdf(0.975)),
-        dense: per_run.iter().map(|r| r.1).sum(),
-        tiled: per_run.iter().map(|r| r.2).sum(),
-        min_std_ratio: per_run.iter().map(|r| r.3).fold(f64::INFINITY, f64::min),
+        .sum()
+}
+
+/// Takes a filter, the observations, its parameters, the noise model and the update;
+/// applies every observation in order, each followed by the positivity step.
+fn run_updates<F: RrcsFilter>(
+    f: &mut F,
+    obs: &[Observation],
+    p: &pradar::mapping::EkfValid,
+    noise: &NoiseModel,
+    upd: Update,
+) {
+    for o in obs {
+        apply(f, o, noise, upd);
+        f.project_positive(p.x_min());
     }
 }
 

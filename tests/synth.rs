@@ -410,87 +410,13 @@ fn synth_diffuse_walls_follow_the_radar_equation() {
     // energy along the wall's (delay, angle) curve, summed over a delay window, against
     // Σ_walls ∫ σ'·cos^n ψ·ḡ²(θ − θ_d) / ((4π)³ d⁴) · K(τ) ds (K a unit echo's energy in
     // the window), in a near-normal and an oblique group of directions
-    use pradar::campaign::layout::Layout;
-    use pradar::energy::EnergyProcessor;
-    use pradar::model::BandPattern;
-    use pradar::pattern::ArrayPattern;
-    use std::f64::consts::PI;
     let tmp = tempfile::tempdir().unwrap();
-    let mut t = fixture("tests/point_target.toml");
-    set(&mut t, "processing.max_delay_ns", 60.0);
-    set(&mut t, "processing.noise_from_ns", 70.0);
-    set(&mut t, "directions.start_deg", -50.0);
-    set(&mut t, "directions.stop_deg", 50.0);
     let ys = [-3.0, -1.5, 0.0, 1.5, 3.0];
-    let poses: Vec<toml::Value> = ys
-        .iter()
-        .map(|y| {
-            let mut p = toml::Table::new();
-            p.insert("x_m".into(), 4.0.into());
-            p.insert("y_m".into(), (*y).into());
-            p.insert("heading_deg".into(), 0.0.into());
-            toml::Value::Table(p)
-        })
-        .collect();
-    t.insert("poses".into(), toml::Value::Array(poses));
-    let path = write_campaign(tmp.path(), &t);
-    let c = Campaign::load(&path).unwrap();
+    let c = east_wall_campaign(tmp.path(), &ys);
     let m = &c.manifest;
-    let layout = Layout::load(&c.layout_path()).unwrap();
-    let proc = EnergyProcessor::new(m.band, m.processing).unwrap();
-    let tb = proc.bin_width_ns() * 1e-9;
-    let pattern = ArrayPattern::new(m.array, m.band.center_hz()).unwrap();
-    let bp = BandPattern::new(&pattern.tables(&[0.0], &m.band, 33)[0], m.processing.window);
-    // delay window 30..58 ns; K(τ) = Σ_{b in window} e_b(τ), exact near its edges
-    let (lo, hi) = ((30e-9 / tb).round() as usize, (58e-9 / tb).round() as usize);
-    let k_of = |tau: f64| -> f64 {
-        let b0 = (tau / tb).round() as i64;
-        (b0 - 24..=b0 + 24)
-            .filter(|b| *b >= lo as i64 && *b <= hi as i64)
-            .map(|b| proc.point_echo_energy_at(1.0, tau, b as usize))
-            .sum()
-    };
-    let k_mid = k_of((lo + hi) as f64 / 2.0 * tb);
-    let grid = tb / 16.0;
-    let mut k_cache = std::collections::HashMap::new();
-    let mut k_at = |tau: f64| -> f64 {
-        let near = tau < (lo as f64 + 25.0) * tb || tau > (hi as f64 - 25.0) * tb;
-        if !near {
-            return k_mid;
-        }
-        let i = (tau / grid).round() as i64;
-        *k_cache.entry(i).or_insert_with(|| k_of(i as f64 * grid))
-    };
     let (per_m, n_exp) = (0.02, 2.0);
+    let (pred, lo, hi) = diffuse_wall_prediction(&c, &ys, per_m, n_exp);
     let angles = m.directions.angles_deg();
-    // prediction per (pose, direction), the wall integrated at 2 mm
-    let ds = 2e-3;
-    let mut pred = vec![0.0; ys.len() * angles.len()];
-    for w in &layout.walls {
-        let nrm = w.normal();
-        let steps = (w.length() / ds).round() as usize;
-        for i in 0..steps {
-            let s = w.line.start + w.line.delta() * ((i as f64 + 0.5) / steps as f64);
-            for (p, y) in ys.iter().enumerate() {
-                let v = Coord { x: 4.0, y: *y } - s;
-                let d = v.x.hypot(v.y);
-                let cos = (v.x * nrm.x + v.y * nrm.y) / d;
-                let tau = 2.0 * d / pradar::units::C0;
-                if cos <= 0.0 || tau < (lo as f64 - 24.0) * tb || tau > (hi as f64 + 24.0) * tb {
-                    continue;
-                }
-                let th = (-v.y).atan2(-v.x);
-                let e = per_m * ds * cos.powf(n_exp) / ((4.0 * PI).powi(3) * d.powi(4));
-                let k = k_at(tau);
-                for (di, a) in angles.iter().enumerate() {
-                    let rel = pradar::units::wrap_rad(th - a.to_radians());
-                    if let Some((g, _)) = bp.at(rel) {
-                        pred[p * angles.len() + di] += g * g * e * k;
-                    }
-                }
-            }
-        }
-    }
     let model = diffuse_model(per_m, n_exp);
     // (sum measured, sum predicted, Σ dB ratio, count) per group: |θ| ≤ 15°, 30° ≤ |θ| ≤ 45°
     let mut groups = [(0.0, 0.0, 0.0, 0usize); 2];
@@ -532,30 +458,7 @@ fn synth_diffuse_walls_follow_the_radar_equation() {
                 groups[g].3 += 1;
             }
         }
-        // the truth carries the walls' points as kind diffuse, cluster −1, on the walls
-        let df = pradar::table::read_parquet(&truth.join("rays.parquet"), None).unwrap();
-        let kind = df.column("kind").unwrap().str().unwrap().clone();
-        let cl = df.column("cluster_id").unwrap().i64().unwrap().clone();
-        let x = df.column("x_m").unwrap().f64().unwrap().clone();
-        let yy = df.column("y_m").unwrap().f64().unwrap().clone();
-        let mut rows = 0usize;
-        for i in 0..df.height() {
-            if kind.get(i) == Some("diffuse") {
-                rows += 1;
-                assert_eq!(cl.get(i), Some(-1));
-                let (px, py) = (x.get(i).unwrap(), yy.get(i).unwrap());
-                assert!(
-                    (px.abs() - 10.0).abs() < 1e-9 || (py.abs() - 10.0).abs() < 1e-9,
-                    "({px}, {py}) is not on a wall"
-                );
-            }
-        }
-        assert!(
-            (rows as f64 - r.diffuse_per_position * ys.len() as f64).abs() < 0.5,
-            "{rows} truth rows vs {} seen",
-            r.diffuse_per_position * ys.len() as f64
-        );
-        diffuse_rows += rows;
+        diffuse_rows += diffuse_truth_rows(&truth, r.diffuse_per_position, ys.len());
     }
     assert!(diffuse_rows > 1000);
     for (name, (meas, want, db, n)) in ["|θ| ≤ 15°", "30° ≤ |θ| ≤ 45°"].iter().zip(groups)
@@ -570,6 +473,132 @@ fn synth_diffuse_walls_follow_the_radar_equation() {
             "{name}: {pooled:+.2} dB"
         );
     }
+}
+
+/// Takes a folder and the poses' y (m); writes the point-target room's campaign with
+/// those poses at x = 4 m looking east, −50° to 50°, the delay span to 60 ns, and gives
+/// it.
+fn east_wall_campaign(dir: &std::path::Path, ys: &[f64]) -> Campaign {
+    let mut t = fixture("tests/point_target.toml");
+    set(&mut t, "processing.max_delay_ns", 60.0);
+    set(&mut t, "processing.noise_from_ns", 70.0);
+    set(&mut t, "directions.start_deg", -50.0);
+    set(&mut t, "directions.stop_deg", 50.0);
+    let poses: Vec<toml::Value> = ys
+        .iter()
+        .map(|y| {
+            let mut p = toml::Table::new();
+            p.insert("x_m".into(), 4.0.into());
+            p.insert("y_m".into(), (*y).into());
+            p.insert("heading_deg".into(), 0.0.into());
+            toml::Value::Table(p)
+        })
+        .collect();
+    t.insert("poses".into(), toml::Value::Array(poses));
+    let path = write_campaign(dir, &t);
+    Campaign::load(&path).unwrap()
+}
+
+/// Takes the campaign, the poses' y, and the diffuse walls' σ′ (m²/m) and Lambert
+/// exponent; gives the predicted energy in the delay window per (pose, direction), every
+/// wall integrated at 2 mm, and the window's bins (30..58 ns).
+fn diffuse_wall_prediction(
+    c: &Campaign,
+    ys: &[f64],
+    per_m: f64,
+    n_exp: f64,
+) -> (Vec<f64>, usize, usize) {
+    use pradar::campaign::layout::Layout;
+    use pradar::energy::EnergyProcessor;
+    use pradar::model::BandPattern;
+    use pradar::pattern::ArrayPattern;
+    use std::f64::consts::PI;
+    let m = &c.manifest;
+    let layout = Layout::load(&c.layout_path()).unwrap();
+    let proc = EnergyProcessor::new(m.band, m.processing).unwrap();
+    let tb = proc.bin_width_ns() * 1e-9;
+    let pattern = ArrayPattern::new(m.array, m.band.center_hz()).unwrap();
+    let bp = BandPattern::new(&pattern.tables(&[0.0], &m.band, 33)[0], m.processing.window);
+    // delay window 30..58 ns; K(τ) = Σ_{b in window} e_b(τ), exact near its edges
+    let (lo, hi) = ((30e-9 / tb).round() as usize, (58e-9 / tb).round() as usize);
+    let k_of = |tau: f64| -> f64 {
+        let b0 = (tau / tb).round() as i64;
+        (b0 - 24..=b0 + 24)
+            .filter(|b| *b >= lo as i64 && *b <= hi as i64)
+            .map(|b| proc.point_echo_energy_at(1.0, tau, b as usize))
+            .sum()
+    };
+    let k_mid = k_of((lo + hi) as f64 / 2.0 * tb);
+    let grid = tb / 16.0;
+    let mut k_cache = std::collections::HashMap::new();
+    let mut k_at = |tau: f64| -> f64 {
+        let near = tau < (lo as f64 + 25.0) * tb || tau > (hi as f64 - 25.0) * tb;
+        if !near {
+            return k_mid;
+        }
+        let i = (tau / grid).round() as i64;
+        *k_cache.entry(i).or_insert_with(|| k_of(i as f64 * grid))
+    };
+    let angles = m.directions.angles_deg();
+    // prediction per (pose, direction), the wall integrated at 2 mm
+    let ds = 2e-3;
+    let mut pred = vec![0.0; ys.len() * angles.len()];
+    for w in &layout.walls {
+        let nrm = w.normal();
+        let steps = (w.length() / ds).round() as usize;
+        for i in 0..steps {
+            let s = w.line.start + w.line.delta() * ((i as f64 + 0.5) / steps as f64);
+            for (p, y) in ys.iter().enumerate() {
+                let v = Coord { x: 4.0, y: *y } - s;
+                let d = v.x.hypot(v.y);
+                let cos = (v.x * nrm.x + v.y * nrm.y) / d;
+                let tau = 2.0 * d / pradar::units::C0;
+                if cos <= 0.0 || tau < (lo as f64 - 24.0) * tb || tau > (hi as f64 + 24.0) * tb {
+                    continue;
+                }
+                let th = (-v.y).atan2(-v.x);
+                let e = per_m * ds * cos.powf(n_exp) / ((4.0 * PI).powi(3) * d.powi(4));
+                let k = k_at(tau);
+                for (di, a) in angles.iter().enumerate() {
+                    let rel = pradar::units::wrap_rad(th - a.to_radians());
+                    if let Some((g, _)) = bp.at(rel) {
+                        pred[p * angles.len() + di] += g * g * e * k;
+                    }
+                }
+            }
+        }
+    }
+    (pred, lo, hi)
+}
+
+/// Takes a synth truth folder, the diffuse points seen per position and the positions;
+/// checks that the truth carries the walls' points as kind diffuse, cluster −1, on the
+/// walls, as many as seen, and gives their count.
+fn diffuse_truth_rows(truth: &std::path::Path, per_position: f64, positions: usize) -> usize {
+    // the truth carries the walls' points as kind diffuse, cluster −1, on the walls
+    let df = pradar::table::read_parquet(&truth.join("rays.parquet"), None).unwrap();
+    let kind = df.column("kind").unwrap().str().unwrap().clone();
+    let cl = df.column("cluster_id").unwrap().i64().unwrap().clone();
+    let x = df.column("x_m").unwrap().f64().unwrap().clone();
+    let yy = df.column("y_m").unwrap().f64().unwrap().clone();
+    let mut rows = 0usize;
+    for i in 0..df.height() {
+        if kind.get(i) == Some("diffuse") {
+            rows += 1;
+            assert_eq!(cl.get(i), Some(-1));
+            let (px, py) = (x.get(i).unwrap(), yy.get(i).unwrap());
+            assert!(
+                (px.abs() - 10.0).abs() < 1e-9 || (py.abs() - 10.0).abs() < 1e-9,
+                "({px}, {py}) is not on a wall"
+            );
+        }
+    }
+    assert!(
+        (rows as f64 - per_position * positions as f64).abs() < 0.5,
+        "{rows} truth rows vs {} seen",
+        per_position * positions as f64
+    );
+    rows
 }
 
 #[test]

@@ -163,62 +163,13 @@ pub fn explore(
     progress: Progress,
 ) -> Result<ExploreOutput> {
     let base = Campaign::load(&inputs.campaign)?;
-    let (source, data) = match &inputs.data {
-        DataKind::Sweeps => {
-            if !has_scene(&base)? {
-                return Err(Error::input(
-                    &inputs.campaign,
-                    "physics sweeps need a [scene] section (or use --data model --model M)",
-                ));
-            }
-            (Source::Sweeps, "physics sweeps".to_string())
-        }
-        DataKind::Model(m) => {
-            let mc = ModelConfig::load(m)?
-                .require_estimable(&Default::default())
-                .map_err(|e| Error::input(m, e.to_string()))?;
-            (
-                Source::Model(Box::new(mc)),
-                format!("synth of {}", m.display()),
-            )
-        }
-    };
+    let (source, data) = source_of(inputs, &base)?;
     let (configs, paper) = grid(&base, params);
-    let mut jobs = Vec::new();
-    for cfg in &configs {
-        let c = configured(&base, cfg, 0)?;
-        for &seed in &params.seeds {
-            jobs.push(Job {
-                config: *cfg,
-                seed,
-                directions: c.manifest.directions.count(),
-                samples: c.manifest.band.points,
-            });
-        }
-    }
+    let jobs = jobs_of(&base, &configs, params)?;
     let work_dir = out.join("work");
     let nm = params.mappers.len();
-    // the probe: the cheapest job, run and timed first
-    let probe = (0..jobs.len())
-        .min_by(|&a, &b| jobs[a].work(nm).total_cmp(&jobs[b].work(nm)))
-        .expect("at least one job");
-    // on one thread, so its time is one core's whatever the stages' own parallelism
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .map_err(|e| Error::param("threads", e.to_string()))?;
-    let t = Instant::now();
-    let probe_done = one.install(|| {
-        run_job(
-            &base,
-            &source,
-            &jobs[probe],
-            params,
-            &work_dir,
-            inputs.keep_work,
-        )
-    })?;
-    let probe_s = t.elapsed().as_secs_f64();
+    let (probe, probe_done, probe_s) =
+        run_probe(&base, &source, &jobs, params, &work_dir, inputs.keep_work)?;
     let total_work: f64 = jobs.iter().map(|j| j.work(nm)).sum();
     let threads = rayon::current_num_threads().max(1) as f64;
     let estimate_minutes = probe_s * total_work / jobs[probe].work(nm) / threads / 60.0;
@@ -234,100 +185,17 @@ pub fn explore(
             ),
         ));
     }
-    // the rest, largest first, on `threads` workers each with a one-thread pool: a job's
-    // stages run on its worker only, so at most `threads` jobs are in memory at once (on
-    // one shared pool a waiting thread would steal and start further jobs)
-    let mut order: Vec<usize> = (0..jobs.len()).filter(|&i| i != probe).collect();
-    order.sort_by(|&a, &b| {
-        jobs[b]
-            .work(nm)
-            .total_cmp(&jobs[a].work(nm))
-            .then(a.cmp(&b))
-    });
-    let cb = progress("explore", jobs.len());
-    cb(1, jobs.len());
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<JobResult>)>();
-    let mut by_job: Vec<Option<JobResult>> = vec![None; jobs.len()];
-    by_job[probe] = Some(probe_done);
-    let mut first_error = None;
-    std::thread::scope(|s| {
-        let (order, jobs, base, source, next) = (&order, &jobs, &base, &source, &next);
-        for _ in 0..threads as usize {
-            let tx = tx.clone();
-            let work_dir = &work_dir;
-            s.spawn(move || {
-                let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() else {
-                    return;
-                };
-                loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(&i) = order.get(k) else { break };
-                    let r = pool.install(|| {
-                        run_job(base, source, &jobs[i], params, work_dir, inputs.keep_work)
-                    });
-                    let failed = r.is_err();
-                    if tx.send((i, r)).is_err() || failed {
-                        // stop taking jobs after an error
-                        next.store(order.len(), std::sync::atomic::Ordering::Relaxed);
-                        break;
-                    }
-                }
-            });
-        }
-        drop(tx);
-        let mut done = 1;
-        for (i, r) in rx {
-            match r {
-                Ok(r) => by_job[i] = Some(r),
-                Err(e) => {
-                    // the first error in job order among those that failed
-                    if first_error.as_ref().is_none_or(|(j, _)| i < *j) {
-                        first_error = Some((i, e));
-                    }
-                }
-            }
-            done += 1;
-            cb(done, jobs.len());
-        }
-    });
-    if let Some((_, e)) = first_error {
-        return Err(e);
-    }
-    if by_job.iter().any(|r| r.is_none()) {
-        return Err(Error::param(
-            "threads",
-            "a worker could not start its thread pool",
-        ));
-    }
-    let mut rows = Vec::new();
+    let grid_run = GridRun {
+        base: &base,
+        source: &source,
+        jobs: &jobs,
+        params,
+        work_dir: &work_dir,
+        keep: inputs.keep_work,
+    };
+    let by_job = grid_run.run_rest(probe, probe_done, threads, progress)?;
+    let rows = rows_of(&configs, &jobs, &by_job, params, model);
     let mut timings = Vec::new();
-    // rows in (configuration, mapper, seed) order
-    let per_cfg = params.seeds.len();
-    for (ci, _) in configs.iter().enumerate() {
-        let chunk = &by_job[ci * per_cfg..(ci + 1) * per_cfg];
-        for mi in 0..nm {
-            for (si, r) in chunk.iter().enumerate() {
-                let r = r.as_ref().expect("every job ran");
-                let j = &jobs[ci * per_cfg + si];
-                rows.push(ExploreRow {
-                    config: j.config,
-                    mapper: params.mappers[mi].name(),
-                    seed: j.seed,
-                    directions: j.directions,
-                    samples: j.samples,
-                    cost: model.scan(&ScanShape {
-                        elements: j.config.elements,
-                        directions: j.directions,
-                        pulses: j.config.pulses,
-                        samples: j.samples,
-                        tx_power_dbm: j.config.tx_power_dbm,
-                    }),
-                    scores: r.scores[mi],
-                });
-            }
-        }
-    }
     for r in by_job.into_iter().flatten() {
         timings.push(r.timing);
     }
@@ -354,6 +222,220 @@ pub fn explore(
             },
         ),
     })
+}
+
+/// Takes the inputs and their campaign; gives the data every job draws from and how the
+/// page names it (physics sweeps need the campaign's `[scene]`; a model must be
+/// estimable).
+fn source_of(inputs: &ExploreInputs, base: &Campaign) -> Result<(Source, String)> {
+    Ok(match &inputs.data {
+        DataKind::Sweeps => {
+            if !has_scene(base)? {
+                return Err(Error::input(
+                    &inputs.campaign,
+                    "physics sweeps need a [scene] section (or use --data model --model M)",
+                ));
+            }
+            (Source::Sweeps, "physics sweeps".to_string())
+        }
+        DataKind::Model(m) => {
+            let mc = ModelConfig::load(m)?
+                .require_estimable(&Default::default())
+                .map_err(|e| Error::input(m, e.to_string()))?;
+            (
+                Source::Model(Box::new(mc)),
+                format!("synth of {}", m.display()),
+            )
+        }
+    })
+}
+
+/// Takes the campaign, the grid's configurations and the parameters; gives the jobs,
+/// each configuration at each seed (in that order), with its scan's directions and
+/// samples.
+fn jobs_of(base: &Campaign, configs: &[Config], params: &ExploreValid) -> Result<Vec<Job>> {
+    let mut jobs = Vec::new();
+    for cfg in configs {
+        let c = configured(base, cfg, 0)?;
+        for &seed in &params.seeds {
+            jobs.push(Job {
+                config: *cfg,
+                seed,
+                directions: c.manifest.directions.count(),
+                samples: c.manifest.band.points,
+            });
+        }
+    }
+    Ok(jobs)
+}
+
+/// The probe: takes what the jobs need; gives the cheapest job's index, its result and
+/// its time (s), run first on one thread, so its time is one core's whatever the stages'
+/// own parallelism.
+fn run_probe(
+    base: &Campaign,
+    source: &Source,
+    jobs: &[Job],
+    params: &ExploreValid,
+    work_dir: &Path,
+    keep: bool,
+) -> Result<(usize, JobResult, f64)> {
+    let nm = params.mappers.len();
+    // the probe: the cheapest job, run and timed first
+    let probe = (0..jobs.len())
+        .min_by(|&a, &b| jobs[a].work(nm).total_cmp(&jobs[b].work(nm)))
+        .expect("at least one job");
+    // on one thread, so its time is one core's whatever the stages' own parallelism
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| Error::param("threads", e.to_string()))?;
+    let t = Instant::now();
+    let probe_done = one.install(|| run_job(base, source, &jobs[probe], params, work_dir, keep))?;
+    let probe_s = t.elapsed().as_secs_f64();
+    Ok((probe, probe_done, probe_s))
+}
+
+/// What every job of the grid shares: the campaign, the data, the jobs, the parameters
+/// and the work folder.
+struct GridRun<'a> {
+    /// The campaign as given.
+    base: &'a Campaign,
+    /// The data every job draws from.
+    source: &'a Source,
+    /// The jobs in grid order.
+    jobs: &'a [Job],
+    /// The grid's parameters.
+    params: &'a ExploreValid,
+    /// `out/work`.
+    work_dir: &'a Path,
+    /// Keep every job's data and maps.
+    keep: bool,
+}
+
+impl GridRun<'_> {
+    /// Takes the probe's index and result, the worker count and the progress bars; gives
+    /// every job's result in job order, the rest run largest first on `threads` workers
+    /// each with a one-thread pool (the first error in job order stops the grid).
+    fn run_rest(
+        &self,
+        probe: usize,
+        probe_done: JobResult,
+        threads: f64,
+        progress: Progress,
+    ) -> Result<Vec<Option<JobResult>>> {
+        let nm = self.params.mappers.len();
+        let params = self.params;
+        let keep = self.keep;
+        // the rest, largest first, on `threads` workers each with a one-thread pool: a job's
+        // stages run on its worker only, so at most `threads` jobs are in memory at once (on
+        // one shared pool a waiting thread would steal and start further jobs)
+        let jobs = self.jobs;
+        let mut order: Vec<usize> = (0..jobs.len()).filter(|&i| i != probe).collect();
+        order.sort_by(|&a, &b| {
+            jobs[b]
+                .work(nm)
+                .total_cmp(&jobs[a].work(nm))
+                .then(a.cmp(&b))
+        });
+        let cb = progress("explore", jobs.len());
+        cb(1, jobs.len());
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<JobResult>)>();
+        let mut by_job: Vec<Option<JobResult>> = vec![None; jobs.len()];
+        by_job[probe] = Some(probe_done);
+        let mut first_error = None;
+        std::thread::scope(|s| {
+            let (order, base, source, next) = (&order, self.base, self.source, &next);
+            for _ in 0..threads as usize {
+                let tx = tx.clone();
+                let work_dir = self.work_dir;
+                s.spawn(move || {
+                    let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() else {
+                        return;
+                    };
+                    loop {
+                        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(&i) = order.get(k) else { break };
+                        let r = pool
+                            .install(|| run_job(base, source, &jobs[i], params, work_dir, keep));
+                        let failed = r.is_err();
+                        if tx.send((i, r)).is_err() || failed {
+                            // stop taking jobs after an error
+                            next.store(order.len(), std::sync::atomic::Ordering::Relaxed);
+                            break;
+                        }
+                    }
+                });
+            }
+            drop(tx);
+            let mut done = 1;
+            for (i, r) in rx {
+                match r {
+                    Ok(r) => by_job[i] = Some(r),
+                    Err(e) => {
+                        // the first error in job order among those that failed
+                        if first_error.as_ref().is_none_or(|(j, _)| i < *j) {
+                            first_error = Some((i, e));
+                        }
+                    }
+                }
+                done += 1;
+                cb(done, jobs.len());
+            }
+        });
+        if let Some((_, e)) = first_error {
+            return Err(e);
+        }
+        if by_job.iter().any(|r| r.is_none()) {
+            return Err(Error::param(
+                "threads",
+                "a worker could not start its thread pool",
+            ));
+        }
+        Ok(by_job)
+    }
+}
+
+/// Takes the configurations, the jobs, every job's result (all present), the parameters
+/// and the energy model; gives the rows in (configuration, mapper, seed) order, each
+/// with its scan's cost.
+fn rows_of(
+    configs: &[Config],
+    jobs: &[Job],
+    by_job: &[Option<JobResult>],
+    params: &ExploreValid,
+    model: &EnergyModelValid,
+) -> Vec<ExploreRow> {
+    let nm = params.mappers.len();
+    let mut rows = Vec::new();
+    // rows in (configuration, mapper, seed) order
+    let per_cfg = params.seeds.len();
+    for (ci, _) in configs.iter().enumerate() {
+        let chunk = &by_job[ci * per_cfg..(ci + 1) * per_cfg];
+        for mi in 0..nm {
+            for (si, r) in chunk.iter().enumerate() {
+                let r = r.as_ref().expect("every job ran");
+                let j = &jobs[ci * per_cfg + si];
+                rows.push(ExploreRow {
+                    config: j.config,
+                    mapper: params.mappers[mi].name(),
+                    seed: j.seed,
+                    directions: j.directions,
+                    samples: j.samples,
+                    cost: model.scan(&ScanShape {
+                        elements: j.config.elements,
+                        directions: j.directions,
+                        pulses: j.config.pulses,
+                        samples: j.samples,
+                        tx_power_dbm: j.config.tx_power_dbm,
+                    }),
+                    scores: r.scores[mi],
+                });
+            }
+        }
+    }
+    rows
 }
 
 /// What one job gives: the scores per mapper (in `params.mappers` order) and its timing.

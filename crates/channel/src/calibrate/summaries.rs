@@ -190,134 +190,174 @@ struct Peak {
 }
 
 /// The summaries ([`NAMES`]) of energies `e` (position-major, then direction, then bin).
-#[allow(clippy::needless_range_loop)] // (position, direction, bin) index several arrays
 pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
-    let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
-    let (mu, tb) = (ctx.mu, ctx.bin_ns);
-    let thr_low = mu + 3.0 * ctx.sdn;
-    let thr = mu + 10.0 * ctx.sdn;
-    let at = |p: usize, d: usize, b: usize| e[(p * nd + d) * nb + b];
-    let det = |p: usize, d: usize, b: usize| b >= ctx.first_bin && at(p, d, b) > thr;
-    let sig = |p: usize, d: usize, b: usize| {
-        let v = at(p, d, b);
-        if b >= ctx.first_bin && v > thr_low {
-            v - mu
-        } else {
-            0.0
-        }
-    };
-    let mut total_s = 0.0;
-    let mut n_det = 0usize;
-    let mut profiles_det = 0usize;
-    let mut ln_max = Vec::new();
-    let (mut ln_m0, mut m1s, mut m2s) = (Vec::new(), Vec::new(), Vec::new());
-    let windows = [1.0, 3.0, 6.0, 10.0, 15.0, 25.0, 40.0, f64::INFINITY];
-    let mut shares = [0.0; 8];
-    let mut peaks_all = 0usize;
-    let mut peak_xy = Vec::new();
-    let mut env: Vec<(f64, f64)> = Vec::new();
-    let mut ln_peak = Vec::new();
-    let (mut pairs, mut p5, mut p15, mut p30) = (0usize, 0usize, 0usize, 0usize);
-    let (mut dth2, mut dtau5, mut gaps) = (Vec::new(), Vec::new(), Vec::new());
-    let depth_edges = [-0.2, 0.15, 0.4, 0.8, 1.5, f64::INFINITY];
-    let mut depth_pow = [0.0; 6];
-    let (mut depths, mut first_depths) = (Vec::new(), Vec::new());
-    let mut entropy = Vec::new();
-    let (mut neigh, mut neigh_of) = (0usize, 0usize);
-    let mut t0s = Vec::new();
-    let step = if nd > 1 {
+    let c = Cells::new(ctx, e);
+    let mut s = Sums::default();
+    let step = if ctx.nd > 1 {
         (ctx.angles_deg[1] - ctx.angles_deg[0]).abs()
     } else {
         1.0
     };
-    for p in 0..np {
+    for p in 0..ctx.np {
+        s.add_position(&c, p, step);
+    }
+    s.finish(ctx)
+}
+
+/// The upper edges (ns after T_0) of the delay profile's windows.
+const WINDOWS_NS: [f64; 8] = [1.0, 3.0, 6.0, 10.0, 15.0, 25.0, 40.0, f64::INFINITY];
+
+/// The upper edges (m) of the depth classes behind the wall.
+const DEPTH_EDGES_M: [f64; 6] = [-0.2, 0.15, 0.4, 0.8, 1.5, f64::INFINITY];
+
+/// The energies as the summaries read them (module docs): a cell's energy E, whether it
+/// is detected and its signal S.
+struct Cells<'a> {
+    /// The matrix's shape, noise and walls.
+    ctx: &'a SummaryContext,
+    /// The energies (position-major, then direction, then bin).
+    e: &'a [f64],
+    /// μ + 3σ_n: the signal threshold.
+    thr_low: f64,
+    /// μ + 10σ_n: the detection threshold.
+    thr: f64,
+}
+
+impl<'a> Cells<'a> {
+    /// Takes the context and the energies; gives their cells with the thresholds.
+    fn new(ctx: &'a SummaryContext, e: &'a [f64]) -> Cells<'a> {
+        let mu = ctx.mu;
+        let thr_low = mu + 3.0 * ctx.sdn;
+        let thr = mu + 10.0 * ctx.sdn;
+        Cells {
+            ctx,
+            e,
+            thr_low,
+            thr,
+        }
+    }
+
+    /// Takes a cell (position, direction, bin); gives its energy E.
+    fn at(&self, p: usize, d: usize, b: usize) -> f64 {
+        self.e[(p * self.ctx.nd + d) * self.ctx.nb + b]
+    }
+
+    /// Takes a cell; gives whether it is detected (after the gate, E > μ + 10σ_n).
+    fn det(&self, p: usize, d: usize, b: usize) -> bool {
+        b >= self.ctx.first_bin && self.at(p, d, b) > self.thr
+    }
+
+    /// Takes a cell; gives its signal S (E − μ after the gate where E > μ + 3σ_n, else 0).
+    fn sig(&self, p: usize, d: usize, b: usize) -> f64 {
+        let v = self.at(p, d, b);
+        if b >= self.ctx.first_bin && v > self.thr_low {
+            v - self.ctx.mu
+        } else {
+            0.0
+        }
+    }
+
+    /// Takes a cell and its energy `v`; gives whether it is above its 8 neighbours in
+    /// (direction, bin) (ties go to the earlier).
+    fn is_peak(&self, p: usize, d: usize, b: usize, v: f64) -> bool {
+        let (nd, nb) = (self.ctx.nd, self.ctx.nb);
+        let mut is_peak = true;
+        'n: for dd in -1i64..=1 {
+            for db in -1i64..=1 {
+                if dd == 0 && db == 0 {
+                    continue;
+                }
+                let (d2, b2) = (d as i64 + dd, b as i64 + db);
+                if d2 < 0 || d2 >= nd as i64 || b2 < 0 || b2 >= nb as i64 {
+                    continue;
+                }
+                let w = self.at(p, d2 as usize, b2 as usize);
+                // ties go to the earlier (direction, bin)
+                if w > v || (w == v && (dd, db) < (0, 0)) {
+                    is_peak = false;
+                    break 'n;
+                }
+            }
+        }
+        is_peak
+    }
+}
+
+/// The running sums and samples of the summaries, over the positions in order.
+#[derive(Default)]
+struct Sums {
+    /// ΣS over every cell after the gate.
+    total_s: f64,
+    /// Detected bins.
+    n_det: usize,
+    /// Profiles with a detection.
+    profiles_det: usize,
+    /// Per position, ln(max E/μ).
+    ln_max: Vec<f64>,
+    /// Per profile with signal, ln(m0/μ).
+    ln_m0: Vec<f64>,
+    /// Per profile with signal, m1 − T_0.
+    m1s: Vec<f64>,
+    /// Per profile with signal, m2.
+    m2s: Vec<f64>,
+    /// ΣS per delay window after T_0 ([`WINDOWS_NS`]).
+    shares: [f64; 8],
+    /// Peaks.
+    peaks_all: usize,
+    /// Per peak, (τ − T_0, ln(peak power/μ)).
+    peak_xy: Vec<(f64, f64)>,
+    /// Per position and 5-ns window, (window start, its largest ln(peak power/μ)).
+    env: Vec<(f64, f64)>,
+    /// Per peak, ln(peak power/μ).
+    ln_peak: Vec<f64>,
+    /// Peak pairs within 6 ns.
+    pairs: usize,
+    /// Of them, within 5°.
+    p5: usize,
+    /// Within 15°.
+    p15: usize,
+    /// Within 30°.
+    p30: usize,
+    /// |Δθ| of the pairs within 2 ns.
+    dth2: Vec<f64>,
+    /// |Δτ| of the pairs within 5°.
+    dtau5: Vec<f64>,
+    /// Per peak, the gap to the next peak in delay in its direction.
+    gaps: Vec<f64>,
+    /// Peak power per depth class ([`DEPTH_EDGES_M`]).
+    depth_pow: [f64; 6],
+    /// Every peak's depth behind the wall, m.
+    depths: Vec<f64>,
+    /// Each profile's first peak's depth, m.
+    first_depths: Vec<f64>,
+    /// Per position with signal, the angular profile's normalised entropy.
+    entropy: Vec<f64>,
+    /// Detected bins whose next direction at the same bin is detected.
+    neigh: usize,
+    /// Detected bins with a next direction.
+    neigh_of: usize,
+    /// Per position with a detection, T_0.
+    t0s: Vec<f64>,
+}
+
+impl Sums {
+    /// Takes the cells, a position and the direction step (degrees); adds the position's
+    /// profiles, peaks, angular entropy, envelope and peak pairs.
+    fn add_position(&mut self, c: &Cells, p: usize, step: f64) {
+        let ctx = c.ctx;
+        let (nd, nb, tb) = (ctx.nd, ctx.nb, ctx.bin_ns);
         // T0: the earliest detection of the position
         let t0 = (ctx.first_bin..nb)
-            .find(|&b| (0..nd).any(|d| det(p, d, b)))
+            .find(|&b| (0..nd).any(|d| c.det(p, d, b)))
             .map(|b| b as f64 * tb);
         let mut ang = vec![0.0; nd];
         let mut max_e: f64 = 0.0;
         let mut peaks: Vec<Peak> = Vec::new();
         for d in 0..nd {
-            let (mut m0, mut m1, mut any) = (0.0, 0.0, false);
-            let mut first_peak = true;
-            for b in ctx.first_bin..nb {
-                let s = sig(p, d, b);
-                let tau = b as f64 * tb;
-                total_s += s;
-                m0 += s;
-                m1 += s * tau;
-                ang[d] += s;
-                max_e = max_e.max(at(p, d, b));
-                if let Some(t0) = t0 {
-                    let k = windows.iter().position(|w| tau - t0 < *w).unwrap_or(7);
-                    shares[k] += s;
-                }
-                if !det(p, d, b) {
-                    continue;
-                }
-                any = true;
-                n_det += 1;
-                if d + 1 < nd {
-                    neigh_of += 1;
-                    if det(p, d + 1, b) {
-                        neigh += 1;
-                    }
-                }
-                let v = at(p, d, b);
-                let mut is_peak = true;
-                'n: for dd in -1i64..=1 {
-                    for db in -1i64..=1 {
-                        if dd == 0 && db == 0 {
-                            continue;
-                        }
-                        let (d2, b2) = (d as i64 + dd, b as i64 + db);
-                        if d2 < 0 || d2 >= nd as i64 || b2 < 0 || b2 >= nb as i64 {
-                            continue;
-                        }
-                        let w = at(p, d2 as usize, b2 as usize);
-                        // ties go to the earlier (direction, bin)
-                        if w > v || (w == v && (dd, db) < (0, 0)) {
-                            is_peak = false;
-                            break 'n;
-                        }
-                    }
-                }
-                if is_peak {
-                    let pw = v - mu;
-                    peaks.push(Peak {
-                        d,
-                        tau,
-                        ln_p: (pw / mu).ln(),
-                    });
-                    let wall = ctx.wall_m[p * nd + d];
-                    if wall.is_finite() {
-                        let depth = wall - C0 * tau * 1e-9 / 2.0;
-                        let k = depth_edges.iter().position(|x| depth <= *x).unwrap_or(5);
-                        depth_pow[k] += pw;
-                        depths.push(depth);
-                        if first_peak {
-                            first_depths.push(depth);
-                        }
-                    }
-                    first_peak = false;
-                }
-            }
-            if any {
-                profiles_det += 1;
-            }
-            if m0 > 0.0 && any {
-                let m1v = m1 / m0;
-                let m2: f64 = (ctx.first_bin..nb)
-                    .map(|b| sig(p, d, b) * (b as f64 * tb - m1v).powi(2))
-                    .sum::<f64>()
-                    / m0;
-                ln_m0.push((m0 / mu).ln());
-                m1s.push(m1v - t0.unwrap_or(0.0));
-                m2s.push(m2.sqrt());
-            }
+            self.add_profile(c, p, d, t0, &mut ang, &mut max_e, &mut peaks);
         }
-        ln_max.push((max_e / mu).max(1e-12).ln());
+        let mu = ctx.mu;
+        self.ln_max.push((max_e / mu).max(1e-12).ln());
         let ta: f64 = ang.iter().sum();
         if ta > 0.0 {
             let h: f64 = ang
@@ -328,21 +368,123 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
                     -q * q.ln()
                 })
                 .sum();
-            entropy.push(h / (nd.max(2) as f64).ln());
+            self.entropy.push(h / (nd.max(2) as f64).ln());
         }
         if let Some(t0) = t0 {
-            t0s.push(t0);
+            self.t0s.push(t0);
             let mut best = std::collections::BTreeMap::new();
             for pk in &peaks {
-                peak_xy.push((pk.tau - t0, pk.ln_p));
+                self.peak_xy.push((pk.tau - t0, pk.ln_p));
                 let w = ((pk.tau - t0) / 5.0).floor() as i64;
                 let slot: &mut f64 = best.entry(w).or_insert(f64::NEG_INFINITY);
                 *slot = slot.max(pk.ln_p);
             }
-            env.extend(best.iter().map(|(w, v)| (*w as f64 * 5.0, *v)));
+            self.env
+                .extend(best.iter().map(|(w, v)| (*w as f64 * 5.0, *v)));
         }
-        peaks_all += peaks.len();
-        ln_peak.extend(peaks.iter().map(|p| p.ln_p));
+        self.peaks_all += peaks.len();
+        self.ln_peak.extend(peaks.iter().map(|p| p.ln_p));
+        self.add_pairs(&peaks, step);
+    }
+
+    /// Takes the cells, a profile (position `p`, direction `d`) and the position's T_0;
+    /// adds the profile's signal, detections, moments and peaks, its signal to the angular
+    /// profile `ang`, its largest energy to `max_e` and its peaks to `peaks`.
+    #[allow(clippy::too_many_arguments)]
+    fn add_profile(
+        &mut self,
+        c: &Cells,
+        p: usize,
+        d: usize,
+        t0: Option<f64>,
+        ang: &mut [f64],
+        max_e: &mut f64,
+        peaks: &mut Vec<Peak>,
+    ) {
+        let ctx = c.ctx;
+        let (nd, nb, mu, tb) = (ctx.nd, ctx.nb, ctx.mu, ctx.bin_ns);
+        let (mut m0, mut m1, mut any) = (0.0, 0.0, false);
+        let mut first_peak = true;
+        for b in ctx.first_bin..nb {
+            let s = c.sig(p, d, b);
+            let tau = b as f64 * tb;
+            self.total_s += s;
+            m0 += s;
+            m1 += s * tau;
+            ang[d] += s;
+            *max_e = max_e.max(c.at(p, d, b));
+            if let Some(t0) = t0 {
+                let k = WINDOWS_NS.iter().position(|w| tau - t0 < *w).unwrap_or(7);
+                self.shares[k] += s;
+            }
+            if !c.det(p, d, b) {
+                continue;
+            }
+            any = true;
+            self.n_det += 1;
+            if d + 1 < nd {
+                self.neigh_of += 1;
+                if c.det(p, d + 1, b) {
+                    self.neigh += 1;
+                }
+            }
+            let v = c.at(p, d, b);
+            if c.is_peak(p, d, b, v) {
+                self.add_peak(ctx, p, d, tau, v, first_peak, peaks);
+                first_peak = false;
+            }
+        }
+        if any {
+            self.profiles_det += 1;
+        }
+        if m0 > 0.0 && any {
+            let m1v = m1 / m0;
+            let m2: f64 = (ctx.first_bin..nb)
+                .map(|b| c.sig(p, d, b) * (b as f64 * tb - m1v).powi(2))
+                .sum::<f64>()
+                / m0;
+            self.ln_m0.push((m0 / mu).ln());
+            self.m1s.push(m1v - t0.unwrap_or(0.0));
+            self.m2s.push(m2.sqrt());
+        }
+    }
+
+    /// Takes a peak (position, direction, delay ns, energy `v`) and whether it is its
+    /// profile's first; adds it to `peaks` and its power to its depth class behind the
+    /// wall (when the direction has a wall).
+    #[allow(clippy::too_many_arguments)]
+    fn add_peak(
+        &mut self,
+        ctx: &SummaryContext,
+        p: usize,
+        d: usize,
+        tau: f64,
+        v: f64,
+        first_peak: bool,
+        peaks: &mut Vec<Peak>,
+    ) {
+        let mu = ctx.mu;
+        let pw = v - mu;
+        peaks.push(Peak {
+            d,
+            tau,
+            ln_p: (pw / mu).ln(),
+        });
+        let wall = ctx.wall_m[p * ctx.nd + d];
+        if wall.is_finite() {
+            let depth = wall - C0 * tau * 1e-9 / 2.0;
+            let k = DEPTH_EDGES_M.iter().position(|x| depth <= *x).unwrap_or(5);
+            self.depth_pow[k] += pw;
+            self.depths.push(depth);
+            if first_peak {
+                self.first_depths.push(depth);
+            }
+        }
+    }
+
+    /// Takes a position's peaks and the direction step (degrees); adds their pairs within
+    /// 6 ns and each peak's gap to the next in its direction.
+    fn add_pairs(&mut self, peaks: &[Peak], step: f64) {
         for (i, a) in peaks.iter().enumerate() {
             let mut next: Option<f64> = None;
             for (j, b) in peaks.iter().enumerate() {
@@ -357,105 +499,140 @@ pub fn summaries(ctx: &SummaryContext, e: &[f64]) -> Vec<f64> {
                     continue;
                 }
                 let dth = (a.d as f64 - b.d as f64).abs() * step;
-                pairs += 1;
-                p5 += usize::from(dth <= 5.0 + 1e-9);
-                p15 += usize::from(dth <= 15.0 + 1e-9);
-                p30 += usize::from(dth <= 30.0 + 1e-9);
+                self.pairs += 1;
+                self.p5 += usize::from(dth <= 5.0 + 1e-9);
+                self.p15 += usize::from(dth <= 15.0 + 1e-9);
+                self.p30 += usize::from(dth <= 30.0 + 1e-9);
                 if dtau < 2.0 {
-                    dth2.push(dth);
+                    self.dth2.push(dth);
                 }
                 if dth <= 5.0 + 1e-9 {
-                    dtau5.push(dtau);
+                    self.dtau5.push(dtau);
                 }
             }
             if let Some(g) = next {
-                gaps.push(g);
+                self.gaps.push(g);
             }
         }
     }
-    let cells = (np * nd * nb.saturating_sub(ctx.first_bin)).max(1) as f64;
-    let total_share: f64 = shares.iter().sum();
-    let share = |x: f64| {
-        if total_share > 0.0 {
-            (x / total_share + 1e-6).ln()
-        } else {
-            1e-6f64.ln()
-        }
-    };
-    let (m_lnm0, sd_lnm0) = mean_sd(&ln_m0, 0.0);
-    let (m_m1, sd_m1) = mean_sd(&m1s, 0.0);
-    let (m_m2, _) = mean_sd(&m2s, 0.0);
-    let (slope, icpt) = line(&peak_xy, (0.0, 0.0));
-    let (env_slope, _) = line(&env, (0.0, 0.0));
-    let npk = peaks_all.max(1) as f64;
-    let frac = |k: usize| {
-        if pairs > 0 {
-            k as f64 / pairs as f64
-        } else {
+
+    /// Takes the sums over every position; gives the summaries ([`NAMES`]), a value that
+    /// is not finite replaced by 0.
+    fn finish(self, ctx: &SummaryContext) -> Vec<f64> {
+        let (np, nd, nb) = (ctx.np, ctx.nd, ctx.nb);
+        let (mu, tb) = (ctx.mu, ctx.bin_ns);
+        let Sums {
+            total_s,
+            n_det,
+            profiles_det,
+            ln_max,
+            ln_m0,
+            m1s,
+            m2s,
+            shares,
+            peaks_all,
+            peak_xy,
+            env,
+            ln_peak,
+            pairs,
+            p5,
+            p15,
+            p30,
+            dth2,
+            dtau5,
+            gaps,
+            depth_pow,
+            depths,
+            first_depths,
+            entropy,
+            neigh,
+            neigh_of,
+            t0s,
+        } = self;
+        let cells = (np * nd * nb.saturating_sub(ctx.first_bin)).max(1) as f64;
+        let total_share: f64 = shares.iter().sum();
+        let share = |x: f64| {
+            if total_share > 0.0 {
+                (x / total_share + 1e-6).ln()
+            } else {
+                1e-6f64.ln()
+            }
+        };
+        let (m_lnm0, sd_lnm0) = mean_sd(&ln_m0, 0.0);
+        let (m_m1, sd_m1) = mean_sd(&m1s, 0.0);
+        let (m_m2, _) = mean_sd(&m2s, 0.0);
+        let (slope, icpt) = line(&peak_xy, (0.0, 0.0));
+        let (env_slope, _) = line(&env, (0.0, 0.0));
+        let npk = peaks_all.max(1) as f64;
+        let frac = |k: usize| {
+            if pairs > 0 {
+                k as f64 / pairs as f64
+            } else {
+                0.0
+            }
+        };
+        let tp: f64 = depth_pow.iter().sum();
+        let dshare = |x: f64| {
+            if tp > 0.0 {
+                (x / tp + 1e-4).ln()
+            } else {
+                1e-4f64.ln()
+            }
+        };
+        let lngaps: Vec<f64> = gaps.iter().map(|g| g.max(tb).ln()).collect();
+        let gaps2 = if gaps.is_empty() {
             0.0
-        }
-    };
-    let tp: f64 = depth_pow.iter().sum();
-    let dshare = |x: f64| {
-        if tp > 0.0 {
-            (x / tp + 1e-4).ln()
         } else {
-            1e-4f64.ln()
+            gaps.iter().filter(|g| **g < 2.0).count() as f64 / gaps.len() as f64
+        };
+        let mut out = vec![
+            (total_s / cells / mu + 1e-9).ln(),
+            (1.0 + n_det as f64).ln(),
+            profiles_det as f64 / (np * nd).max(1) as f64,
+            median(&ln_max).unwrap_or(0.0),
+            m_lnm0,
+            sd_lnm0,
+            m_m1,
+            sd_m1,
+            m_m2,
+        ];
+        out.extend(shares.iter().map(|s| share(*s)));
+        out.extend([
+            (1.0 + peaks_all as f64 / np.max(1) as f64).ln(),
+            peaks_all as f64 / profiles_det.max(1) as f64,
+            slope,
+            icpt,
+            env_slope,
+            median(&ln_peak).unwrap_or(0.0),
+            (pairs as f64 / npk + 0.1).ln(),
+            frac(p5),
+            frac(p15),
+            frac(p30),
+            median(&dth2).unwrap_or(90.0),
+            median(&dtau5).unwrap_or(6.0),
+            median(&lngaps).unwrap_or((nb as f64 * tb).ln()),
+            gaps2,
+        ]);
+        out.extend(depth_pow.iter().map(|x| dshare(*x)));
+        out.extend([
+            median(&depths).unwrap_or(0.0),
+            median(&first_depths).unwrap_or(0.0),
+            mean_sd(&entropy, 1.0).0,
+            if neigh_of > 0 {
+                neigh as f64 / neigh_of as f64
+            } else {
+                0.0
+            },
+            mean_sd(&t0s, nb as f64 * tb).0.max(tb).ln(),
+        ]);
+        debug_assert_eq!(out.len(), NAMES.len());
+        for v in &mut out {
+            if !v.is_finite() {
+                *v = 0.0;
+            }
         }
-    };
-    let lngaps: Vec<f64> = gaps.iter().map(|g| g.max(tb).ln()).collect();
-    let gaps2 = if gaps.is_empty() {
-        0.0
-    } else {
-        gaps.iter().filter(|g| **g < 2.0).count() as f64 / gaps.len() as f64
-    };
-    let mut out = vec![
-        (total_s / cells / mu + 1e-9).ln(),
-        (1.0 + n_det as f64).ln(),
-        profiles_det as f64 / (np * nd).max(1) as f64,
-        median(&ln_max).unwrap_or(0.0),
-        m_lnm0,
-        sd_lnm0,
-        m_m1,
-        sd_m1,
-        m_m2,
-    ];
-    out.extend(shares.iter().map(|s| share(*s)));
-    out.extend([
-        (1.0 + peaks_all as f64 / np.max(1) as f64).ln(),
-        peaks_all as f64 / profiles_det.max(1) as f64,
-        slope,
-        icpt,
-        env_slope,
-        median(&ln_peak).unwrap_or(0.0),
-        (pairs as f64 / npk + 0.1).ln(),
-        frac(p5),
-        frac(p15),
-        frac(p30),
-        median(&dth2).unwrap_or(90.0),
-        median(&dtau5).unwrap_or(6.0),
-        median(&lngaps).unwrap_or((nb as f64 * tb).ln()),
-        gaps2,
-    ]);
-    out.extend(depth_pow.iter().map(|x| dshare(*x)));
-    out.extend([
-        median(&depths).unwrap_or(0.0),
-        median(&first_depths).unwrap_or(0.0),
-        mean_sd(&entropy, 1.0).0,
-        if neigh_of > 0 {
-            neigh as f64 / neigh_of as f64
-        } else {
-            0.0
-        },
-        mean_sd(&t0s, nb as f64 * tb).0.max(tb).ln(),
-    ]);
-    debug_assert_eq!(out.len(), NAMES.len());
-    for v in &mut out {
-        if !v.is_finite() {
-            *v = 0.0;
-        }
+        out
     }
-    out
 }
 
 /// The quantiles 10, 25, 50, 75, 90 % of each component of the per-profile and

@@ -38,7 +38,7 @@ use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
 
-use crate::model::file::Quantity;
+use crate::model::file::{ModelConfig, Quantity};
 use crate::units::C0;
 use std::path::Path;
 
@@ -248,46 +248,8 @@ pub fn write_table1(
 /// The rows of one fit (no truth).
 fn ours(f: &ChannelFit) -> Vec<Table1Row> {
     let m = &f.model;
-    let best = |k: &str| {
-        f.details
-            .get(k)
-            .and_then(|d| d.aic.first())
-            .map(|a| a.0.clone())
-            .unwrap_or_default()
-    };
-    let corr = |key: &str| -> Option<CorrectedCell> {
-        let c = f.correction.as_ref()?.get(key)?;
-        let q = m.quantity(key)?;
-        Some(CorrectedCell {
-            value: c.value,
-            shown: match &c.not_identifiable {
-                Some(why) => why.clone(),
-                None if c.value == f64::INFINITY => "∞ (no excess decay)".to_string(),
-                None if c.value.is_nan() => "—".to_string(),
-                None => format!("{:.3} {}", c.value, q.unit),
-            },
-            interval: c.interval,
-            slope: c.slope,
-        })
-    };
-    let row = |parameter, q: &Quantity, best_aic: String, paper| Table1Row {
-        parameter,
-        // a stated value is not an estimate: the CSV's value stays empty
-        value: if q.is_estimable() { q.value } else { f64::NAN },
-        unit: q.unit.clone(),
-        value_shown: match &q.not_estimable {
-            Some(reason) => stated_shown(reason, q),
-            None if q.value == f64::INFINITY => "∞ (no excess decay)".to_string(),
-            None => format!("{:.3} {}", q.value, q.unit),
-        },
-        interval: q.interval,
-        family: q.family.clone(),
-        ks_p: q.ks_p,
-        best_aic,
-        paper,
-        truth: None,
-        corrected: None,
-    };
+    let best = |k: &str| best_aic(f, k);
+    let row = quantity_row;
     let ns1 = 1e9 / C0;
     let spacing = Table1Row {
         value_shown: spacing_shown(f),
@@ -351,11 +313,79 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
             "rays_per_cluster",
         ];
         for (r, k) in rows.iter_mut().zip(keys) {
-            r.corrected = corr(k);
+            r.corrected = corrected_cell(f, k);
         }
     }
     // the dense component beside the discrete clusters (its truth column stays "—": the
     // simulator's walls are not clusters)
+    rows.extend(diffuse_rows(m));
+    // the levels read from the energy table (`model::levels`), beside the paper's
+    // quantities
+    rows.extend(level_rows(m));
+    rows
+}
+
+/// Takes the fit and a quantity's key; gives the name of its best family by AIC (empty
+/// when none was ranked).
+fn best_aic(f: &ChannelFit, k: &str) -> String {
+    f.details
+        .get(k)
+        .and_then(|d| d.aic.first())
+        .map(|a| a.0.clone())
+        .unwrap_or_default()
+}
+
+/// Takes the fit and a quantity's key; gives its bias-corrected cell, when the fit has a
+/// correction of that quantity.
+fn corrected_cell(f: &ChannelFit, key: &str) -> Option<CorrectedCell> {
+    let m = &f.model;
+    let c = f.correction.as_ref()?.get(key)?;
+    let q = m.quantity(key)?;
+    Some(CorrectedCell {
+        value: c.value,
+        shown: match &c.not_identifiable {
+            Some(why) => why.clone(),
+            None if c.value == f64::INFINITY => "∞ (no excess decay)".to_string(),
+            None if c.value.is_nan() => "—".to_string(),
+            None => format!("{:.3} {}", c.value, q.unit),
+        },
+        interval: c.interval,
+        slope: c.slope,
+    })
+}
+
+/// Takes a row's parameter, its quantity, the best family by AIC and the paper's value;
+/// gives the row (no truth, no correction).
+fn quantity_row(
+    parameter: &'static str,
+    q: &Quantity,
+    best_aic: String,
+    paper: Option<(f64, &'static str)>,
+) -> Table1Row {
+    Table1Row {
+        parameter,
+        // a stated value is not an estimate: the CSV's value stays empty
+        value: if q.is_estimable() { q.value } else { f64::NAN },
+        unit: q.unit.clone(),
+        value_shown: match &q.not_estimable {
+            Some(reason) => stated_shown(reason, q),
+            None if q.value == f64::INFINITY => "∞ (no excess decay)".to_string(),
+            None => format!("{:.3} {}", q.value, q.unit),
+        },
+        interval: q.interval,
+        family: q.family.clone(),
+        ks_p: q.ks_p,
+        best_aic,
+        paper,
+        truth: None,
+        corrected: None,
+    }
+}
+
+/// Takes the model; gives the rows of its dense component (`[diffuse]`; none without it).
+fn diffuse_rows(m: &ModelConfig) -> Vec<Table1Row> {
+    let row = quantity_row;
+    let mut rows = Vec::new();
     if let Some(d) = &m.diffuse {
         for (name, q) in [
             ("diffuse wall backscatter σ′", &d.wall_rcs_per_m),
@@ -366,8 +396,14 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
             rows.push(row(name, q, String::new(), None));
         }
     }
-    // the levels read from the energy table (`model::levels`), beside the paper's
-    // quantities
+    rows
+}
+
+/// Takes the model; gives the rows of the levels read from the energy table (`[walls]`:
+/// |Γ| with each material's, the vertices' σ, and the clusters' σ; none without it).
+fn level_rows(m: &ModelConfig) -> Vec<Table1Row> {
+    let row = quantity_row;
+    let mut rows = Vec::new();
     if let Some(w) = &m.walls {
         let mut spec = row("wall specular |Γ|", &w.specular_gamma, String::new(), None);
         if !w.material_gamma.is_empty() && w.specular_gamma.is_estimable() {

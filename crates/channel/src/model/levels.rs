@@ -69,6 +69,7 @@ use super::diffuse::DiffuseWalls;
 use super::synth::LayoutRays;
 use super::walls::{specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
+use crate::campaign::layout::{Foot, Layout};
 use crate::campaign::manifest::Campaign;
 use crate::energy::EnergyMatrix;
 use crate::error::Result;
@@ -149,26 +150,147 @@ pub fn fit_levels(
         .check()?,
     )?;
     let layout = sim.layout().clone();
-    let (np, nd, nb) = (em.positions, em.directions(), em.bins);
-    let mu = em.meta.noise_mean();
-    let bin_ns = em.meta.bin_width_ns;
-    let first_bin = ((em.meta.gate_ns() / bin_ns).ceil() as usize).min(nb);
-    let step = if nd > 1 {
-        (em.angles_rel_deg[1] - em.angles_rel_deg[0]).abs()
-    } else {
-        5.0
-    };
-    let sig = |p: usize, d: usize, b: usize| (em.data[(p * nd + d) * nb + b] - mu).max(0.0);
-    let nearest = |rel_deg: f64| -> Option<usize> {
-        let (i, a) = em
+    let t = Cells::of(em, &sim, &layout);
+    // 1. specular |Γ|
+    let (ratios, feet_at) = specular_ratios(&t);
+    let specular_pairs = ratios.len();
+    let mut out = model.clone();
+    let (gamma, walls) = wall_model(&ratios);
+    out.walls = Some(walls);
+    let g = gamma.unwrap_or(0.0);
+    // the walls' expected energies per pose: specular at |Γ|, diffuse at σ′ = 1 (zero
+    // without [diffuse])
+    let w = wall_energies(&t, c, &out, &feet_at, g);
+    // 2. diffuse σ′
+    let (diffuse_cells, sigma_d) = fit_diffuse(&t, &mut out, &w, &feet_at);
+    // 2b. the vertices' σ: corners and edges
+    let by_kind = vertex_ratios(&t, &w, &feet_at, sigma_d);
+    let vertex_cells = by_kind[0].len() + by_kind[1].len();
+    let walls = out.walls.as_mut().expect("set above");
+    for (slot, samples) in [&mut walls.corner_rcs, &mut walls.edge_rcs]
+        .into_iter()
+        .zip(by_kind)
+    {
+        let n = samples.len();
+        *slot = median(&samples).map(|m| Quantity {
+            n: Some(n),
+            ..Quantity::new(m.max(1e-9), "m2", "constant")
+        });
+    }
+    // 3. cluster σ by the method of moments
+    let measured = mean_signal_bins(&em.data, t.nb, t.first_bin, t.mu);
+    let (sigma, at_bound, model_bins) = cluster_sigma(&t, &out, gamma, g, measured)?;
+    if out.cluster_rrcs.value.is_finite() {
+        out.cluster_rrcs = Quantity {
+            value: sigma,
+            interval: None,
+            ks: None,
+            ks_p: None,
+            family: out.cluster_rrcs.family.clone(),
+            ..out.cluster_rrcs.clone()
+        };
+    }
+    if gamma.is_none() {
+        // no wall foot in the sector: a model without the layout's returns (σ was matched
+        // without them), not one that synth would refuse for a missing |Γ|
+        out.walls = None;
+    }
+    let out = out.with_stated_values();
+    out.check()?;
+    Ok((
+        out,
+        LevelReport {
+            specular_pairs,
+            diffuse_cells,
+            vertex_cells,
+            measured_bins: measured,
+            model_bins,
+            sigma_at_bound: at_bound,
+        },
+    ))
+}
+
+/// The measured table as the level estimates read it, with the campaign's simulator and
+/// its layout: dimensions, noise mean μ, first bin after the coupling gate, direction
+/// step.
+struct Cells<'a> {
+    /// The measured energy table.
+    em: &'a EnergyMatrix,
+    /// The campaign's simulator (the table's N0).
+    sim: &'a EnergySimulator,
+    /// The campaign's layout.
+    layout: &'a Layout,
+    /// Positions.
+    np: usize,
+    /// Directions.
+    nd: usize,
+    /// Bins.
+    nb: usize,
+    /// The table's noise mean N0·TW.
+    mu: f64,
+    /// Bin width, ns.
+    bin_ns: f64,
+    /// The first bin after the coupling gate.
+    first_bin: usize,
+    /// The direction step, degrees (5 with one direction).
+    step: f64,
+}
+
+impl<'a> Cells<'a> {
+    /// Takes the table, the simulator and its layout; gives their cells.
+    fn of(em: &'a EnergyMatrix, sim: &'a EnergySimulator, layout: &'a Layout) -> Cells<'a> {
+        let (np, nd, nb) = (em.positions, em.directions(), em.bins);
+        let mu = em.meta.noise_mean();
+        let bin_ns = em.meta.bin_width_ns;
+        let first_bin = ((em.meta.gate_ns() / bin_ns).ceil() as usize).min(nb);
+        let step = if nd > 1 {
+            (em.angles_rel_deg[1] - em.angles_rel_deg[0]).abs()
+        } else {
+            5.0
+        };
+        Cells {
+            em,
+            sim,
+            layout,
+            np,
+            nd,
+            nb,
+            mu,
+            bin_ns,
+            first_bin,
+            step,
+        }
+    }
+
+    /// Takes a cell (position, direction, bin); gives its signal S = max(E − μ, 0).
+    fn sig(&self, p: usize, d: usize, b: usize) -> f64 {
+        (self.em.data[(p * self.nd + d) * self.nb + b] - self.mu).max(0.0)
+    }
+
+    /// Takes an angle relative to the heading, degrees; gives the table's nearest
+    /// direction, if within half a step of it.
+    fn nearest(&self, rel_deg: f64) -> Option<usize> {
+        let (i, a) = self
+            .em
             .angles_rel_deg
             .iter()
             .enumerate()
             .min_by(|a, b| (a.1 - rel_deg).abs().total_cmp(&(b.1 - rel_deg).abs()))?;
-        ((a - rel_deg).abs() <= 0.5 * step + 1e-9).then_some(i)
-    };
-    let bin_of = |tau_s: f64| (tau_s * 1e9 / bin_ns).round() as isize;
-    // 1. specular |Γ|
+        ((a - rel_deg).abs() <= 0.5 * self.step + 1e-9).then_some(i)
+    }
+
+    /// Takes a round-trip delay, s; gives its bin (rounded, possibly outside the table).
+    fn bin_of(&self, tau_s: f64) -> isize {
+        (tau_s * 1e9 / self.bin_ns).round() as isize
+    }
+}
+
+/// Step 1 (module docs): takes the cells; gives the (material, S/U) ratio of every
+/// (pose, wall) pair whose unit specular echo reaches 10μ, and each pose's
+/// normal-incidence points.
+fn specular_ratios(t: &Cells) -> (Vec<(String, f64)>, Vec<Vec<Foot>>) {
+    let (em, sim, layout) = (t.em, t.sim, t.layout);
+    let (np, nb, first_bin, mu) = (t.np, t.nb, t.first_bin, t.mu);
     let mut ratios = Vec::new();
     let mut feet_at = Vec::with_capacity(np);
     for p in 0..np {
@@ -176,11 +298,11 @@ pub fn fit_levels(
         let f = layout.feet(at);
         for foot in &f {
             let rel = wrap_rad(foot.bearing - heading.to_radians()).to_degrees();
-            let Some(d) = nearest(rel) else { continue };
+            let Some(d) = t.nearest(rel) else { continue };
             if !em.has(p, d) {
                 continue; // no sweep there
             }
-            let b = bin_of(crate::units::delay_s(foot.d_m));
+            let b = t.bin_of(crate::units::delay_s(foot.d_m));
             // the bins ±2 around the echo, or, for an echo inside the coupling gate, the
             // first 3 bins after it (where its range side lobes show)
             let lo = (b - 2).max(first_bin as isize);
@@ -191,7 +313,7 @@ pub fn fit_levels(
             let u = sim.expected_profile(p, d, &[specular_ray(foot, 1.0, 0.0)]);
             let (lo, hi) = (lo as usize, hi as usize);
             let umax = (lo..=hi).map(|k| u[k]).fold(0.0, f64::max);
-            let smax = (lo..=hi).map(|k| sig(p, d, k)).fold(0.0, f64::max);
+            let smax = (lo..=hi).map(|k| t.sig(p, d, k)).fold(0.0, f64::max);
             // a unit echo that would not reach the noise level there says nothing
             if umax > 10.0 * mu {
                 ratios.push((layout.walls[foot.wall].material.clone(), smax / umax));
@@ -199,8 +321,13 @@ pub fn fit_levels(
         }
         feet_at.push(f);
     }
+    (ratios, feet_at)
+}
+
+/// Step 1's estimate: takes the specular ratios; gives |Γ| (None without a pair) and the
+/// `[walls]` with it and each material's |Γ| (no vertices yet).
+fn wall_model(ratios: &[(String, f64)]) -> (Option<f64>, WallModel) {
     let specular_pairs = ratios.len();
-    let mut out = model.clone();
     let gamma =
         median(&ratios.iter().map(|r| r.1).collect::<Vec<_>>()).map(|r| r.sqrt().clamp(1e-6, 1.0));
     let mut material_gamma = std::collections::BTreeMap::new();
@@ -221,7 +348,7 @@ pub fn fit_levels(
             }
         }
     }
-    out.walls = Some(WallModel {
+    let walls = WallModel {
         material_gamma,
         specular_gamma: match gamma {
             Some(g) => Quantity {
@@ -239,10 +366,32 @@ pub fn fit_levels(
         },
         corner_rcs: None,
         edge_rcs: None,
-    });
-    let g = gamma.unwrap_or(0.0);
-    // the walls' expected energies per pose: specular at |Γ|, diffuse at σ′ = 1 (zero
-    // without [diffuse])
+    };
+    (gamma, walls)
+}
+
+/// The walls' expected energies per pose (steps 2 and 2b).
+struct WallEnergies {
+    /// The diffuse walls at σ′ = 1 m²/m (None without `[diffuse]` or a finite exponent).
+    unit: Option<DiffuseWalls>,
+    /// Per pose, the specular returns at |Γ| (directions × bins).
+    ws: Vec<Vec<f64>>,
+    /// Per pose, the diffuse walls at σ′ = 1 (zero without `[diffuse]`).
+    wd: Vec<Vec<f64>>,
+}
+
+/// Takes the cells, the campaign, the model with its `[walls]`, each pose's
+/// normal-incidence points and |Γ| (`g`, 0 for none); gives the walls' expected energies
+/// per pose: specular at |Γ|, diffuse at σ′ = 1.
+fn wall_energies(
+    t: &Cells,
+    c: &Campaign,
+    out: &ModelConfig,
+    feet_at: &[Vec<Foot>],
+    g: f64,
+) -> WallEnergies {
+    let (sim, layout) = (t.sim, t.layout);
+    let (np, nd, nb) = (t.np, t.nd, t.nb);
     let wm = out.walls.clone().expect("set above");
     let unit = out
         .diffuse
@@ -250,7 +399,7 @@ pub fn fit_levels(
         .filter(|d| d.lambert_exponent.value.is_finite())
         .map(|d| {
             DiffuseWalls::unit_mean(
-                &layout,
+                layout,
                 d.lambert_exponent.value,
                 c.manifest.band.bandwidth_hz(),
             )
@@ -266,31 +415,48 @@ pub fn fit_levels(
             .collect();
         ws.push(sim.expected_profiles(p, &spec));
         wd.push(match &unit {
-            Some(u) => sim.expected_profiles(p, &u.rays_from(&layout, at, 0.0)),
+            Some(u) => sim.expected_profiles(p, &u.rays_from(layout, at, 0.0)),
             None => vec![0.0; nd * nb],
         });
     }
-    let near_foot = |p: usize, ang: f64| {
-        feet_at[p]
-            .iter()
-            .any(|f| wrap_rad(f.bearing - ang).abs() < 10f64.to_radians())
-    };
-    // 2. diffuse σ′
+    WallEnergies { unit, ws, wd }
+}
+
+/// Takes each pose's normal-incidence points, a pose and an absolute angle (rad); gives
+/// whether the angle is within 10° of one of them (a cell of the specular return).
+fn near_foot(feet_at: &[Vec<Foot>], p: usize, ang: f64) -> bool {
+    feet_at[p]
+        .iter()
+        .any(|f| wrap_rad(f.bearing - ang).abs() < 10f64.to_radians())
+}
+
+/// Step 2 (module docs): takes the cells, the model (its `[diffuse]` σ′ replaced here when
+/// it has one and a cell gives a ratio), the walls' expected energies and each pose's
+/// normal-incidence points; gives (on-wall cells used, σ′; 0 when not estimated).
+fn fit_diffuse(
+    t: &Cells,
+    out: &mut ModelConfig,
+    w: &WallEnergies,
+    feet_at: &[Vec<Foot>],
+) -> (usize, f64) {
+    let (em, sim, layout) = (t.em, t.sim, t.layout);
+    let (np, nd, nb, first_bin, mu) = (t.np, t.nd, t.nb, t.first_bin, t.mu);
+    let (ws, wd) = (&w.ws, &w.wd);
     let mut diffuse_cells = 0;
     let mut sigma_d = 0.0;
-    if let (Some(dm), Some(_)) = (out.diffuse.as_mut(), unit.as_ref()) {
+    if let (Some(dm), Some(_)) = (out.diffuse.as_mut(), w.unit.as_ref()) {
         let mut r = Vec::new();
         for p in 0..np {
             let (at, heading) = sim.pose(p);
             for d in 0..nd {
                 let ang = heading.to_radians() + em.angles_rel_deg[d].to_radians();
-                if near_foot(p, ang) || !em.has(p, d) {
+                if near_foot(feet_at, p, ang) || !em.has(p, d) {
                     continue;
                 }
                 let Some((range, _, _)) = layout.first_hit(at, ang) else {
                     continue;
                 };
-                let b = bin_of(crate::units::delay_s(range));
+                let b = t.bin_of(crate::units::delay_s(range));
                 if b < first_bin as isize || b >= nb as isize {
                     continue;
                 }
@@ -299,7 +465,7 @@ pub fn fit_levels(
                 if wd[p][k] < mu {
                     continue;
                 }
-                r.push((sig(p, d, b as usize) - ws[p][k]) / wd[p][k]);
+                r.push((t.sig(p, d, b as usize) - ws[p][k]) / wd[p][k]);
             }
         }
         diffuse_cells = r.len();
@@ -315,24 +481,38 @@ pub fn fit_levels(
             };
         }
     }
-    // 2b. the vertices' σ: corners and edges
-    let verts = vertices(&layout);
+    (diffuse_cells, sigma_d)
+}
+
+/// Step 2b (module docs): takes the cells, the walls' expected energies, each pose's
+/// normal-incidence points and σ′; gives the ratios r of the corners (`[0]`) and of the
+/// edges (`[1]`).
+fn vertex_ratios(
+    t: &Cells,
+    w: &WallEnergies,
+    feet_at: &[Vec<Foot>],
+    sigma_d: f64,
+) -> [Vec<f64>; 2] {
+    let (em, sim, layout) = (t.em, t.sim, t.layout);
+    let (np, nb, first_bin) = (t.np, t.nb, t.first_bin);
+    let (ws, wd) = (&w.ws, &w.wd);
+    let verts = vertices(layout);
     let mut by_kind: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for p in 0..np {
         let (at, heading) = sim.pose(p);
         for (i, v) in verts.iter().enumerate() {
-            let Some((r, bearing)) = vertex_seen(&layout, at, v) else {
+            let Some((r, bearing)) = vertex_seen(layout, at, v) else {
                 continue;
             };
             let rel = wrap_rad(bearing - heading.to_radians()).to_degrees();
-            let Some(d) = nearest(rel) else { continue };
+            let Some(d) = t.nearest(rel) else { continue };
             if !em.has(p, d) {
                 continue; // no sweep there
             }
-            if near_foot(p, bearing) {
+            if near_foot(feet_at, p, bearing) {
                 continue;
             }
-            let b = bin_of(crate::units::delay_s(r));
+            let b = t.bin_of(crate::units::delay_s(r));
             if b < first_bin as isize + 1 || b + 1 >= nb as isize {
                 continue;
             }
@@ -346,24 +526,25 @@ pub fn fit_levels(
                 continue;
             }
             let kk = d * nb + k;
-            let excess = sig(p, d, k) - sigma_d * wd[p][kk] - ws[p][kk];
+            let excess = t.sig(p, d, k) - sigma_d * wd[p][kk] - ws[p][kk];
             by_kind[(v.kind == VertexKind::Edge) as usize].push(excess / umax);
         }
     }
-    let vertex_cells = by_kind[0].len() + by_kind[1].len();
-    let walls = out.walls.as_mut().expect("set above");
-    for (slot, samples) in [&mut walls.corner_rcs, &mut walls.edge_rcs]
-        .into_iter()
-        .zip(by_kind)
-    {
-        let n = samples.len();
-        *slot = median(&samples).map(|m| Quantity {
-            n: Some(n),
-            ..Quantity::new(m.max(1e-9), "m2", "constant")
-        });
-    }
-    // 3. cluster σ by the method of moments
-    let measured = mean_signal_bins(&em.data, nb, first_bin, mu);
+    by_kind
+}
+
+/// Step 3 (module docs): takes the cells, the model with its walls' levels, |Γ| (and `g`,
+/// 0 for none) and the table's mean signal bins; gives (σ, whether it stopped at an end of
+/// its range, the model's mean signal bins there; NaN when the search did not run).
+fn cluster_sigma(
+    t: &Cells,
+    out: &ModelConfig,
+    gamma: Option<f64>,
+    g: f64,
+    measured: f64,
+) -> Result<(f64, bool, f64)> {
+    let (em, sim) = (t.em, t.sim);
+    let (np, nd, nb, first_bin, mu) = (t.np, t.nd, t.nb, t.first_bin, t.mu);
     let mut base = out.clone();
     if !g.is_finite() || gamma.is_none() {
         base.walls = None;
@@ -404,77 +585,60 @@ pub fn fit_levels(
         Ok(n as f64 / profiles.max(1) as f64)
     };
     let (lo, hi) = (1e-6f64.ln(), 10f64.ln());
+    if !usable || !measured.is_finite() || !out.cluster_rrcs.value.is_finite() {
+        return Ok((out.cluster_rrcs.value, true, f64::NAN));
+    }
+    regula_falsi(level, measured, lo, hi)
+}
+
+/// Takes the model's mean signal bins as a function of σ (`level`), the table's
+/// (`measured`) and the bracket [lo, hi] in ln σ; gives (σ, whether it stopped at an end
+/// of the bracket, the model's mean at the last σ tried): g(x) = level(e^x) − measured,
+/// increasing in x, by regula falsi (Illinois) on the bracket, stopped within 0.1 % of
+/// the table's mean or after 16 steps.
+fn regula_falsi(
+    level: impl Fn(f64) -> Result<f64>,
+    measured: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<(f64, bool, f64)> {
     let mut at_bound = false;
     let mut model_bins = f64::NAN;
-    let sigma = if !usable || !measured.is_finite() || !out.cluster_rrcs.value.is_finite() {
+    let (mut a, mut b) = (lo, hi);
+    let (mut ga, mut gb) = (level(a.exp())? - measured, level(b.exp())? - measured);
+    let sigma = if ga >= 0.0 {
         at_bound = true;
-        out.cluster_rrcs.value
+        model_bins = ga + measured;
+        a.exp()
+    } else if gb <= 0.0 {
+        at_bound = true;
+        model_bins = gb + measured;
+        b.exp()
     } else {
-        // g(x) = level(e^x) − measured, increasing in x: regula falsi (Illinois) on the
-        // bracket, stopped within 0.1 % of the table's mean or after 16 steps
-        let (mut a, mut b) = (lo, hi);
-        let (mut ga, mut gb) = (level(a.exp())? - measured, level(b.exp())? - measured);
-        if ga >= 0.0 {
-            at_bound = true;
-            model_bins = ga + measured;
-            a.exp()
-        } else if gb <= 0.0 {
-            at_bound = true;
-            model_bins = gb + measured;
-            b.exp()
-        } else {
-            let mut side = 0i8;
-            let mut x = 0.5 * (a + b);
-            for _ in 0..16 {
-                x = (a * gb - b * ga) / (gb - ga);
-                let gx = level(x.exp())? - measured;
-                model_bins = gx + measured;
-                if gx.abs() < 1e-3 * measured.max(1.0) || (b - a) < 1e-3 {
-                    break;
-                }
-                if gx < 0.0 {
-                    (a, ga) = (x, gx);
-                    if side == -1 {
-                        gb *= 0.5;
-                    }
-                    side = -1;
-                } else {
-                    (b, gb) = (x, gx);
-                    if side == 1 {
-                        ga *= 0.5;
-                    }
-                    side = 1;
-                }
+        let mut side = 0i8;
+        let mut x = 0.5 * (a + b);
+        for _ in 0..16 {
+            x = (a * gb - b * ga) / (gb - ga);
+            let gx = level(x.exp())? - measured;
+            model_bins = gx + measured;
+            if gx.abs() < 1e-3 * measured.max(1.0) || (b - a) < 1e-3 {
+                break;
             }
-            x.exp()
+            if gx < 0.0 {
+                (a, ga) = (x, gx);
+                if side == -1 {
+                    gb *= 0.5;
+                }
+                side = -1;
+            } else {
+                (b, gb) = (x, gx);
+                if side == 1 {
+                    ga *= 0.5;
+                }
+                side = 1;
+            }
         }
+        x.exp()
     };
-    if out.cluster_rrcs.value.is_finite() {
-        out.cluster_rrcs = Quantity {
-            value: sigma,
-            interval: None,
-            ks: None,
-            ks_p: None,
-            family: out.cluster_rrcs.family.clone(),
-            ..out.cluster_rrcs.clone()
-        };
-    }
-    if gamma.is_none() {
-        // no wall foot in the sector: a model without the layout's returns (σ was matched
-        // without them), not one that synth would refuse for a missing |Γ|
-        out.walls = None;
-    }
-    let out = out.with_stated_values();
-    out.check()?;
-    Ok((
-        out,
-        LevelReport {
-            specular_pairs,
-            diffuse_cells,
-            vertex_cells,
-            measured_bins: measured,
-            model_bins,
-            sigma_at_bound: at_bound,
-        },
-    ))
+    Ok((sigma, at_bound, model_bins))
 }

@@ -19,7 +19,7 @@ use super::{
 };
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
-use crate::grid::{ObservationModel, Occlusion};
+use crate::grid::{ObservationModel, Occlusion, PoseGeometry, ScanEchoes, Visibility};
 use crate::og::Detector;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -101,99 +101,12 @@ pub fn ekf_run_with_arcs(
     // the filter before pose p − 1 was applied (the state the observations are built from)
     // (the energies are loaded one pose at a time: a table read from its file is never
     // held whole)
-    // a pose's observations with their free-space evidence, build time, withheld rows,
-    // echo arcs
-    type Built = (
-        Vec<(Observation, Option<FreeSpace>)>,
-        f64,
-        u64,
-        Vec<Vec<(u32, f32)>>,
-    );
-    let build = |p: usize, occupied: Option<Vec<bool>>| -> Result<Built> {
-        let tb = Instant::now();
-        let part = src.load(p, p + 1)?;
-        let energy: &EnergyMatrix = &part;
-        let geom = model.pose_geometry(p);
-        let seen = sight.map(|s| {
-            let dets = s.detector.detect_pose(energy, p);
-            let echoes = s
-                .occlusion
-                .echoes(model, energy, p, dets, occupied.as_deref());
-            let vis = s.occlusion.visibility(model, &geom, &echoes);
-            (echoes, vis, s.occlusion.guard_bins())
-        });
-        type Dir = (Observation, Option<FreeSpace>, u64, Vec<Vec<(u32, f32)>>);
-        let obs: Vec<Dir> = (0..model.directions())
-            .into_par_iter()
-            .map_init(
-                || vec![0.0; n],
-                |scratch, d| {
-                    if !energy.has(p, d) {
-                        // no sweep: no rows, no evidence
-                        let none = Observation {
-                            ptr: vec![0],
-                            ..Default::default()
-                        };
-                        return (none, None, 0, Vec::new());
-                    }
-                    let prof = energy.profile(p, d);
-                    let mut bins = prof.len().min(model.bins);
-                    let mut withheld = 0;
-                    let beam = match &seen {
-                        Some((echoes, vis, guard)) => {
-                            let last = echoes.last_observed(d, *guard, bins);
-                            withheld =
-                                (last + 1..bins).filter(|&k| echoes.det[d][k]).count() as u64;
-                            bins = bins.min(last + 1);
-                            model.beam_seen(&geom, d, Some((vis, last)))
-                        }
-                        None => model.beam(&geom, d),
-                    };
-                    let mut o =
-                        Observation::build(&beam, &prof[..bins], &kernel, model.min_bin, scratch);
-                    let mut free = None;
-                    if let (Some((echoes, _, _)), Some(s)) = (&seen, sight) {
-                        let first = echoes.occluder[d].unwrap_or(bins);
-                        let j = kernel.len().saturating_sub(1);
-                        free =
-                            free_space(&o, &echoes.det[d], first, j, s.detector.threshold, noise);
-                    }
-                    if let Some((echoes, _, _)) = &seen {
-                        // the rows around a detection before the occluder (leakage of a strong
-                        // echo at another bearing, withheld by the OG too) are not observed:
-                        // no cell of this beam explains them; with no occluder every detection
-                        // is explained by a side lobe
-                        let first = echoes.occluder[d].unwrap_or(bins);
-                        let j = kernel.len().saturating_sub(1);
-                        let det = &echoes.det[d];
-                        let early: Vec<usize> =
-                            (0..first.min(det.len())).filter(|&k| det[k]).collect();
-                        withheld += early.len() as u64;
-                        if !early.is_empty() {
-                            o.retain_rows(|b| {
-                                let b = b as usize;
-                                b.abs_diff(first) <= j || !early.iter().any(|&k| b.abs_diff(k) <= j)
-                            });
-                        }
-                    }
-                    let arcs = match &seen {
-                        Some((echoes, _, _)) => echo_arcs(&o, &echoes.det[d]),
-                        None => Vec::new(),
-                    };
-                    (o, free, withheld, arcs)
-                },
-            )
-            .collect();
-        let withheld = obs.iter().map(|o| o.2).sum();
-        let mut arcs = Vec::new();
-        let obs = obs
-            .into_iter()
-            .map(|o| {
-                arcs.extend(o.3);
-                (o.0, o.1)
-            })
-            .collect();
-        Ok((obs, tb.elapsed().as_secs_f64(), withheld, arcs))
+    let builder = Builder {
+        model,
+        src,
+        kernel: &kernel,
+        noise,
+        sight,
     };
     // the filter's binary map (EkfMap's rule)
     let snapshot = |f: &dyn RrcsFilter| -> Option<Vec<bool>> {
@@ -201,7 +114,7 @@ pub fn ekf_run_with_arcs(
     };
     let second_order = params.update == super::EkfUpdate::SecondOrder;
     let mut current = if np > 0 {
-        Some(build(0, snapshot(&*filter)))
+        Some(builder.build(0, snapshot(&*filter)))
     } else {
         None
     };
@@ -215,32 +128,9 @@ pub fn ekf_run_with_arcs(
         st.build_seconds += build_s;
         st.withheld += withheld;
         let occupied = if p + 1 < np { snapshot(&*filter) } else { None };
-        let apply = |filter: &mut dyn RrcsFilter, st: &mut EkfStats| -> Result<()> {
-            let tu = Instant::now();
-            for (o, free) in &obs {
-                let lin = if second_order {
-                    filter.linearize_second_order(o, noise)
-                } else {
-                    Linearized::new(o, filter.mean(), noise)
-                };
-                filter.update(o, &lin)?;
-                st.reflected += filter.project_positive(params.x_min()) as u64;
-                if let Some((f, r)) = free {
-                    let lin = Linearized::direct(f, filter.mean(), r);
-                    filter.update(f, &lin)?;
-                    st.reflected += filter.project_positive(params.x_min()) as u64;
-                    st.free_cells += f.rows() as u64;
-                }
-                st.updates += 1;
-                st.rows += o.rows() as u64;
-                st.entries += o.cell.len() as u64;
-            }
-            st.update_seconds += tu.elapsed().as_secs_f64();
-            Ok(())
-        };
         let (applied, next) = rayon::join(
-            || apply(&mut *filter, &mut st),
-            || (p + 1 < np).then(|| build(p + 1, occupied)),
+            || apply_pose(&mut *filter, &mut st, &obs, second_order, noise, params),
+            || (p + 1 < np).then(|| builder.build(p + 1, occupied)),
         );
         applied?;
         current = next;
@@ -248,6 +138,177 @@ pub fn ekf_run_with_arcs(
     }
     st.seconds = t0.elapsed().as_secs_f64();
     Ok(st)
+}
+
+/// A pose's observations with their free-space evidence, build time, withheld rows, echo
+/// arcs.
+type Built = (
+    Vec<(Observation, Option<FreeSpace>)>,
+    f64,
+    u64,
+    Vec<Vec<(u32, f32)>>,
+);
+
+/// One direction's observation with its free-space evidence, withheld rows, echo arcs.
+type Dir = (Observation, Option<FreeSpace>, u64, Vec<Vec<(u32, f32)>>);
+
+/// A pose's echoes, the visibility of its cells and the occlusion guard (bins), with a
+/// sight model.
+type Seen = (ScanEchoes, Visibility, usize);
+
+/// What building a pose's observations takes: the observation model, the energies, the
+/// truncated kernel, the noise model and what the run can see.
+struct Builder<'a, 's> {
+    /// The observation model.
+    model: &'a ObservationModel,
+    /// The run's energies (loaded one pose at a time).
+    src: &'a dyn EnergySource,
+    /// The window kernel, truncated at the parameters' floor.
+    kernel: &'a [f64],
+    /// The run's noise model.
+    noise: &'a NoiseModel,
+    /// What the run can see.
+    sight: Option<Sight<'s>>,
+}
+
+impl Builder<'_, '_> {
+    /// Takes a pose and, with a sight model, the filter's binary map its occluders are
+    /// confirmed against; gives the pose's observations (built in parallel over
+    /// directions, collected in direction order), with their build time, withheld rows
+    /// and echo arcs.
+    fn build(&self, p: usize, occupied: Option<Vec<bool>>) -> Result<Built> {
+        let (model, sight) = (self.model, self.sight);
+        let n = model.spec.len();
+        let tb = Instant::now();
+        let part = self.src.load(p, p + 1)?;
+        let energy: &EnergyMatrix = &part;
+        let geom = model.pose_geometry(p);
+        let seen = sight.map(|s| {
+            let dets = s.detector.detect_pose(energy, p);
+            let echoes = s
+                .occlusion
+                .echoes(model, energy, p, dets, occupied.as_deref());
+            let vis = s.occlusion.visibility(model, &geom, &echoes);
+            (echoes, vis, s.occlusion.guard_bins())
+        });
+        let obs: Vec<Dir> = (0..model.directions())
+            .into_par_iter()
+            .map_init(
+                || vec![0.0; n],
+                |scratch, d| self.direction(energy, &geom, seen.as_ref(), p, d, scratch),
+            )
+            .collect();
+        let withheld = obs.iter().map(|o| o.2).sum();
+        let mut arcs = Vec::new();
+        let obs = obs
+            .into_iter()
+            .map(|o| {
+                arcs.extend(o.3);
+                (o.0, o.1)
+            })
+            .collect();
+        Ok((obs, tb.elapsed().as_secs_f64(), withheld, arcs))
+    }
+
+    /// Takes the pose's energies, geometry and (with a sight model) what it sees, the
+    /// pose, a direction and a scratch buffer; gives the direction's observation (its
+    /// bins up to the occluder plus the guard, less the rows around detections before
+    /// the occluder), free-space evidence, withheld rows and echo arcs.
+    fn direction(
+        &self,
+        energy: &EnergyMatrix,
+        geom: &PoseGeometry,
+        seen: Option<&Seen>,
+        p: usize,
+        d: usize,
+        scratch: &mut [f64],
+    ) -> Dir {
+        let (model, kernel, noise, sight) = (self.model, self.kernel, self.noise, self.sight);
+        if !energy.has(p, d) {
+            // no sweep: no rows, no evidence
+            let none = Observation {
+                ptr: vec![0],
+                ..Default::default()
+            };
+            return (none, None, 0, Vec::new());
+        }
+        let prof = energy.profile(p, d);
+        let mut bins = prof.len().min(model.bins);
+        let mut withheld = 0;
+        let beam = match seen {
+            Some((echoes, vis, guard)) => {
+                let last = echoes.last_observed(d, *guard, bins);
+                withheld = (last + 1..bins).filter(|&k| echoes.det[d][k]).count() as u64;
+                bins = bins.min(last + 1);
+                model.beam_seen(geom, d, Some((vis, last)))
+            }
+            None => model.beam(geom, d),
+        };
+        let mut o = Observation::build(&beam, &prof[..bins], kernel, model.min_bin, scratch);
+        let mut free = None;
+        if let (Some((echoes, _, _)), Some(s)) = (seen, sight) {
+            let first = echoes.occluder[d].unwrap_or(bins);
+            let j = kernel.len().saturating_sub(1);
+            free = free_space(&o, &echoes.det[d], first, j, s.detector.threshold, noise);
+        }
+        if let Some((echoes, _, _)) = seen {
+            // the rows around a detection before the occluder (leakage of a strong
+            // echo at another bearing, withheld by the OG too) are not observed:
+            // no cell of this beam explains them; with no occluder every detection
+            // is explained by a side lobe
+            let first = echoes.occluder[d].unwrap_or(bins);
+            let j = kernel.len().saturating_sub(1);
+            let det = &echoes.det[d];
+            let early: Vec<usize> = (0..first.min(det.len())).filter(|&k| det[k]).collect();
+            withheld += early.len() as u64;
+            if !early.is_empty() {
+                o.retain_rows(|b| {
+                    let b = b as usize;
+                    b.abs_diff(first) <= j || !early.iter().any(|&k| b.abs_diff(k) <= j)
+                });
+            }
+        }
+        let arcs = match seen {
+            Some((echoes, _, _)) => echo_arcs(&o, &echoes.det[d]),
+            None => Vec::new(),
+        };
+        (o, free, withheld, arcs)
+    }
+}
+
+/// Takes the filter, the run's statistics, a pose's observations (with their free-space
+/// evidence), the linearisation order, the noise model and the parameters; applies the
+/// observations to the filter in order, each followed by the positivity step and its
+/// free-space evidence, and counts them in the statistics.
+fn apply_pose(
+    filter: &mut dyn RrcsFilter,
+    st: &mut EkfStats,
+    obs: &[(Observation, Option<FreeSpace>)],
+    second_order: bool,
+    noise: &NoiseModel,
+    params: &EkfValid,
+) -> Result<()> {
+    let tu = Instant::now();
+    for (o, free) in obs {
+        let lin = if second_order {
+            filter.linearize_second_order(o, noise)
+        } else {
+            Linearized::new(o, filter.mean(), noise)
+        };
+        filter.update(o, &lin)?;
+        st.reflected += filter.project_positive(params.x_min()) as u64;
+        if let Some((f, r)) = free {
+            let lin = Linearized::direct(f, filter.mean(), r);
+            filter.update(f, &lin)?;
+            st.reflected += filter.project_positive(params.x_min()) as u64;
+            st.free_cells += f.rows() as u64;
+        }
+        st.updates += 1;
+        st.rows += o.rows() as u64;
+        st.entries += o.cell.len() as u64;
+    }
+    st.update_seconds += tu.elapsed().as_secs_f64();
+    Ok(())
 }
 
 /// Free-space evidence: direct observations of cells (z = 0) and their variances.

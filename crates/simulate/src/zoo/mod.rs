@@ -342,13 +342,88 @@ pub fn write(dir: &Path, scenes: &[ZooScene]) -> Result<Vec<PathBuf>> {
     Ok(out)
 }
 
+/// Takes the scene's index `i` (its family, perimeter material and element count cycle
+/// with it) and its key (the seed of every draw); gives the scene: the shape and its
+/// obstacles, the acquisition, the targets, an overall turn, the scene's levels and the
+/// clutter, drawn in that order.
 fn draw_scene(i: usize, key: u64) -> Spec {
     let mut rng = ChaCha8Rng::seed_from_u64(key);
     let rng = &mut rng;
     let family = Family::ALL[i % Family::ALL.len()];
     let perimeter_material = MATERIALS[i % MATERIALS.len()];
     let elements = [16, 100, 400][i % 3];
-    let (shape, kinds, n_obst): (Shape, &[Kind], usize) = match family {
+    let (shape, kinds, n_obst) = draw_shape(rng, family);
+    let mut placed: Vec<(Rect, &'static str, &'static str)> = Vec::new();
+    if family == Family::Hall {
+        place_pillars(rng, &shape, &mut placed);
+    }
+    place_obstacles(rng, &shape, kinds, n_obst, &mut placed);
+
+    // acquisition
+    let (step_deg, pulses, mode, mut poses) = draw_acquisition(rng, &shape);
+
+    // targets: free space away from the route and the obstacles
+    let targets = draw_targets(rng, &shape, &placed);
+
+    // an overall turn for about a third of the scenes
+    let turn_deg = if rng.gen_bool(1.0 / 3.0) {
+        q(uni(rng, 0.0, 360.0), 0.1)
+    } else {
+        0.0
+    };
+    let (perimeter, obstacles, targets) = turn(turn_deg, &shape, &placed, &mut poses, &targets);
+
+    let scene = draw_scene_levels(rng, targets);
+    let clutter = draw_clutter(rng);
+    let one_bit = rng.gen_bool(0.5);
+    let seed = rng.gen_range(1..1_000_000_000u64);
+    let name = format!("z{i:02}-{}", family.name());
+    let mut mats: Vec<&str> = std::iter::once(perimeter_material)
+        .chain(obstacles.iter().map(|o| o.material))
+        .collect();
+    mats.sort_unstable();
+    mats.dedup();
+    let description = format!(
+        "{}: {}, {} walls, {} obstacles ({}), {} targets, turned {turn_deg}°; {} {} poses, heading {mode}; N {elements}{}, {step_deg}° steps, {pulses} pulses; λ {} /ns, AoA {}°, d_c {} m ({}), d_p {} m, σ_c {} m²",
+        family.name(),
+        shape.detail,
+        perimeter_material,
+        obstacles.len(),
+        mats.join("/"),
+        scene.targets.len(),
+        shape.traj,
+        poses.len(),
+        if one_bit { " one-bit" } else { "" },
+        clutter.intra_cluster_rate.value,
+        clutter.intra_cluster_aoa.value,
+        clutter.perimeter_spacing.value,
+        clutter.perimeter_spacing.family,
+        clutter.perimeter_offset.value,
+        clutter.cluster_rrcs.value,
+    );
+    Spec {
+        layout_title: format!("{name}, {}", shape.detail),
+        name,
+        family,
+        seed,
+        perimeter,
+        perimeter_material,
+        obstacles,
+        poses,
+        elements,
+        one_bit,
+        step_deg,
+        pulses,
+        scene,
+        clutter: Some(clutter),
+        description,
+    }
+}
+
+/// Takes the generator and the scene's family; gives its shape, the kinds of obstacle it
+/// may hold and how many to place.
+fn draw_shape(rng: &mut ChaCha8Rng, family: Family) -> (Shape, &'static [Kind], usize) {
+    match family {
         Family::Room => {
             let (w, h) = (uni(rng, 3.0, 12.0), uni(rng, 3.0, 12.0));
             let alcove = rng.gen_bool(0.6);
@@ -396,35 +471,43 @@ fn draw_scene(i: usize, key: u64) -> Spec {
             rng.gen_range(0..=4),
         ),
         Family::Hall => (hall_shape(rng), &[Kind::Cabinet], rng.gen_range(0..=3)),
-    };
-    let mut placed: Vec<(Rect, &'static str, &'static str)> = Vec::new();
-    if family == Family::Hall {
-        // the pillar grid, skipping pillars near the route
-        let [_, _, w, h] = shape.rects[0].0;
-        let sp = uni(rng, 5.0, 10.0);
-        let size = q(uni(rng, 0.4, 0.8), 0.01);
-        let (nx, ny) = ((w / sp).floor() as usize, (h / sp).floor() as usize);
-        for gx in 1..=nx {
-            for gy in 1..=ny {
-                let (cx, cy) = (
-                    w * gx as f64 / (nx + 1) as f64,
-                    h * gy as f64 / (ny + 1) as f64,
-                );
-                let x = q(cx - size / 2.0, 0.01);
-                let y = q(cy - size / 2.0, 0.01);
-                let r = Rect([x, y, q(x + size, 0.01), q(y + size, 0.01)]);
-                if route_segments(&shape)
-                    .iter()
-                    .all(|(a, b)| r.dist_segment(*a, *b) >= 0.6)
-                {
-                    placed.push((r, "concrete", "pillar"));
-                }
+    }
+}
+
+/// Takes the generator and a hall's shape; adds the hall's pillar grid to `placed`,
+/// skipping pillars near the route.
+fn place_pillars(
+    rng: &mut ChaCha8Rng,
+    shape: &Shape,
+    placed: &mut Vec<(Rect, &'static str, &'static str)>,
+) {
+    // the pillar grid, skipping pillars near the route
+    let [_, _, w, h] = shape.rects[0].0;
+    let sp = uni(rng, 5.0, 10.0);
+    let size = q(uni(rng, 0.4, 0.8), 0.01);
+    let (nx, ny) = ((w / sp).floor() as usize, (h / sp).floor() as usize);
+    for gx in 1..=nx {
+        for gy in 1..=ny {
+            let (cx, cy) = (
+                w * gx as f64 / (nx + 1) as f64,
+                h * gy as f64 / (ny + 1) as f64,
+            );
+            let x = q(cx - size / 2.0, 0.01);
+            let y = q(cy - size / 2.0, 0.01);
+            let r = Rect([x, y, q(x + size, 0.01), q(y + size, 0.01)]);
+            if route_segments(shape)
+                .iter()
+                .all(|(a, b)| r.dist_segment(*a, *b) >= 0.6)
+            {
+                placed.push((r, "concrete", "pillar"));
             }
         }
     }
-    place_obstacles(rng, &shape, kinds, n_obst, &mut placed);
+}
 
-    // acquisition
+/// Takes the generator and the shape; gives the acquisition within [`SWEEP_BUDGET`]: the
+/// direction step (degrees), the pulses, the heading mode and the poses along the route.
+fn draw_acquisition(rng: &mut ChaCha8Rng, shape: &Shape) -> (f64, usize, &'static str, Vec<Pose>) {
     let mut step_deg = *STEPS.choose(rng).expect("steps");
     let mut pulses = rng.gen_range(1..=4usize);
     let mut n_poses = rng.gen_range(12..=40usize);
@@ -439,9 +522,18 @@ fn draw_scene(i: usize, key: u64) -> Spec {
         }
     }
     let mode = *["along", "changes", "spin"].choose(rng).expect("modes");
-    let mut poses = sample_route(rng, &shape, n_poses, mode);
+    let poses = sample_route(rng, shape, n_poses, mode);
+    (step_deg, pulses, mode, poses)
+}
 
-    // targets: free space away from the route and the obstacles
+/// Takes the generator, the shape and the placed obstacles; gives the point targets
+/// (position, RRCS) for about two scenes in five, in free space away from the route and
+/// the obstacles.
+fn draw_targets(
+    rng: &mut ChaCha8Rng,
+    shape: &Shape,
+    placed: &[(Rect, &'static str, &'static str)],
+) -> Vec<(P, f64)> {
     let mut targets = Vec::new();
     if rng.gen_bool(0.4) {
         for _ in 0..rng.gen_range(1..=2) {
@@ -454,7 +546,7 @@ fn draw_scene(i: usize, key: u64) -> Spec {
                 ];
                 let pt = Rect([p[0], p[1], p[0], p[1]]);
                 let free = placed.iter().all(|(o, _, _)| !o.grow(0.2).contains(p))
-                    && route_segments(&shape)
+                    && route_segments(shape)
                         .iter()
                         .all(|(a, b)| pt.dist_segment(*a, *b) >= 0.5);
                 if free {
@@ -464,13 +556,18 @@ fn draw_scene(i: usize, key: u64) -> Spec {
             }
         }
     }
+    targets
+}
 
-    // an overall turn for about a third of the scenes
-    let turn_deg = if rng.gen_bool(1.0 / 3.0) {
-        q(uni(rng, 0.0, 360.0), 0.1)
-    } else {
-        0.0
-    };
+/// Takes the overall turn (degrees), the shape, the placed obstacles, the poses (turned
+/// in place) and the targets; gives the turned perimeter, obstacles and point targets.
+fn turn(
+    turn_deg: f64,
+    shape: &Shape,
+    placed: &[(Rect, &'static str, &'static str)],
+    poses: &mut [Pose],
+    targets: &[(P, f64)],
+) -> (Vec<P>, Vec<Obstacle>, Vec<PointTarget>) {
     let (c, s) = (turn_deg.to_radians().cos(), turn_deg.to_radians().sin());
     let perimeter: Vec<P> = shape.perimeter.iter().map(|p| rotate(*p, c, s)).collect();
     let obstacles: Vec<Obstacle> = placed
@@ -482,7 +579,7 @@ fn draw_scene(i: usize, key: u64) -> Spec {
             ring: r.ring().iter().map(|p| rotate(*p, c, s)).collect(),
         })
         .collect();
-    for p in &mut poses {
+    for p in poses.iter_mut() {
         let r = rotate([p.x_m, p.y_m], c, s);
         p.x_m = r[0];
         p.y_m = r[1];
@@ -500,8 +597,13 @@ fn draw_scene(i: usize, key: u64) -> Spec {
             }
         })
         .collect();
+    (perimeter, obstacles, targets)
+}
 
-    let scene = SceneConfig {
+/// Takes the generator and the point targets; gives the scene's section with the walls'
+/// diffuse σ′ and the corners' and edges' σ drawn (in that order).
+fn draw_scene_levels(rng: &mut ChaCha8Rng, targets: Vec<PointTarget>) -> SceneConfig {
+    SceneConfig {
         walls: true,
         wall_rcs_per_m: sig3(log_uni(rng, 0.005, 0.05)),
         scatterers_per_cell: 10.0,
@@ -513,50 +615,6 @@ fn draw_scene(i: usize, key: u64) -> Spec {
         pattern_knots: 0,
         materials: materials(),
         targets,
-    };
-    let clutter = draw_clutter(rng);
-    let one_bit = rng.gen_bool(0.5);
-    let seed = rng.gen_range(1..1_000_000_000u64);
-    let name = format!("z{i:02}-{}", family.name());
-    let mut mats: Vec<&str> = std::iter::once(perimeter_material)
-        .chain(obstacles.iter().map(|o| o.material))
-        .collect();
-    mats.sort_unstable();
-    mats.dedup();
-    let description = format!(
-        "{}: {}, {} walls, {} obstacles ({}), {} targets, turned {turn_deg}°; {} {} poses, heading {mode}; N {elements}{}, {step_deg}° steps, {pulses} pulses; λ {} /ns, AoA {}°, d_c {} m ({}), d_p {} m, σ_c {} m²",
-        family.name(),
-        shape.detail,
-        perimeter_material,
-        obstacles.len(),
-        mats.join("/"),
-        scene.targets.len(),
-        shape.traj,
-        poses.len(),
-        if one_bit { " one-bit" } else { "" },
-        clutter.intra_cluster_rate.value,
-        clutter.intra_cluster_aoa.value,
-        clutter.perimeter_spacing.value,
-        clutter.perimeter_spacing.family,
-        clutter.perimeter_offset.value,
-        clutter.cluster_rrcs.value,
-    );
-    Spec {
-        layout_title: format!("{name}, {}", shape.detail),
-        name,
-        family,
-        seed,
-        perimeter,
-        perimeter_material,
-        obstacles,
-        poses,
-        elements,
-        one_bit,
-        step_deg,
-        pulses,
-        scene,
-        clutter: Some(clutter),
-        description,
     }
 }
 

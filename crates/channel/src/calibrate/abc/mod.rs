@@ -287,9 +287,74 @@ where
     F: Fn(&[f64], u64) -> Result<Vec<f64>> + Sync,
 {
     let (n, na) = (opts.population, opts.kept);
-    let dim = prior.dim();
     // generation 0: the prior (also the first fit of the semi-automatic summaries)
-    let mut pop: Vec<Particle> = (0..n)
+    let mut pop = prior_generation(prior, opts, &simulate)?;
+    let mut used = n;
+    progress(used, opts.simulations);
+    let (mut s_obs, mut r2, c) = refit(&mut pop, observed, opts.distance, opts.ridge)?;
+    if trace() {
+        eprintln!(
+            "abc: prior generation, held-out R² of the projection {r2:.2?}, ridge c {}",
+            fmt_c(&c)
+        );
+    }
+    let mut eps = keep(&mut pop, na);
+    let mut generations = 1;
+    let mut acceptance = 1.0;
+    while used + (n - na) <= opts.simulations && acceptance >= opts.min_acceptance {
+        let kernel = Kernel::of(&pop, prior)?;
+        let new: Vec<Particle> = (0..n - na)
+            .into_par_iter()
+            .map(|i| kernel.propose(prior, opts, generations, i, &simulate))
+            .collect::<Result<_>>()?;
+        used += n - na;
+        generations += 1;
+        let old = pop.len();
+        pop.extend(new);
+        let (so, r, c) = refit(&mut pop, observed, opts.distance, opts.ridge)?;
+        s_obs = so;
+        r2 = r;
+        // the previous tolerance under the refitted distance: the kept particles' largest
+        let eps_prev = pop[..old].iter().map(|p| p.d).fold(0.0, f64::max);
+        acceptance = pop[old..].iter().filter(|p| p.d < eps_prev).count() as f64 / (n - na) as f64;
+        eps = keep(&mut pop, na);
+        if trace() {
+            eprintln!(
+                "abc: generation {generations}, {used} simulations, acceptance {acceptance:.3}, ε {eps:.3}, held-out R² {r2:.2?}, ridge c {}",
+                fmt_c(&c)
+            );
+        }
+        progress(used, opts.simulations);
+    }
+    let tw: f64 = pop.iter().map(|p| p.w).sum();
+    let weights: Vec<f64> = pop.iter().map(|p| p.w / tw).collect();
+    let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
+    let adjusted = match opts.distance {
+        DistanceKind::Projected => adjust(prior, &pop, &s_obs, eps, &weights),
+        DistanceKind::Direct => None,
+    };
+    Ok(Posterior {
+        regression_adjusted: adjusted.is_some(),
+        adjusted: adjusted.unwrap_or_else(|| theta.clone()),
+        theta,
+        weights,
+        distances: pop.iter().map(|p| p.d).collect(),
+        epsilon: eps,
+        generations,
+        simulations: used,
+        acceptance,
+        heldout_r2: r2,
+    })
+}
+
+/// Generation 0: takes the prior, the options and the simulator; gives the population
+/// drawn from the prior (weight 1 each, distances not yet computed), particle i from its
+/// own stream [`key`]`(seed, 0, i)`.
+fn prior_generation<F>(prior: &BoxPrior, opts: &AbcOptions, simulate: &F) -> Result<Vec<Particle>>
+where
+    F: Fn(&[f64], u64) -> Result<Vec<f64>> + Sync,
+{
+    (0..opts.population)
         .into_par_iter()
         .map(|i| {
             let mut rng = ChaCha8Rng::seed_from_u64(key(opts.seed, 0, i));
@@ -303,25 +368,42 @@ where
                 w: 1.0,
             })
         })
-        .collect::<Result<_>>()?;
-    let mut used = n;
-    progress(used, opts.simulations);
-    let (mut s_obs, mut r2, c) = refit(&mut pop, observed, opts.distance, opts.ridge)?;
-    if trace() {
-        eprintln!(
-            "abc: prior generation, held-out R² of the projection {r2:.2?}, ridge c {}",
-            fmt_c(&c)
-        );
-    }
-    let keep = |pop: &mut Vec<Particle>| -> f64 {
-        pop.sort_by(|a, b| a.d.total_cmp(&b.d)); // stable: ties keep their order
-        pop.truncate(na);
-        pop.last().map_or(f64::INFINITY, |p| p.d)
-    };
-    let mut eps = keep(&mut pop);
-    let mut generations = 1;
-    let mut acceptance = 1.0;
-    while used + (n - na) <= opts.simulations && acceptance >= opts.min_acceptance {
+        .collect::<Result<_>>()
+}
+
+/// Takes the population and the number to keep; keeps the `na` nearest (a stable sort:
+/// ties keep their order) and gives the tolerance, the largest kept distance (infinite
+/// for an empty population).
+fn keep(pop: &mut Vec<Particle>, na: usize) -> f64 {
+    pop.sort_by(|a, b| a.d.total_cmp(&b.d)); // stable: ties keep their order
+    pop.truncate(na);
+    pop.last().map_or(f64::INFINITY, |p| p.d)
+}
+
+/// A generation's proposal: the kept particles, their weights, the Gaussian kernel of
+/// twice their weighted covariance (its Cholesky factor) and the densities' constants.
+struct Kernel {
+    /// The kept particles' parameters.
+    theta: Vec<Vec<f64>>,
+    /// Their weights.
+    w: Vec<f64>,
+    /// The weights' total.
+    tw: f64,
+    /// The lower Cholesky factor L of the kernel's covariance Σ.
+    l: DMatrix<f64>,
+    /// ln π on the prior's box.
+    ln_prior: f64,
+    /// ln φ_Σ(0).
+    ln_phi0: f64,
+    /// The normalised weights' running sums (the particle a proposal starts from).
+    cum: Vec<f64>,
+}
+
+impl Kernel {
+    /// Takes the kept population and the prior; gives the generation's proposal, or an
+    /// error when the particles' covariance is singular.
+    fn of(pop: &[Particle], prior: &BoxPrior) -> Result<Kernel> {
+        let dim = prior.dim();
         let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
         let w: Vec<f64> = pop.iter().map(|p| p.w).collect();
         let tw: f64 = w.iter().sum();
@@ -357,88 +439,76 @@ where
                 Some(*acc)
             })
             .collect();
-        let new: Vec<Particle> = (0..n - na)
-            .into_par_iter()
-            .map(|i| {
-                let mut rng = ChaCha8Rng::seed_from_u64(key(opts.seed, generations, i));
-                let mut th = Vec::new();
-                for attempt in 0..10_000 {
-                    let u: f64 = rng.gen();
-                    let a = cum.partition_point(|c| *c < u).min(na - 1);
-                    let z = DVector::from_fn(dim, |_, _| rng.sample::<f64, _>(StandardNormal));
-                    let step = &l * z;
-                    th = (0..dim).map(|k| theta[a][k] + step[k]).collect();
-                    if prior.inside(&th) {
-                        break;
-                    }
-                    if attempt == 9_999 {
-                        // never in practice: the kernel is centred on particles inside the box
-                        th = th
-                            .iter()
-                            .enumerate()
-                            .map(|(k, v)| v.clamp(prior.lo[k], prior.hi[k]))
-                            .collect();
-                    }
-                }
-                let f = simulate(&th, rng.gen())?;
-                // w = π(θ) / Σ_j (w_j/Σw) φ_Σ(θ − θ_j), both densities normalised (π is
-                // constant on the box); q is the sum without φ's constant
-                let q: f64 = theta
-                    .iter()
-                    .zip(&w)
-                    .map(|(tj, wj)| {
-                        let dv = DVector::from_fn(dim, |k, _| th[k] - tj[k]);
-                        let y = l.solve_lower_triangular(&dv).unwrap_or(dv);
-                        wj / tw * (-0.5 * y.norm_squared()).exp()
-                    })
-                    .sum();
-                Ok(Particle {
-                    theta: th,
-                    f,
-                    s: Vec::new(),
-                    d: 0.0,
-                    w: (ln_prior - ln_phi0 - q.max(1e-300).ln()).exp(),
-                })
-            })
-            .collect::<Result<_>>()?;
-        used += n - na;
-        generations += 1;
-        let old = pop.len();
-        pop.extend(new);
-        let (so, r, c) = refit(&mut pop, observed, opts.distance, opts.ridge)?;
-        s_obs = so;
-        r2 = r;
-        // the previous tolerance under the refitted distance: the kept particles' largest
-        let eps_prev = pop[..old].iter().map(|p| p.d).fold(0.0, f64::max);
-        acceptance = pop[old..].iter().filter(|p| p.d < eps_prev).count() as f64 / (n - na) as f64;
-        eps = keep(&mut pop);
-        if trace() {
-            eprintln!(
-                "abc: generation {generations}, {used} simulations, acceptance {acceptance:.3}, ε {eps:.3}, held-out R² {r2:.2?}, ridge c {}",
-                fmt_c(&c)
-            );
-        }
-        progress(used, opts.simulations);
+        Ok(Kernel {
+            theta,
+            w,
+            tw,
+            l,
+            ln_prior,
+            ln_phi0,
+            cum,
+        })
     }
-    let tw: f64 = pop.iter().map(|p| p.w).sum();
-    let weights: Vec<f64> = pop.iter().map(|p| p.w / tw).collect();
-    let theta: Vec<Vec<f64>> = pop.iter().map(|p| p.theta.clone()).collect();
-    let adjusted = match opts.distance {
-        DistanceKind::Projected => adjust(prior, &pop, &s_obs, eps, &weights),
-        DistanceKind::Direct => None,
-    };
-    Ok(Posterior {
-        regression_adjusted: adjusted.is_some(),
-        adjusted: adjusted.unwrap_or_else(|| theta.clone()),
-        theta,
-        weights,
-        distances: pop.iter().map(|p| p.d).collect(),
-        epsilon: eps,
-        generations,
-        simulations: used,
-        acceptance,
-        heldout_r2: r2,
-    })
+
+    /// Takes the prior, the options, the generation, the new particle's index and the
+    /// simulator; gives the new particle: a kept particle drawn by weight, moved by the
+    /// kernel until inside the prior's box (from its own stream [`key`]`(seed,
+    /// generation, i)`), simulated, and weighted π(θ) / Σ_j (w_j/Σw) φ_Σ(θ − θ_j).
+    fn propose<F>(
+        &self,
+        prior: &BoxPrior,
+        opts: &AbcOptions,
+        generations: usize,
+        i: usize,
+        simulate: &F,
+    ) -> Result<Particle>
+    where
+        F: Fn(&[f64], u64) -> Result<Vec<f64>> + Sync,
+    {
+        let (theta, w, tw, l, cum) = (&self.theta, &self.w, self.tw, &self.l, &self.cum);
+        let (ln_prior, ln_phi0) = (self.ln_prior, self.ln_phi0);
+        let dim = prior.dim();
+        let na = opts.kept;
+        let mut rng = ChaCha8Rng::seed_from_u64(key(opts.seed, generations, i));
+        let mut th = Vec::new();
+        for attempt in 0..10_000 {
+            let u: f64 = rng.gen();
+            let a = cum.partition_point(|c| *c < u).min(na - 1);
+            let z = DVector::from_fn(dim, |_, _| rng.sample::<f64, _>(StandardNormal));
+            let step = l * z;
+            th = (0..dim).map(|k| theta[a][k] + step[k]).collect();
+            if prior.inside(&th) {
+                break;
+            }
+            if attempt == 9_999 {
+                // never in practice: the kernel is centred on particles inside the box
+                th = th
+                    .iter()
+                    .enumerate()
+                    .map(|(k, v)| v.clamp(prior.lo[k], prior.hi[k]))
+                    .collect();
+            }
+        }
+        let f = simulate(&th, rng.gen())?;
+        // w = π(θ) / Σ_j (w_j/Σw) φ_Σ(θ − θ_j), both densities normalised (π is
+        // constant on the box); q is the sum without φ's constant
+        let q: f64 = theta
+            .iter()
+            .zip(w)
+            .map(|(tj, wj)| {
+                let dv = DVector::from_fn(dim, |k, _| th[k] - tj[k]);
+                let y = l.solve_lower_triangular(&dv).unwrap_or(dv);
+                wj / tw * (-0.5 * y.norm_squared()).exp()
+            })
+            .sum();
+        Ok(Particle {
+            theta: th,
+            f,
+            s: Vec::new(),
+            d: 0.0,
+            w: (ln_prior - ln_phi0 - q.max(1e-300).ln()).exp(),
+        })
+    }
 }
 
 /// Local-linear regression adjustment (Beaumont, Zhang & Balding 2002):

@@ -50,9 +50,11 @@
 //! The module's parts: [`network`] (the parsed [`Network`], [`SParam`], [`TsFormat`], text
 //! decoding and the bounds [`MAX_PORTS`], [`MAX_VALUE`]), [`reader`] ([`parse_touchstone`],
 //! [`read_touchstone`]) and [`writer`] ([`write_s2p`]). Every item is re-exported here.
+//! The reader's lines, tokens and numbers are in `text` (private).
 
 pub mod network;
 pub mod reader;
+mod text;
 pub mod writer;
 
 pub use network::{decode, ports_from_name, Network, SParam, TsFormat, MAX_PORTS, MAX_VALUE};

@@ -1,95 +1,13 @@
 //! The Touchstone reader: takes a file's text (or path) and gives a [`Network`]
 //! ([`parse_touchstone`], [`read_touchstone`]); what is read and what is refused is listed
-//! in the [module documentation](super). Errors name the file and the line.
+//! in the [module documentation](super). Errors name the file and the line. The text's
+//! lines, tokens and numbers are taken apart in `text`.
 
 use super::network::{decode, ports_from_name, Network, TsFormat, MAX_PORTS, MAX_VALUE};
+use super::text::{hfss_block, parse_complex, strip_comment, unit_scale, Lines, Tokens};
 use crate::error::{Error, Result};
 use num_complex::Complex64;
 use std::path::Path;
-
-fn unit_scale(tok: &str) -> Option<f64> {
-    match tok.to_ascii_lowercase().as_str() {
-        "hz" => Some(1.0),
-        "khz" => Some(1e3),
-        "mhz" => Some(1e6),
-        "ghz" => Some(1e9),
-        _ => None,
-    }
-}
-
-/// Parse a real or complex number as scikit-rf's option line takes it (`50`, `(10+10j)`,
-/// `10-5j`, `5j`).
-fn parse_complex(tok: &str) -> Option<Complex64> {
-    let t = tok.trim_start_matches('(').trim_end_matches(')');
-    if let Ok(v) = t.parse::<f64>() {
-        return Some(Complex64::new(v, 0.0));
-    }
-    let body = t.strip_suffix(['j', 'J', 'i', 'I'])?;
-    // the sign that starts the imaginary part: the last + or - not at the start and not
-    // after an exponent marker
-    let b = body.as_bytes();
-    let split = (1..b.len())
-        .rev()
-        .find(|&i| (b[i] == b'+' || b[i] == b'-') && !matches!(b[i - 1], b'e' | b'E'));
-    match split {
-        Some(i) => {
-            let re = body[..i].parse::<f64>().ok()?;
-            let im = match &body[i..] {
-                "+" => 1.0,
-                "-" => -1.0,
-                s => s.parse::<f64>().ok()?,
-            };
-            Some(Complex64::new(re, im))
-        }
-        None => Some(Complex64::new(0.0, body.parse::<f64>().ok()?)),
-    }
-}
-
-/// Lines split at LF, CRLF or CR, numbered from 1; `Clone` gives a look-ahead.
-///
-/// A text with any LF splits at LF (memchr-fast `str::find`) and drops a CR before it, as
-/// `str::lines`; a text with CR only (classic Mac) splits at CR.
-#[derive(Clone)]
-struct Lines<'a> {
-    rest: &'a str,
-    lineno: usize,
-    sep: char,
-}
-
-impl<'a> Lines<'a> {
-    fn new(text: &'a str) -> Lines<'a> {
-        let b = text.as_bytes();
-        let sep = if !b.contains(&b'\n') && b.contains(&b'\r') {
-            '\r'
-        } else {
-            '\n'
-        };
-        Lines {
-            rest: text,
-            lineno: 0,
-            sep,
-        }
-    }
-}
-
-impl<'a> Iterator for Lines<'a> {
-    type Item = (usize, &'a str);
-    fn next(&mut self) -> Option<(usize, &'a str)> {
-        if self.rest.is_empty() {
-            return None;
-        }
-        self.lineno += 1;
-        let line = match self.rest.find(self.sep) {
-            Some(i) => {
-                let line = &self.rest[..i];
-                self.rest = &self.rest[i + 1..];
-                line
-            }
-            None => std::mem::take(&mut self.rest),
-        };
-        Some((self.lineno, line.strip_suffix('\r').unwrap_or(line)))
-    }
-}
 
 /// Order of the numbers of a point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -464,173 +382,14 @@ impl<'a> Parser<'a> {
     }
 }
 
-/// Whitespace-separated tokens of a data line, up to a `!` comment (bytes ≤ space
-/// separate; a non-ASCII byte stays in its token, which then fails to parse).
-struct Tokens<'a> {
-    s: &'a str,
-    pos: usize,
-}
-
-impl<'a> Tokens<'a> {
-    fn new(s: &'a str) -> Tokens<'a> {
-        Tokens { s, pos: 0 }
-    }
-}
-
-impl<'a> Iterator for Tokens<'a> {
-    type Item = &'a str;
-    #[inline]
-    fn next(&mut self) -> Option<&'a str> {
-        let b = self.s.as_bytes();
-        let mut i = self.pos;
-        while i < b.len() && b[i] <= b' ' {
-            i += 1;
-        }
-        if i >= b.len() || b[i] == b'!' {
-            self.pos = b.len();
-            return None;
-        }
-        let start = i;
-        while i < b.len() && b[i] > b' ' && b[i] != b'!' {
-            i += 1;
-        }
-        self.pos = i;
-        // split at ASCII bytes only: char boundaries
-        Some(&self.s[start..i])
-    }
-}
-
-fn strip_comment(raw: &str) -> &str {
-    match raw.find('!') {
-        Some(p) => &raw[..p],
-        None => raw,
-    }
-    .trim()
-}
-
-/// Floats of an HFSS comment block (`! Port Impedance re im …`) and its continuation lines
-/// (comments holding only numbers).
-fn hfss_block(first: &str, lines: &mut Lines<'_>) -> Vec<f64> {
-    let mut vals: Vec<f64> = first
-        .split_ascii_whitespace()
-        .filter_map(|t| t.parse().ok())
-        .collect();
-    loop {
-        let mut ahead = lines.clone();
-        let Some((_, l)) = ahead.next() else { break };
-        let Some(body) = l.trim().strip_prefix('!') else {
-            break;
-        };
-        let more: Option<Vec<f64>> = body
-            .split_ascii_whitespace()
-            .map(|t| t.parse().ok())
-            .collect();
-        match more {
-            Some(m) if !m.is_empty() => {
-                vals.extend(m);
-                *lines = ahead;
-            }
-            _ => break,
-        }
-    }
-    vals
-}
-
 /// Parse the text of a Touchstone file; `path` names it in errors and gives the port count
 /// of a v1 file (`.sNp`).
 pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let name_ports = ports_from_name(path);
-    let mut p = Parser {
-        path,
-        version: 1,
-        ports: name_ports,
-        name_ports,
-        scale: 1e9,
-        fmt: TsFormat::Ma,
-        option_seen: false,
-        r_option: vec![Complex64::new(50.0, 0.0)],
-        reference: None,
-        legacy_two_port: true,
-        two_port_order: None,
-        matrix: MatrixFormat::Full,
-        declared_points: None,
-        in_network: true,
-        noise: None,
-        freq_hz: Vec::new(),
-        s: Vec::new(),
-        hfss_z0: Vec::new(),
-        row: Vec::new(),
-        per_point: 0,
-        point_line: 0,
-    };
+    let mut p = Parser::new(path);
     let mut lines = Lines::new(text);
-    let mut noise_rows = 0usize;
-    while let Some((lineno, raw)) = lines.next() {
-        let t = raw.trim();
-        if t.is_empty() {
-            continue;
-        }
-        if let Some(c) = t.strip_prefix('!') {
-            let c = c.trim_start();
-            // `get`: byte 14 may fall inside a character of a non-ASCII comment
-            if c.get(..14)
-                .is_some_and(|h| h.eq_ignore_ascii_case("port impedance"))
-            {
-                let vals = hfss_block(&c[14..], &mut lines);
-                p.hfss_z0.push(vals);
-            }
-            continue;
-        }
-        if t.starts_with('#') {
-            let line = strip_comment(t);
-            if !p.option_seen {
-                p.option_line(line, lineno)?;
-                p.option_seen = true;
-            }
-            continue;
-        }
-        if t.starts_with('[') {
-            if !p.keyword(strip_comment(t), lineno, &mut lines)? {
-                break;
-            }
-            continue;
-        }
-        if p.noise.is_some() {
-            noise_rows += 1;
-            continue;
-        }
-        if !p.in_network {
-            return Err(p.err(lineno, "data before [Network Data]"));
-        }
-        p.data_line(t, lineno)?;
-        if p.noise.is_some() {
-            noise_rows += 1;
-        }
-    }
-    if !p.row.is_empty() {
-        return Err(p.err(
-            p.point_line,
-            format!(
-                "truncated data row ({} of {} numbers)",
-                p.row.len(),
-                p.per_point
-            ),
-        ));
-    }
-    if p.freq_hz.is_empty() {
-        return Err(Error::input(path, "no data rows"));
-    }
-    let n = p.ports.expect("data rows imply a port count");
-    let points = p.freq_hz.len();
-    if let Some((want, lineno)) = p.declared_points {
-        if want != points {
-            return Err(p.err(
-                lineno,
-                format!("[Number of Frequencies] {want} but the file holds {points} points"),
-            ));
-        }
-    }
+    let noise_rows = p.read_lines(&mut lines)?;
+    let (n, points) = p.complete()?;
     let mut notes = Vec::new();
     if let Some((lineno, _)) = p.noise {
         notes.push(format!(
@@ -639,17 +398,146 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
     }
     // reference impedance: HFSS comments per point, else [Reference], else the option line
     let z0_ohm = if !p.hfss_z0.is_empty() {
-        if p.hfss_z0.len() != points {
+        p.hfss_reference(n, points)?
+    } else {
+        p.option_reference(n, points)?
+    };
+    Ok(Network {
+        ports: n,
+        version: p.version,
+        freq_hz: p.freq_hz,
+        s: p.s,
+        z0_ohm,
+        notes,
+    })
+}
+
+impl<'a> Parser<'a> {
+    /// Takes the file's path (named in errors; a v1 file's port count comes from its
+    /// name); gives the parser before the first line: version 1, GHz, MA, 50 Ω, the full
+    /// matrix, in the network data.
+    fn new(path: &'a Path) -> Parser<'a> {
+        let name_ports = ports_from_name(path);
+        Parser {
+            path,
+            version: 1,
+            ports: name_ports,
+            name_ports,
+            scale: 1e9,
+            fmt: TsFormat::Ma,
+            option_seen: false,
+            r_option: vec![Complex64::new(50.0, 0.0)],
+            reference: None,
+            legacy_two_port: true,
+            two_port_order: None,
+            matrix: MatrixFormat::Full,
+            declared_points: None,
+            in_network: true,
+            noise: None,
+            freq_hz: Vec::new(),
+            s: Vec::new(),
+            hfss_z0: Vec::new(),
+            row: Vec::new(),
+            per_point: 0,
+            point_line: 0,
+        }
+    }
+
+    /// Takes the file's lines; reads every one (comments with HFSS port impedances, the
+    /// option line, keywords, data rows) up to the end or `[End]`, and gives the number
+    /// of noise-parameter rows skipped.
+    fn read_lines(&mut self, lines: &mut Lines<'_>) -> Result<usize> {
+        let mut noise_rows = 0usize;
+        while let Some((lineno, raw)) = lines.next() {
+            let t = raw.trim();
+            if t.is_empty() {
+                continue;
+            }
+            if let Some(c) = t.strip_prefix('!') {
+                let c = c.trim_start();
+                // `get`: byte 14 may fall inside a character of a non-ASCII comment
+                if c.get(..14)
+                    .is_some_and(|h| h.eq_ignore_ascii_case("port impedance"))
+                {
+                    let vals = hfss_block(&c[14..], lines);
+                    self.hfss_z0.push(vals);
+                }
+                continue;
+            }
+            if t.starts_with('#') {
+                let line = strip_comment(t);
+                if !self.option_seen {
+                    self.option_line(line, lineno)?;
+                    self.option_seen = true;
+                }
+                continue;
+            }
+            if t.starts_with('[') {
+                if !self.keyword(strip_comment(t), lineno, lines)? {
+                    break;
+                }
+                continue;
+            }
+            if self.noise.is_some() {
+                noise_rows += 1;
+                continue;
+            }
+            if !self.in_network {
+                return Err(self.err(lineno, "data before [Network Data]"));
+            }
+            self.data_line(t, lineno)?;
+            if self.noise.is_some() {
+                noise_rows += 1;
+            }
+        }
+        Ok(noise_rows)
+    }
+
+    /// After the last line: gives (ports, frequency points), or the error of a truncated
+    /// last row, of no data row, or of a point count other than `[Number of Frequencies]`.
+    fn complete(&self) -> Result<(usize, usize)> {
+        if !self.row.is_empty() {
+            return Err(self.err(
+                self.point_line,
+                format!(
+                    "truncated data row ({} of {} numbers)",
+                    self.row.len(),
+                    self.per_point
+                ),
+            ));
+        }
+        if self.freq_hz.is_empty() {
+            return Err(Error::input(self.path, "no data rows"));
+        }
+        let n = self.ports.expect("data rows imply a port count");
+        let points = self.freq_hz.len();
+        if let Some((want, lineno)) = self.declared_points {
+            if want != points {
+                return Err(self.err(
+                    lineno,
+                    format!("[Number of Frequencies] {want} but the file holds {points} points"),
+                ));
+            }
+        }
+        Ok((n, points))
+    }
+
+    /// Takes the port and point counts; gives the reference impedance per point and port
+    /// from the HFSS `! Port Impedance` blocks (one per point: the diagonal of an n × n
+    /// block, or n values), or the error naming a block that is neither.
+    fn hfss_reference(&self, n: usize, points: usize) -> Result<Vec<Complex64>> {
+        let path = self.path;
+        if self.hfss_z0.len() != points {
             return Err(Error::input(
                 path,
                 format!(
                     "{} `! Port Impedance` blocks for {points} frequency points",
-                    p.hfss_z0.len()
+                    self.hfss_z0.len()
                 ),
             ));
         }
         let mut z = Vec::with_capacity(points * n);
-        for (k, b) in p.hfss_z0.iter().enumerate() {
+        for (k, b) in self.hfss_z0.iter().enumerate() {
             let c: Vec<Complex64> = b
                 .chunks_exact(2)
                 .map(|c| Complex64::new(c[0], c[1]))
@@ -671,33 +559,31 @@ pub fn parse_touchstone(text: &str, path: &Path) -> Result<Network> {
                 ));
             }
         }
-        z
-    } else {
-        let r = match &p.reference {
+        Ok(z)
+    }
+
+    /// Takes the port and point counts; gives the reference impedance per point and port
+    /// from `[Reference]`, else the option line (one value for every port, one per port,
+    /// or 50 Ω), or the error of an option line with another count.
+    fn option_reference(&self, n: usize, points: usize) -> Result<Vec<Complex64>> {
+        let path = self.path;
+        let r = match &self.reference {
             Some(r) => r.clone(),
-            None if p.r_option.len() == 1 => vec![p.r_option[0]; n],
-            None if p.r_option.len() == n => p.r_option.clone(),
-            None if p.r_option.is_empty() => vec![Complex64::new(50.0, 0.0); n],
+            None if self.r_option.len() == 1 => vec![self.r_option[0]; n],
+            None if self.r_option.len() == n => self.r_option.clone(),
+            None if self.r_option.is_empty() => vec![Complex64::new(50.0, 0.0); n],
             None => {
                 return Err(Error::input(
                     path,
                     format!(
                         "option line gives {} reference impedances for {n} ports",
-                        p.r_option.len()
+                        self.r_option.len()
                     ),
                 ))
             }
         };
-        (0..points).flat_map(|_| r.iter().copied()).collect()
-    };
-    Ok(Network {
-        ports: n,
-        version: p.version,
-        freq_hz: p.freq_hz,
-        s: p.s,
-        z0_ohm,
-        notes,
-    })
+        Ok((0..points).flat_map(|_| r.iter().copied()).collect())
+    }
 }
 
 /// Read a Touchstone file (bytes decoded by [`decode`]).

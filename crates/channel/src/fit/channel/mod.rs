@@ -72,23 +72,27 @@
 //! Every entry of [`ChannelFit::details`] is present, a not-estimable one with no samples.
 //!
 //! Measurements behind these choices (closed-loop and coverage figures): `docs/fit.md`.
+//!
+//! Layout: this module holds the entry points and the fit's steps (`fit_rays`); `rays`
+//! reads, checks and groups the input rays, `aoa` gives the AoA offsets, margin and
+//! samples, `samples` gathers every quantity's samples per position.
+
+mod aoa;
+mod rays;
+mod samples;
 
 use crate::campaign::layout::Layout;
-use crate::campaign::manifest::{Campaign, Manifest, C0};
+use crate::campaign::manifest::Campaign;
 use crate::error::{Error, Result};
-use crate::fit::estimators::{fit, Family};
-use crate::fit::geometry::{
-    bootstrap_block, cluster_location, observed_stretches, perimeter_offset, stretch_spacings,
-    Interior, OBSERVED_STEP_M,
-};
+use crate::fit::geometry::{bootstrap_block, Interior};
 use crate::fit::quantities::{
     excess_decay_quantity, fit_arrivals, fit_offset, fit_spacing, mean_quantity,
-    ray_decay_quantity, Groups, PairGroups, Resampling,
+    ray_decay_quantity, Resampling,
 };
 use crate::model::file::{BinSettings, ModelConfig};
-use crate::pattern::ArrayPattern;
-use crate::table;
-use crate::units::range_m;
+use aoa::{aoa_groups, aoa_margin, aoa_offsets};
+use rays::{group_clusters, read_rays};
+use samples::Samples;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -232,56 +236,6 @@ pub fn read_clustered(path: &Path) -> Result<usize> {
     Ok(read_rays(path, false)?.len())
 }
 
-/// The rays of a clustered MPC table (`truth = false`: grouped by `cluster_id`, all ≥ 0)
-/// or of a truth `rays.parquet` (`truth = true`: grouped by `truth_cluster`, else
-/// `cluster_id` in files written before it; rows with −1 are dropped).
-fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
-    let df = table::read_parquet(path, None)?;
-    let pos = table::i64_column(path, &df, "position")?;
-    let column = if truth && df.column("truth_cluster").is_ok() {
-        "truth_cluster"
-    } else {
-        "cluster_id"
-    };
-    let cid = table::i64_column(path, &df, column)?;
-    let d = table::f64_column(path, &df, "delay_ns")?;
-    let a = table::f64_column(path, &df, "angle_rel_deg")?;
-    let pw = table::f64_column(path, &df, "power_db")?;
-    // the dense component (diffuse MPCs, cluster_id −1) is fitted apart (`fit::diffuse`)
-    let diffuse = match table::str_column(path, &df, "component")? {
-        None => vec![false; pos.len()],
-        Some(c) => c
-            .iter()
-            .enumerate()
-            .map(|(i, x)| match crate::mpc::Component::parse(x) {
-                Some(k) => Ok(k == crate::mpc::Component::Diffuse),
-                None => Err(Error::input(
-                    path,
-                    format!("column `component` row {i}: {x:?} (expected discrete or diffuse)"),
-                )),
-            })
-            .collect::<Result<Vec<_>>>()?,
-    };
-    (0..pos.len())
-        .filter(|&i| !diffuse[i] && (!truth || cid[i] >= 0))
-        .map(|i| {
-            if pos[i] < 0 || cid[i] < 0 {
-                return Err(Error::input(
-                    path,
-                    format!("row {i}: negative position or {column}"),
-                ));
-            }
-            Ok(Ray {
-                position: pos[i] as usize,
-                cluster: cid[i] as usize,
-                delay_ns: d[i],
-                angle_rel_deg: a[i],
-                power_db: pw[i],
-            })
-        })
-        .collect()
-}
-
 /// The campaign fit on rays read from `clusters` (named in errors), in steps: group the
 /// rays by (position, cluster), take the AoA offsets and their sector margin, gather the
 /// per-position samples, fit each quantity, assemble the model file.
@@ -397,247 +351,13 @@ fn nothing_estimable(clusters: &Path, n: usize, model: &ModelConfig) -> Result<(
     ))
 }
 
-/// The rays keyed by (position, cluster): truth cluster ids name objects seen from many
-/// positions. A position outside the campaign, a delay or angle that is not finite or a
-/// NaN power is an error naming `path` (bad input, not a quantity left unestimated).
-fn group_clusters(
-    path: &Path,
-    rays: &[Ray],
-    np: usize,
-) -> Result<BTreeMap<(usize, usize), Vec<Ray>>> {
-    let mut by_cluster: BTreeMap<(usize, usize), Vec<Ray>> = BTreeMap::new();
-    for (i, r) in rays.iter().enumerate() {
-        if !(r.delay_ns.is_finite() && r.angle_rel_deg.is_finite()) || r.power_db.is_nan() {
-            return Err(Error::input(
-                path,
-                format!(
-                    "ray {i} (position {}, cluster {}): delay_ns and angle_rel_deg must be finite, power_db a number",
-                    r.position, r.cluster
-                ),
-            ));
-        }
-        if r.position >= np {
-            return Err(Error::input(
-                path,
-                format!(
-                    "position {} outside the campaign ({np} positions)",
-                    r.position
-                ),
-            ));
-        }
-        by_cluster
-            .entry((r.position, r.cluster))
-            .or_default()
-            .push(*r);
-    }
-    Ok(by_cluster)
-}
-
-/// A cluster's reference ray: its strongest member (the last of equals). `rs` is non-empty.
-fn strongest_of(rs: &[Ray]) -> &Ray {
-    rs.iter()
-        .max_by(|a, b| a.power_db.total_cmp(&b.power_db))
-        .expect("a cluster has members")
-}
-
-/// One cluster's AoA: its position, its reference (strongest) ray's angle and the other
-/// rays' offsets from it.
-type ClusterAoa = (usize, f64, Vec<f64>);
-
-/// The AoA offsets of every cluster (the reference ray left out).
-fn aoa_offsets(by_cluster: &BTreeMap<(usize, usize), Vec<Ray>>) -> Vec<ClusterAoa> {
-    by_cluster
-        .values()
-        .map(|rs| {
-            let strongest = strongest_of(rs);
-            let mut skipped = false;
-            let mut offsets = Vec::with_capacity(rs.len());
-            for r in rs {
-                if !skipped && std::ptr::eq(r, strongest) {
-                    skipped = true;
-                    continue;
-                }
-                offsets.push(r.angle_rel_deg - strongest.angle_rel_deg);
-            }
-            (rs[0].position, strongest.angle_rel_deg, offsets)
-        })
-        .collect()
-}
-
-/// The sector-edge margin 2·b̂₀ (degrees), b̂₀ the Laplacian scale fitted to the AoA
-/// offsets of all clusters (0 when they cannot be fitted). A ray lies beyond 2b of its
-/// cluster's reference with probability e^{−2}/2 = 7 % on each side.
-fn aoa_margin(clusters: &[ClusterAoa]) -> f64 {
-    let all: Vec<f64> = clusters.iter().flat_map(|c| c.2.iter().copied()).collect();
-    fit(Family::Laplacian, &all).map_or(0.0, |f| 2.0 * f.params[1])
-}
-
-/// The AoA samples per position, from the clusters whose reference ray lies at least 2·b̂₀
-/// inside the scanned sector, b̂₀ the Laplacian scale fitted to all clusters (the margin
-/// at most a quarter of the sector; all clusters when none lies that far in). A cluster
-/// whose reference is near a sector edge loses the rays beyond the edge, and what is left
-/// is mostly one side of the Laplacian. A Laplacian tail beyond 2b holds e^{−2}/2 = 7 % of
-/// the rays.
-fn aoa_groups(clusters: &[ClusterAoa], np: usize, lo: f64, hi: f64, margin: f64) -> Groups {
-    let mut groups: Groups = vec![Vec::new(); np];
-    let margin = margin.min((hi - lo) / 4.0);
-    let inner = |a: f64| a >= lo + margin && a <= hi - margin;
-    let any_inner = clusters.iter().any(|c| inner(c.1) && !c.2.is_empty());
-    for (pos, reference, offsets) in clusters {
-        if !any_inner || inner(*reference) {
-            groups[*pos].extend_from_slice(offsets);
-        }
-    }
-    groups
-}
-
-/// The samples of every quantity, per position.
-struct Samples {
-    /// Each cluster's first arrival, ns.
-    first: Groups,
-    /// Inter-arrival gaps inside clusters, ns (at least δ).
-    intra: Groups,
-    /// Gaps between the clusters' first arrivals, ns (at least δ).
-    inter: Groups,
-    /// Perimeter offsets folded at the wall (interior clusters), m.
-    dp: Groups,
-    /// The same offsets signed (negative beyond the perimeter): the value's estimate.
-    dp_signed: Groups,
-    /// Every cluster's arc-length coordinate on the perimeter, m.
-    arcs: Groups,
-    /// Complete gaps along the observed perimeter, m.
-    dc: Groups,
-    /// Per position: [observed perimeter length, clusters projected into it].
-    exposure: Groups,
-    /// Rays per cluster.
-    members: Groups,
-    /// (strongest ray's delay ns, its power dB + 40·log10 of its range) per cluster.
-    cl_power: PairGroups,
-    /// (excess delay ns, power relative to the cluster's first ray dB) per ray.
-    ray_decay: PairGroups,
-    /// σ of each cluster's strongest ray, m².
-    sigma: Groups,
-}
-
-impl Samples {
-    /// Gather the per-cluster samples, then the per-position gaps and spacings.
-    fn gather(
-        by_cluster: &BTreeMap<(usize, usize), Vec<Ray>>,
-        m: &Manifest,
-        layout: &Layout,
-        region: &Interior,
-        delta: f64,
-    ) -> Result<Samples> {
-        let np = m.positions();
-        let mut s = Samples {
-            first: vec![Vec::new(); np],
-            intra: vec![Vec::new(); np],
-            inter: vec![Vec::new(); np],
-            dp: vec![Vec::new(); np],
-            dp_signed: vec![Vec::new(); np],
-            arcs: vec![Vec::new(); np],
-            dc: vec![Vec::new(); np],
-            exposure: vec![Vec::new(); np],
-            members: vec![Vec::new(); np],
-            cl_power: vec![Vec::new(); np],
-            ray_decay: vec![Vec::new(); np],
-            sigma: vec![Vec::new(); np],
-        };
-        let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
-        let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
-        let lc = C0 / m.band.center_hz();
-        let gain_den = g0 * g0 * lc * lc;
-        for rs in by_cluster.values() {
-            s.add_cluster(rs, m, layout, region, delta, gain_den);
-        }
-        s.add_spacings(m, layout, region, delta);
-        Ok(s)
-    }
-
-    /// The samples of one cluster `rs` (non-empty, one position); `gain_den` = G²λ² with G
-    /// the array's broadside gain and λ the wavelength at the centre frequency (the radar
-    /// equation's σ = E·(4π)³d⁴/(G²λ²)).
-    fn add_cluster(
-        &mut self,
-        rs: &[Ray],
-        m: &Manifest,
-        layout: &Layout,
-        region: &Interior,
-        delta: f64,
-        gain_den: f64,
-    ) {
-        let pos = rs[0].position;
-        let mut d: Vec<f64> = rs.iter().map(|r| r.delay_ns).collect();
-        d.sort_by(f64::total_cmp);
-        self.first[pos].push(d[0]);
-        self.intra[pos].extend(d.windows(2).map(|w| (w[1] - w[0]).max(delta)));
-        let strongest = strongest_of(rs);
-        let n = rs.len() as f64;
-        let range = rs.iter().map(|r| range_m(r.delay_ns)).sum::<f64>() / n;
-        let centroid = cluster_location(&m.poses[pos], range, strongest.angle_rel_deg);
-        let off = perimeter_offset(layout, centroid);
-        // d_c: every cluster's projection; the observed stretches decide which count
-        self.arcs[pos].push(off.arc_m);
-        if region.contains(strongest.angle_rel_deg, range) {
-            self.dp_signed[pos].push(off.signed_m);
-            self.dp[pos].push(off.folded_m);
-        }
-        self.members[pos].push(n);
-        // the strongest ray (the law's first ray, σ_l), range-corrected: the model's own
-        // r⁻⁴ at its range removed
-        let r0 = range_m(strongest.delay_ns).max(1e-3);
-        self.cl_power[pos].push((strongest.delay_ns, strongest.power_db + 40.0 * r0.log10()));
-        let first_ray = rs
-            .iter()
-            .min_by(|a, b| a.delay_ns.total_cmp(&b.delay_ns))
-            .expect("non-empty");
-        for r in rs {
-            if !std::ptr::eq(r, first_ray) {
-                self.ray_decay[pos].push((
-                    r.delay_ns - first_ray.delay_ns,
-                    r.power_db - first_ray.power_db,
-                ));
-            }
-        }
-        let d = range_m(strongest.delay_ns);
-        let e = 10f64.powf(strongest.power_db / 10.0);
-        self.sigma[pos].push(e * (4.0 * std::f64::consts::PI).powi(3) * d.powi(4) / gain_den);
-    }
-
-    /// Per position: the gaps between the clusters' first arrivals, and the complete gaps
-    /// and exposure along the perimeter observed in `region`.
-    fn add_spacings(&mut self, m: &Manifest, layout: &Layout, region: &Interior, delta: f64) {
-        let perim = layout.perimeter_length();
-        for pos in 0..m.positions() {
-            let mut f = self.first[pos].clone();
-            f.sort_by(f64::total_cmp);
-            self.inter[pos] = f.windows(2).map(|w| (w[1] - w[0]).max(delta)).collect();
-            let stretches = observed_stretches(layout, &m.poses[pos], region, OBSERVED_STEP_M);
-            let (gaps, length, count) = stretch_spacings(&self.arcs[pos], &stretches, perim);
-            self.dc[pos] = gaps;
-            self.exposure[pos] = vec![length, count as f64];
-        }
-    }
-
-    /// The clusters' (strongest ray's delay, its range-corrected power) relative to the
-    /// position's earliest.
-    fn cluster_pairs(&self) -> PairGroups {
-        self.cl_power
-            .iter()
-            .map(|v| {
-                let t0 = v.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
-                let p0 = v.iter().find(|x| x.0 == t0).map(|x| x.1).unwrap_or(0.0);
-                v.iter().map(|x| (x.0 - t0, x.1 - p0)).collect()
-            })
-            .collect()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::fit::geometry::tests::hall_at_centre;
     use crate::params::ParamGuard;
+    use crate::table;
+    use crate::units::range_m;
 
     #[test]
     fn spacing_without_two_complete_gaps_keeps_the_censored_value() {
