@@ -18,7 +18,6 @@ mod analysis;
 mod campaign_report;
 pub mod commands;
 pub mod experiment;
-pub mod explore;
 mod geometry;
 mod kmax;
 mod reproduce;
@@ -34,8 +33,9 @@ pub const CORRIDOR_MANIFEST: &str = include_str!("../../data/corridor/campaign.t
 /// The built-in corridor layout.
 pub const CORRIDOR_LAYOUT: &str = include_str!("../../data/corridor/layout.geojson");
 
-/// Progress callback factory: (stage label, total steps) → per-step callback.
-pub type Progress<'a> = &'a dyn Fn(&str, usize) -> Box<dyn Fn(usize, usize) + 'a>;
+/// Progress callback factory: (stage label, total steps) → per-step callback (the bottom
+/// layer's [`crate::progress::Bars`]).
+pub use crate::progress::Bars as Progress;
 
 /// Write the built-in corridor campaign (manifest + layout) into `dir`.
 ///

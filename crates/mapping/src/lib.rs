@@ -32,8 +32,9 @@ pub mod job;
 
 // the lower layers' modules under their old paths (`crate::campaign::…`)
 use pradar_channel::model;
-use pradar_formats::{campaign, error, export, io, params, units};
+use pradar_formats::{campaign, error, export, io, params, progress, units};
 use pradar_radar::{energy, pattern};
+use pradar_simulate as simulate;
 
 pub mod ekf;
 pub mod experiment;

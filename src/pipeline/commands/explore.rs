@@ -1,4 +1,4 @@
-//! The `explore` command: the design-space grid ([`crate::pipeline::explore`]) into one
+//! The `explore` command: the design-space grid ([`crate::explore::run`]) into one
 //! folder — `explore.csv|.md`, `summary.csv|.md`, `timing.csv`, `energy_model.toml`, the
 //! plots, `index.html` and `report_section.html` (the section `report --explore` shows). Takes its command struct and gives a summary whose `Display` is
 //! printed.
@@ -7,9 +7,9 @@ use crate::error::{Error, Result};
 use crate::explore::summary::{
     rows_table, summarize, summary_table, timing_table, verdict_text, verdicts,
 };
+use crate::explore::{run_grid, ExploreInputs};
 use crate::explore::{DataKind, EnergyModel, ExploreParams};
 use crate::params::ParamGuard;
-use crate::pipeline::explore::{explore as run_grid, ExploreInputs};
 use crate::pipeline::Progress;
 use std::fmt;
 use std::path::PathBuf;

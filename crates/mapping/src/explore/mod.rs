@@ -8,7 +8,7 @@
 //! changed to it (elements, pulses, direction step, band and transmit power; the manifest
 //! seed is the campaign's plus the seed, so a seed draws a new scene and new noise),
 //! simulated (or synthesised), put through the energy stage and every mapper, and each map
-//! scored on the three-class reference (the run: `crate::pipeline::explore`, giving an
+//! scored on the three-class reference (the run: [`run`], giving an
 //! [`ExploreOutput`]); [`summary`] makes the tables and the verdict from it, and
 //! [`crate::report::explore`] the Pareto plot, the heat maps and `index.html`. This module
 //! holds the parameters, the result types, the [`energy_model`] and the Pareto front.
@@ -33,9 +33,11 @@
 //!   grid above [`ExploreParams::max_minutes`] is then refused with the estimate.
 
 pub mod energy_model;
+pub mod run;
 pub mod summary;
 
 pub use energy_model::{EnergyModel, EnergyModelValid, ScanCost, ScanShape};
+pub use run::{run_grid, ExploreInputs};
 
 use crate::error::{Error, Result};
 use crate::metrics::ThreeClassMetrics;
@@ -319,7 +321,7 @@ pub struct Timing {
     pub map_s: Vec<(&'static str, f64)>,
 }
 
-/// What the grid run (`crate::pipeline::explore::explore`) gives.
+/// What the grid run ([`run_grid`]) gives.
 #[derive(Debug, Clone)]
 pub struct ExploreOutput {
     /// The campaign explored.

@@ -11,11 +11,11 @@ use crate::explore::{
     Config, DataKind, EnergyModelValid, ExploreOutput, ExploreRow, ExploreValid, ScanShape, Scores,
     Timing, PAPER_ELEMENTS, PAPER_PULSES, PAPER_STEP_DEG,
 };
-use crate::mapping::job::{run_map, MapOptions, MapRun, PoseNoise};
+use crate::job::{run_map, MapOptions, MapRun, PoseNoise};
 use crate::model::file::ModelConfig;
 use crate::model::{synth, SynthParams};
 use crate::params::ParamGuard;
-use crate::pipeline::Progress;
+use crate::progress::Bars as Progress;
 use crate::simulate::{has_scene, simulate, write_campaign};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -155,7 +155,7 @@ pub struct ExploreInputs {
 /// Run the grid: the jobs (each configuration at each seed), rows and timings in grid
 /// order. Refused before the grid runs (after the probe job) when the estimate is above
 /// `params.max_minutes`.
-pub fn explore(
+pub fn run_grid(
     inputs: &ExploreInputs,
     params: &ExploreValid,
     model: &EnergyModelValid,
