@@ -1,4 +1,5 @@
-//! The analysis chain on one energy table: CLEAN → K-means → channel fit ([`analyse`]).
+//! The analysis chain on one energy table: CLEAN → K-means → channel fit ([`analyse`]),
+//! the channel layer's in-memory chain ([`crate::chain`]) with its tables written to `work/`.
 //!
 //! Every stage runs with its defaults (the clustering with the campaign's angular sector),
 //! so `reproduce`, its geometry-only table and the experiments' model fit are the same
@@ -6,9 +7,10 @@
 //! can say why.
 
 use crate::campaign::manifest::Campaign;
+use crate::chain::{headings_deg, ChainParams};
 use crate::energy::EnergyMatrix;
 use crate::error::Result;
-use crate::params::ParamGuard;
+use crate::fit::channel::fit_clustering;
 use crate::{cluster, mpc};
 use std::path::Path;
 use std::time::Instant;
@@ -57,25 +59,24 @@ pub fn analyse(
 ) -> Result<Analysis> {
     let mut timings = Vec::new();
     let t = Instant::now();
-    let xp = mpc::ExtractParams::default();
-    let mpcs = mpc::extract(em, sc, &xp.check()?)?;
+    let chain = ChainParams::for_campaign(sc)?;
+    let xp = chain.extract.params();
+    let mpcs = mpc::extract(em, sc, &chain.extract)?;
     if keep_mpcs {
         // `fit` (through `cluster`) reads the levels from the energy table the MPCs name
         let mp = work.join("mpcs.parquet");
-        let mut meta = mpc::table_metadata(em, sc, &xp);
+        let mut meta = mpc::table_metadata(em, sc, xp);
         meta.extend(cluster::io::energy_entry(&mp, energy));
         mpc::write_mpcs(&mp, &mpcs, meta)?;
     }
     timings.push(("extract (CLEAN)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
-    let headings: Vec<f64> = sc.manifest.poses.iter().map(|p| p.heading_deg).collect();
-    let params = cluster::ClusterParams::default().sector_deg(sc.manifest.directions.width_deg());
-    let clustering = cluster::cluster(&mpcs, &headings, &params.check()?)?;
+    let clustering = cluster::cluster(&mpcs, &headings_deg(sc), &chain.cluster)?;
     let cp = work.join("clusters.parquet");
     cluster::io::write_with(&cp, &clustering, Some(energy))?;
     timings.push(("cluster (K-means)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
-    let fit = crate::fit::channel::fit_channel(&cp, sc, &Default::default());
+    let fit = fit_clustering(&cp, &clustering, sc, &Default::default());
     timings.push(("fit (Table 1)".into(), t.elapsed().as_secs_f64()));
     let t = Instant::now();
     // the levels refine a fitted model; when they cannot be read the chain's model stays
@@ -94,7 +95,7 @@ pub fn analyse(
     Ok(Analysis {
         mpcs,
         clustering,
-        cluster_params: params,
+        cluster_params: *chain.cluster.params(),
         fit,
         levels_error,
         timings,

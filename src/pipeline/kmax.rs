@@ -50,7 +50,7 @@ pub(crate) fn k_max_sensitivity(
     for (k, c) in ks.into_iter().zip(clusterings) {
         let path = work.join(format!("clusters_kmax{k}.parquet"));
         cluster::write(&path, &c)?;
-        let f = crate::fit::channel::fit_channel(&path, sc, &Default::default()).ok();
+        let f = crate::fit::channel::fit_clustering(&path, &c, sc, &Default::default()).ok();
         let changed = Cell::count(c.k_changed(base).len());
         t.push(kmax_row(k.to_string(), ks_of(&c, k), changed, f.as_ref()));
     }

@@ -3,6 +3,7 @@
 //! [`mpc`] (2-D CLEAN or peaks, diffuse wall returns labelled) → [`cluster`] (K-means, K per
 //! position) → [`fit`] (Table 1: MLEs, block-bootstrap intervals, the layout's levels) →
 //! [`model`] (the model file drawn: rays, walls, `synth`) → [`check`] (the predictive check);
+//! [`chain`] runs extraction, clustering and the fit in memory, as every caller does;
 //! [`calibrate`] (ABC-SMC with `synth`) and [`correction`] (indirect inference on the chain)
 //! fit the model by simulation.
 //!
@@ -11,6 +12,7 @@
 #![deny(missing_docs)]
 
 pub mod calibrate;
+pub mod chain;
 pub mod check;
 pub mod cluster;
 pub mod correction;

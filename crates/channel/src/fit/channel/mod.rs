@@ -179,6 +179,28 @@ pub fn fit_channel(clusters: &Path, c: &Campaign, p: &FitValid) -> Result<Channe
     Ok(f)
 }
 
+/// [`fit_channel`] on a clustering in memory (the chain's own, not read back from the table
+/// `cluster` writes of it; `name` is what errors name): the same discrete rays
+/// ([`clustered_rays`]) and the same diffuse MPCs, so the same Table 1 and model file.
+pub fn fit_clustering(
+    name: &Path,
+    clustering: &crate::cluster::Clustering,
+    c: &Campaign,
+    p: &FitValid,
+) -> Result<ChannelFit> {
+    let mut f = fit_rays(name, clustered_rays(clustering), c, p.bootstrap, p.seed)?;
+    let r = crate::fit::diffuse::Resample {
+        bootstrap: p.bootstrap,
+        seed: p.seed,
+        block: bootstrap_block(&c.manifest),
+    };
+    f.model.diffuse =
+        crate::fit::diffuse::fit_diffuse(&clustering.mpcs, c.manifest.positions(), &r);
+    f.model = f.model.with_stated_values();
+    f.model.check()?;
+    Ok(f)
+}
+
 /// The same estimators applied to the simulator's true clusters (`truth_dir/rays.parquet`
 /// grouped by `truth_cluster`, defined in `docs/campaign.md`, "True clusters of a
 /// simulated scene"; the diffuse rows, −1, are dropped), seen from each position in the half-plane
