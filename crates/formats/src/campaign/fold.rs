@@ -117,4 +117,50 @@ mod tests {
             assert!(with(n - 1) < range, "{range}: {} points suffice", n - 1);
         }
     }
+
+    /// The long hall (120 m × 12 m) read at 801 and at 401 points from its centre: the
+    /// warning names the reach (√(60² + 6²) = 60.3 m), the range and the points that cover
+    /// it, and a room within the range gets none.
+    #[test]
+    fn a_layout_beyond_the_unambiguous_range_is_named_with_the_points_that_cover_it() {
+        use crate::campaign::manifest::Campaign;
+        let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/tests");
+        let dir = tempfile::tempdir().unwrap();
+        for f in ["long_hall.geojson", "room.geojson"] {
+            std::fs::copy(format!("{data}/{f}"), dir.path().join(f)).unwrap();
+        }
+        let text = std::fs::read_to_string(format!("{data}/point_target.toml")).unwrap();
+        let text = text.split("[scene]").next().unwrap().to_string();
+        let load = |layout: &str, points: usize| {
+            let t = text
+                .replace("\"room.geojson\"", &format!("\"{layout}\""))
+                .replace("points = 401", &format!("points = {points}"));
+            let path = dir.path().join("campaign.toml");
+            std::fs::write(&path, t).unwrap();
+            let c = Campaign::load(&path).unwrap();
+            let l = Layout::load(&c.layout_path()).unwrap();
+            fold_warning(&c.manifest, &l)
+        };
+        let w = load("long_hall.geojson", 801).expect("60 m is beyond 20 m");
+        let reach = 60f64.hypot(6.0);
+        assert!(w.contains(&format!("reaches {reach:.1} m")), "{w}");
+        assert!(w.contains("unambiguous range 20.0 m"), "{w}");
+        assert!(w.contains("801 points over 6.00 GHz"), "{w}");
+        let n = points_covering(
+            &Band {
+                start_hz: 57.5e9,
+                stop_hz: 63.5e9,
+                points: 801,
+            },
+            reach,
+        );
+        assert!(w.contains(&format!("{n} points over the same band")), "{w}");
+        assert_eq!(n, (2.0 * 6e9 * reach / C0).ceil() as usize + 1);
+        // at enough points the same hall is within range
+        assert_eq!(load("long_hall.geojson", n), None);
+        // the 20 m room seen from its centre: 14.1 m to a corner, within 20.0 m at 801 points
+        // but not within 10.0 m at 401
+        assert!(load("room.geojson", 801).is_none());
+        assert!(load("room.geojson", 401).is_some());
+    }
 }
