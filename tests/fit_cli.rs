@@ -213,7 +213,6 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
             s(&table),
             "--bootstrap",
             "50",
-            "--no-correction",
         ];
         if let Some(e) = energy {
             a.extend(["--energy", s(e)]);
@@ -386,7 +385,6 @@ fn fit_finds_the_energy_table_of_a_moved_project() {
             s(&tmp.path().join(format!("table{i}.md"))),
             "--bootstrap",
             "50",
-            "--no-correction",
         ]);
         assert_eq!(code, 0, "{err}");
         assert!(err.is_empty(), "{err}");
