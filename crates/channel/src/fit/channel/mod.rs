@@ -284,7 +284,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
         diffuse: None,
         walls: None,
         calibration: None,
-        correction: None,
+        legacy_correction: None,
     };
     model.check()?;
     nothing_estimable(clusters, rays.len(), &model)?;
