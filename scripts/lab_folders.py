@@ -174,8 +174,8 @@ def make(sim_manifest: Path, out: Path) -> None:
         base = [
             "# What the sweep files cannot tell pradar import (scripts/lab_folders.py).",
             "name = " + toml_value(f"lab-{m['name']}-{suffix}"),
-            # the simulated campaign's seed: the report's seeded steps (the check's draws,
-            # the bias correction's simulated campaigns) then draw what the simulated report drew
+            # the simulated campaign's seed: the report's seeded steps (the check's draws)
+            # then draw what the simulated report drew
             "seed = " + toml_value(m["seed"]),
             "",
             "[array]",

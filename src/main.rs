@@ -105,8 +105,7 @@ fn run(cli: Cli) -> Result<()> {
             report(quiet, summary)
         }
         Cmd::Fit(a) => {
-            let cmd = a.into_command();
-            let summary = with_bar(quiet, "correct", |p| commands::fit(&cmd, p))?;
+            let summary = commands::fit(&a.into_command())?;
             for w in summary.warnings() {
                 eprintln!("warning: {w}");
             }

@@ -72,22 +72,18 @@ fn base() -> &'static Path {
             params: Default::default(),
         })
         .unwrap();
-        commands::fit(
-            &commands::Fit {
-                clusters: d.join("c.parquet"),
-                campaign: sim,
-                out: d.join("model.toml"),
-                table: d.join("t.md"),
-                truth: None,
-                energy: None,
-                params: pradar::fit::channel::FitParams {
-                    bootstrap: 40,
-                    seed: 1,
-                },
-                correction: None,
+        commands::fit(&commands::Fit {
+            clusters: d.join("c.parquet"),
+            campaign: sim,
+            out: d.join("model.toml"),
+            table: d.join("t.md"),
+            truth: None,
+            energy: None,
+            params: pradar::fit::channel::FitParams {
+                bootstrap: 40,
+                seed: 1,
             },
-            &|_, _| {},
-        )
+        })
         .unwrap();
         import_inputs(d);
         dir
@@ -368,7 +364,6 @@ const FIT: &[&str] = &[
     "t2.md",
     "--bootstrap",
     "40",
-    "--no-correction",
 ];
 const SYNTH: &[&str] = &[
     "synth",

@@ -75,18 +75,17 @@ const STEP_DEG: f64 = 3.0;
 /// Seeds of the extra environment draws (synth `--seed`), beside the campaign's 77.
 const DRAW_SEEDS: [u64; 5] = [101, 102, 103, 104, 105];
 
-/// A layout (its perimeter polygon) and the poses in it (the bias correction's closed
-/// loops, `tests/correction.rs`, use the same hall).
-pub(crate) struct Scene {
-    pub(crate) name: &'static str,
+/// A layout (its perimeter polygon) and the poses in it.
+struct Scene {
+    name: &'static str,
     /// Perimeter polygon, closed.
-    pub(crate) ring: Vec<[f64; 2]>,
-    pub(crate) poses: Vec<[f64; 3]>,
+    ring: Vec<[f64; 2]>,
+    poses: Vec<[f64; 3]>,
 }
 
 impl Scene {
     /// The 480 m × 12 m hall, 240 random poses at least 2.5 m from the walls.
-    pub(crate) fn hall() -> Scene {
+    fn hall() -> Scene {
         let hx = 240.0;
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let poses = (0..240)
@@ -144,7 +143,7 @@ impl Scene {
     }
 
     /// Write the layout and the campaign into `dir`; returns the manifest path.
-    pub(crate) fn write(&self, dir: &Path) -> PathBuf {
+    fn write(&self, dir: &Path) -> PathBuf {
         std::fs::create_dir_all(dir).unwrap();
         let coords: Vec<String> = self
             .ring
@@ -165,7 +164,7 @@ impl Scene {
     }
 }
 
-pub(crate) fn run(args: &[&str]) {
+fn run(args: &[&str]) {
     let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
         .args(args)
         .output()
@@ -177,7 +176,7 @@ pub(crate) fn run(args: &[&str]) {
     );
 }
 
-pub(crate) fn s(p: &Path) -> String {
+fn s(p: &Path) -> String {
     p.to_str().unwrap().to_string()
 }
 
@@ -231,8 +230,6 @@ fn chain(dir: &Path, cpath: &Path, e: &Path) -> (PathBuf, PathBuf, String) {
         "--quiet",
         "--bootstrap",
         "100",
-        // the paper's method: the bias correction's own closed loops are tests/correction.rs
-        "--no-correction",
         "--clusters",
         &s(&cl),
         "--campaign",
@@ -498,8 +495,8 @@ fn closed_loop_recovers_the_drawn_environment() {
         // +16.6 % from the reference (the same estimator on every true ray, detectable or
         // not), with the strongest-ray estimator; the clusters' total power read +56.7 %
         // and +20.2 %. Under schema 1 both were asserted and held. The Table 1 bias issue's
-        // correction (simulation of the chain at the fitted point) is where Γ's closed loop
-        // comes back: a known gap, not a tolerance.
+        // correction (simulation of the chain at the fitted point) did not bring Γ's closed
+        // loop back and was removed (docs/correction.md): a known gap, not a tolerance.
         Set {
             name: "set 3 (λ 0.2/ns, AoA 30°, d_c 10 m)",
             model: common::hall_model(0.2, 30.0, 10.0),

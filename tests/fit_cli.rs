@@ -109,6 +109,28 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
         !text.to_lowercase().contains("nan"),
         "NaN in the model:\n{text}"
     );
+    // Table 1 is the paper's method alone (its bias correction was removed): no corrected
+    // columns in the Markdown or the CSV, no foot line, no `[correction]` in the model
+    let md = String::from_utf8(outs[0].1.clone()).unwrap();
+    let csv = std::fs::read_to_string(tmp.path().join("table0.csv")).unwrap();
+    assert!(
+        md.contains("\n| parameter | pradar | 95% interval (positions bootstrap) | family | KS p (param. bootstrap) | best family by AIC | paper Table 1 |\n"),
+        "{md}"
+    );
+    assert!(
+        csv.starts_with("parameter,value,unit,lo,hi,family,ks_p,best_aic,paper\n"),
+        "{csv}"
+    );
+    for t in [&md, &csv] {
+        for word in ["corrected", "slope", "paper's method", "identifiable", "Bias"] {
+            assert!(!t.contains(word), "{word} in Table 1:\n{t}");
+        }
+    }
+    let written: toml::Table = toml::from_str(&text).unwrap();
+    assert!(
+        !written.contains_key("correction") && !text.contains("correction"),
+        "{text}"
+    );
     // read back and written unchanged
     let m0 = tmp.path().join("model0.toml");
     let model = pradar::model::file::ModelConfig::load(&m0).unwrap();
@@ -213,7 +235,6 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
             s(&table),
             "--bootstrap",
             "50",
-            "--no-correction",
         ];
         if let Some(e) = energy {
             a.extend(["--energy", s(e)]);
@@ -272,6 +293,60 @@ fn bad_model_files_and_too_few_clusters_give_clear_errors() {
         &[],
         "no quantity can be estimated",
     );
+}
+
+/// A model file `fit` wrote while it ran Table 1's bias correction (removed) has a
+/// `[correction]` section: such a file still loads, with its values as written, `synth`
+/// takes it, and saving it drops the section. Any other unknown section is still refused.
+#[test]
+fn an_old_model_file_with_a_correction_section_still_loads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut m = pradar::model::file::ModelConfig::table1_defaults();
+    m.intra_cluster_rate.value = 0.624;
+    m.ray_decay.not_estimable =
+        Some("not identifiable from this campaign: slope 0.12 (below 0.25)".into());
+    // the section as `fit` wrote it (commit d565422), after the quantities
+    let text = format!(
+        "{}{}\n[correction]\nmethod = \"indirect-inference\"\ndraws = 8\niterations = 3\nsettled = false\nseed = 1\n\n[correction.raw]\nintra_cluster_rate = 1.034\ncluster_decay = inf\n\n[correction.slope]\nintra_cluster_rate = 0.62\nray_decay = 0.12\n",
+        pradar::model::file::HEADER,
+        toml::to_string(&m).unwrap()
+    );
+    let old = tmp.path().join("old.toml");
+    std::fs::write(&old, &text).unwrap();
+    let back = pradar::model::file::ModelConfig::load(&old).unwrap();
+    assert!(back.legacy_correction.is_some());
+    let without = pradar::model::file::ModelConfig {
+        legacy_correction: None,
+        ..back.clone()
+    };
+    assert_eq!(without, m);
+    assert_eq!(back.intra_cluster_rate.value, 0.624);
+    assert!(!back.ray_decay.is_estimable());
+    // written again: the section is gone, the rest is the same model
+    let again = tmp.path().join("again.toml");
+    back.save(&again).unwrap();
+    let written = std::fs::read_to_string(&again).unwrap();
+    assert!(!written.contains("correction"), "{written}");
+    assert_eq!(pradar::model::file::ModelConfig::load(&again).unwrap(), m);
+    // the command line reads it as every command does
+    let man = write_campaign(&tmp.path().join("in"), &corridor());
+    let (code, err) = pradar(&[
+        "synth",
+        "--model",
+        s(&old),
+        "--campaign",
+        s(&man),
+        "--out",
+        s(&tmp.path().join("synth.parquet")),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // only the legacy key is let through
+    let bad = tmp.path().join("bad.toml");
+    std::fs::write(&bad, text.replace("[correction", "[corection")).unwrap();
+    let e = pradar::model::file::ModelConfig::load(&bad)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("bad.toml") && e.contains("corection"), "{e}");
 }
 
 /// A discrete MPC at `position` (the corridor's array, the fit reads delay, angle, power).
@@ -386,7 +461,6 @@ fn fit_finds_the_energy_table_of_a_moved_project() {
             s(&tmp.path().join(format!("table{i}.md"))),
             "--bootstrap",
             "50",
-            "--no-correction",
         ]);
         assert_eq!(code, 0, "{err}");
         assert!(err.is_empty(), "{err}");

@@ -14,7 +14,6 @@ mod check;
 mod cli;
 mod closed_loop;
 mod cluster;
-mod correction;
 mod diffuse;
 mod ekf;
 mod experiment;

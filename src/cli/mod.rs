@@ -19,7 +19,6 @@ use pradar::calibrate::{CalibrateParams, Distance, Ridge};
 use pradar::campaign::manifest::SweepFormat;
 use pradar::check::CheckParams;
 use pradar::cluster::{ClusterParams, Criterion};
-use pradar::correction::CorrectionParams;
 use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
 use pradar::mapping::grid::SilentBound;
@@ -446,12 +445,6 @@ pub struct FitArgs {
     /// `fit` refuses.
     #[arg(long)]
     pub energy: Option<PathBuf>,
-    /// Keep the paper's method's values: no bias correction by simulation of the chain.
-    #[arg(long)]
-    pub no_correction: bool,
-    /// Simulated campaigns per point of the bias correction (R; more: narrower intervals).
-    #[arg(long, default_value_t = CorrectionParams::default().draws, conflicts_with = "no_correction")]
-    pub correction_draws: usize,
 }
 
 // `pradar report`

@@ -217,10 +217,6 @@ impl FitArgs {
                 bootstrap: self.bootstrap,
                 seed: self.seed,
             },
-            correction: (!self.no_correction).then(|| pradar::correction::CorrectionParams {
-                draws: self.correction_draws,
-                ..Default::default()
-            }),
         }
     }
 }

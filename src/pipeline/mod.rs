@@ -57,13 +57,5 @@ fn table1_html_rows(
     f: &crate::fit::channel::ChannelFit,
     truth: Option<&crate::fit::channel::ChannelFit>,
 ) -> String {
-    let mut h = report::html_table(&crate::fit::table1::table(f, truth));
-    // the bias correction's method, R and the partition stability under the table
-    if let Some(c) = &f.correction {
-        h.push_str(&format!(
-            "<p>{}</p>\n",
-            report::html_escape(&c.summary_line())
-        ));
-    }
-    h
+    report::html_table(&crate::fit::table1::table(f, truth))
 }

@@ -94,8 +94,6 @@ pub fn reproduce(opts: &ReproduceValid, progress: Progress) -> Result<ReportOutp
         model: None,
         truth: None,
         experiments: opts.experiments.then_some(&opts.experiment_params),
-        // the smaller run keeps the main job quick (its intervals are the wider for it)
-        correction: Some(crate::correction::CorrectionParams::quick()),
         explore: None,
         progress,
     };

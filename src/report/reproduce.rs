@@ -146,8 +146,7 @@ pub fn experiments_not_run_partial(not_estimable: &[(String, String)]) -> Sectio
 pub type FitPlot = (String, Option<String>);
 
 /// The fitted Table 1 after its table (`rows_html`, as the pipeline gives
-/// it, already closed, with the bias correction's note when it ran): the closing note with
-/// links and the fit plots.
+/// it, already closed): the closing note with links and the fit plots.
 pub fn table1_fitted_html(name: &str, rows_html: &str, plots: &[FitPlot]) -> String {
     let mut h = rows_html.to_string();
     h.push_str(&format!("<p>From the clusters of {}; reported beside the paper with no pass mark (<a href=\"table1.md\">table1.md</a>, <a href=\"fitted_model.toml\">fitted_model.toml</a>).</p>\n", html_escape(name)));

@@ -4,10 +4,9 @@
 //!
 //! Takes an energy table and its campaign; gives the MPCs and their clustering
 //! ([`extract_and_cluster`]) and the fit on that clustering
-//! ([`fit_clustering`](crate::fit::channel::fit_clustering), or the point estimates alone
-//! with [`fit_clustered`](crate::fit::channel::fit_clustered)). `report` (through
-//! `pipeline::analyse`, which also writes the tables), its K_max refits and the bias
-//! correction's simulated campaigns all run these, so their chains cannot drift apart.
+//! ([`fit_clustering`](crate::fit::channel::fit_clustering)). `report` (through
+//! `pipeline::analyse`, which also writes the tables) and its K_max refits both run these,
+//! so their chains cannot drift apart.
 //! The stages' defaults are the commands' defaults, so the chain here is what
 //! `extract`, `cluster` and `fit` run one command at a time.
 

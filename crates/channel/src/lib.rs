@@ -4,8 +4,7 @@
 //! position) → [`fit`] (Table 1: MLEs, block-bootstrap intervals, the layout's levels) →
 //! [`model`] (the model file drawn: rays, walls, `synth`) → [`check`] (the predictive check);
 //! [`chain`] runs extraction, clustering and the fit in memory, as every caller does;
-//! [`calibrate`] (ABC-SMC with `synth`) and [`correction`] (indirect inference on the chain)
-//! fit the model by simulation.
+//! [`calibrate`] (ABC-SMC with `synth`) fits the model by simulation.
 //!
 //! Takes the formats (`pradar-formats`), the processing (`pradar-radar`) and the simulator's
 //! shared draws (`pradar-simulate`); used by the mappers and the `pradar` crate.
@@ -15,7 +14,6 @@ pub mod calibrate;
 pub mod chain;
 pub mod check;
 pub mod cluster;
-pub mod correction;
 pub mod fit;
 pub mod model;
 pub mod mpc;

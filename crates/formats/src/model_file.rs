@@ -79,9 +79,6 @@ pub const HEADER: &str = "\
 #   cluster_rrcs (m², first-ray σ at which synth's mean signal bins per profile equals the
 #   table's). Without the table these are the cluster chain's CLEAN-peak values.
 # [calibration], when present: the values are posterior medians of `pradar calibrate`.
-# [correction], when present: the values are bias-corrected (indirect inference: the whole
-#   chain simulated at the fitted point, `fit`; docs/correction.md), raw.<quantity> the
-#   paper's method's value, slope.<quantity> how much the chain's estimate moves with it.
 ";
 
 fn nan() -> f64 {
@@ -314,34 +311,13 @@ pub struct ModelConfig {
     /// writes it; absent in fitted and hand-written models, which read as before).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calibration: Option<CalibrationMeta>,
-    /// How the values were corrected for the clustering's bias (`fit` writes it unless
-    /// `--no-correction`; absent in uncorrected, calibrated and hand-written models).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub correction: Option<CorrectionMeta>,
-}
-
-/// `[correction]` of a bias-corrected fit (`crate::correction`): the quantities' `value` is
-/// then the indirect-inference estimate and `interval` its 95 % interval; `raw` keeps the
-/// paper's method's values (the chain on the data) and `slope` the binding function's own
-/// slopes. A quantity the campaign cannot identify keeps its raw value, drawn as stated,
-/// with `not_estimable = "not identifiable from this campaign: …"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CorrectionMeta {
-    /// Method (`indirect-inference`).
-    pub method: String,
-    /// Simulated draws per evaluation point (R).
-    pub draws: usize,
-    /// Steps made after the start.
-    pub iterations: usize,
-    /// Whether the remaining bias fell within the simulation noise.
-    pub settled: bool,
-    /// Seed of the draws.
-    pub seed: u64,
-    /// The paper's method's value per quantity (inf: Γ without excess decay).
-    pub raw: std::collections::BTreeMap<String, f64>,
-    /// The binding function's own slope per quantity.
-    pub slope: std::collections::BTreeMap<String, f64>,
+    /// Legacy, read and dropped: the `[correction]` section that `fit` wrote while it ran
+    /// Table 1's bias correction (indirect inference, removed; docs/correction.md). A user's
+    /// old model file with it still loads (its values are read as any fitted values: they
+    /// are the corrected ones, and its "not identifiable" quantities stay flagged); the
+    /// section's content is not read, and nothing writes it (`Some` only for such a file).
+    #[serde(default, rename = "correction", skip_serializing)]
+    pub legacy_correction: Option<serde::de::IgnoredAny>,
 }
 
 /// `[calibration]` of a calibrated model: the method and its run. The quantities' `value`
@@ -390,7 +366,7 @@ impl ModelConfig {
             diffuse: None,
             walls: None,
             calibration: None,
-            correction: None,
+            legacy_correction: None,
         }
     }
 
@@ -497,7 +473,7 @@ impl ModelConfig {
     /// The range a quantity's value must lie in, with the reason: far beyond any indoor
     /// channel, and what keeps the generators' sizes and sums finite (rays are drawn per
     /// cluster, clusters per perimeter spacing, energies scale with the RRCS).
-    pub fn bounds(name: &str) -> Option<(f64, f64, &'static str)> {
+    fn bounds(name: &str) -> Option<(f64, f64, &'static str)> {
         Some(match name {
             "inter_cluster_rate" | "intra_cluster_rate" => {
                 (0.0, 100.0, "one arrival per 10 ps is far below the delay resolution")

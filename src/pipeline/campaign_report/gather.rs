@@ -1,19 +1,14 @@
 //! The report's data: the energy table of the job's [`Source`] (simulated
 //! then computed, computed from the campaign's sweeps, or read as given) checked against
-//! the campaign ([`obtain`]), and the bias correction of the analysed fit
-//! ([`correct_fit`]).
+//! the campaign ([`obtain`]).
 //!
-//! Takes the job, its source and the work folder (then the analysis); gives [`Data`] (the
-//! analysed campaign, its energy table, where it came from, the energy stage's warnings)
-//! and the fit with its correction kept in it.
+//! Takes the job, its source and the work folder; gives [`Data`] (the analysed campaign,
+//! its energy table, where it came from, the energy stage's warnings).
 
 use super::{Job, Source, Timings};
 use crate::campaign::manifest::{Campaign, SweepFormat};
 use crate::energy::{self, EnergyMatrix};
 use crate::error::Result;
-use crate::params::ParamGuard;
-use crate::pipeline::{Analysis, Progress};
-use crate::report::reproduce as page;
 use crate::simulate::{simulate, SimReport};
 use std::path::{Path, PathBuf};
 
@@ -104,48 +99,4 @@ pub(super) fn obtain(
         energy_warnings,
         em,
     })
-}
-
-/// The bias correction of the analysis's fit (`crate::correction`) with the partition
-/// stability of its clustering, kept in the fit; a correction that fails leaves the fit as
-/// the paper's method gave it (Table 1 then has no corrected column) and returns the
-/// page's note saying why.
-pub(super) fn correct_fit(
-    s: &Data,
-    a: &mut Analysis,
-    p: &crate::correction::CorrectionValid,
-    progress: Progress,
-) -> Option<String> {
-    let Ok(f) = &mut a.fit else {
-        return None;
-    };
-    let cb = progress("correct", 0);
-    let run = || -> Result<crate::fit::corrected::Corrected> {
-        let mut c =
-            crate::correction::correct(&s.campaign, &s.em, &s.energy_path, f, p, &|d, t| cb(d, t))?;
-        let headings: Vec<f64> = s
-            .campaign
-            .manifest
-            .poses
-            .iter()
-            .map(|p| p.heading_deg)
-            .collect();
-        let params = a.cluster_params.check()?;
-        c.stability = Some(crate::correction::stability::partition_stability(
-            &a.clustering.mpcs,
-            &a.clustering.cluster_id,
-            &headings,
-            &params,
-            p.resamples,
-            p.seed.unwrap_or(s.campaign.manifest.seed),
-        )?);
-        Ok(c)
-    };
-    match run() {
-        Ok(c) => {
-            f.correction = Some(c);
-            None
-        }
-        Err(e) => Some(page::failed("the bias correction", &e)),
-    }
 }

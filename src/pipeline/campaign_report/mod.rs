@@ -36,7 +36,7 @@
 //!   beside the others and its total is the job's wall time.
 //!
 //! Layout: this module holds the options, the job and its source, the output guard and the
-//! scheduler ([`run_inner`]); [`gather`] obtains the energy table and corrects the fit,
+//! scheduler ([`run_inner`]); [`gather`] obtains the energy table,
 //! [`render`] writes the sections (Table 1, the check, the plots, the summaries), and
 //! [`experiments`] runs the mapping experiments.
 
@@ -54,7 +54,7 @@ use crate::report::reproduce::{self as page, ReproducePage};
 use crate::report::Section;
 use crate::simulate::has_scene;
 use experiments::run_experiments;
-use gather::{correct_fit, obtain};
+use gather::obtain;
 use render::{
     campaign_summary, check_section, explore_section, mpc_summary, table1_section, write_plots,
 };
@@ -196,8 +196,6 @@ pub fn report(opts: &ReportValid, progress: Progress) -> Result<ReportOutput> {
         model: opts.model.as_deref(),
         truth,
         experiments: opts.experiments.then_some(&opts.experiment_params),
-        // the smaller run, as reproduce: `fit` makes the full one
-        correction: Some(crate::correction::CorrectionParams::quick()),
         explore: opts.explore.as_deref(),
         progress,
     };
@@ -223,8 +221,6 @@ pub(crate) struct Job<'a, 'p> {
     pub truth: Option<PathBuf>,
     /// The experiments' parameters, when they run.
     pub experiments: Option<&'a ExperimentValid>,
-    /// The bias correction of Table 1 (`crate::correction`), when it runs.
-    pub correction: Option<crate::correction::CorrectionParams>,
     /// A `pradar explore` folder to show (`report --explore`).
     pub explore: Option<&'a Path>,
     /// Progress bars.
@@ -395,17 +391,9 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
             drop(to_side);
             let mut a = analyse(&s.campaign, &s.em, &s.energy_path, work, true)?;
             timings.0.append(&mut a.timings);
-            let mut correction_note = None;
-            if let Some(p) = job.correction {
-                let label = format!("bias correction (R = {})", p.draws);
-                correction_note = timings.time(&label, || {
-                    Ok(correct_fit(&s, &mut a, &p.check()?, job.progress))
-                })?;
-            }
             let table1 = timings.time("fit report (truth, plots)", || {
                 table1_section(&s, &a, work, out)
             })?;
-            let table1 = table1 + correction_note.as_deref().unwrap_or("");
             let check = timings.time("check (20 synth draws)", || {
                 Ok(check_section(job, &s, &a, progress))
             })?;

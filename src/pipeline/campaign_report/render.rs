@@ -60,7 +60,7 @@ pub(super) fn check_section(job: &Job, s: &Data, a: &Analysis, progress: Progres
                     .as_ref()
                     .map_err(|e| Error::param("fit", e.to_string()))?;
                 (
-                    f.model_out().require_estimable(&Default::default())?,
+                    f.model.require_estimable(&Default::default())?,
                     format!(
                         "the fitted model (fitted_model.toml) against the energy table of {name}"
                     ),
@@ -101,9 +101,8 @@ pub(super) fn table1_section(s: &Data, a: &Analysis, work: &Path, out: &Path) ->
     };
     let table1 = match &a.fit {
         Ok(f) => {
-            let model = f.model_out();
-            model.check()?;
-            model.save(&out.join("fitted_model.toml"))?;
+            f.model.check()?;
+            f.model.save(&out.join("fitted_model.toml"))?;
             crate::fit::channel::write_table1(&out.join("table1.md"), name, f, truth.as_ref())?;
             let plots = write_fit_plots(f, out)?;
             page::table1_fitted_html(name, &table1_html_rows(f, truth.as_ref()), &plots)

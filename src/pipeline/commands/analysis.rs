@@ -4,7 +4,7 @@
 //! beside the simulator's truth). Each takes its command struct and gives a summary whose
 //! `Display` is printed.
 
-use super::{campaign_inputs, refuse, StepProgress};
+use super::{campaign_inputs, refuse};
 use crate::campaign::manifest::Campaign;
 use crate::cluster::ClusterParams;
 use crate::energy::{EnergySource, EnergyTable};
@@ -13,7 +13,7 @@ use crate::fit::channel::{ChannelFit, FitParams};
 use crate::mpc::{ExtractParams, Mpc};
 use crate::params::ParamGuard;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// `pradar extract`: MPCs of an energy table.
 #[derive(Debug, Clone)]
@@ -201,9 +201,6 @@ pub struct Fit {
     pub energy: Option<PathBuf>,
     /// Bootstrap resamples and seed.
     pub params: FitParams,
-    /// The bias correction's parameters (`crate::correction`); None keeps the paper's
-    /// method's values (`--no-correction`).
-    pub correction: Option<crate::correction::CorrectionParams>,
 }
 
 /// The fits `fit` wrote.
@@ -259,7 +256,7 @@ impl fmt::Display for FitSummary {
 /// Table 1. A partial fit is written with its not-estimable quantities marked
 /// ([`FitSummary::warnings`] lists them); a fit where no quantity can be estimated is an
 /// error and writes nothing.
-pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
+pub fn fit(cmd: &Fit) -> Result<FitSummary> {
     let c = Campaign::load(&cmd.campaign)?;
     let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
     inputs.push((cmd.clusters.clone(), "--clusters"));
@@ -285,32 +282,12 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
         &inputs,
     )?;
     let params = cmd.params.check()?;
-    let correction = cmd.correction.map(|p| p.check()).transpose()?;
     let mut fit = crate::fit::channel::fit_channel(&cmd.clusters, &c, &params)?;
-    let fit_truth = || -> Result<Option<ChannelFit>> {
-        (cmd.truth.as_ref())
-            .map(|dir| crate::fit::channel::fit_truth(dir, &c, &params))
-            .transpose()
-    };
-    // read before the correction when it runs (a bad folder fails before minutes of
-    // simulation), else after the levels
-    let mut truth_read = None;
     match energy {
         Some(energy) => {
             let em = crate::energy::EnergyMatrix::read(&energy)?;
             crate::energy::matrix::check_campaign(&c, &em, &energy)?;
             fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
-            if let Some(p) = &correction {
-                crate::correction::check_correctable(&fit, &cmd.clusters)?;
-                // the cheap reads first: a bad input fails before minutes of simulation
-                let stability_inputs = data_stability_inputs(&cmd.clusters)?;
-                truth_read = Some(fit_truth()?);
-                let mut corr = crate::correction::correct(&c, &em, &energy, &fit, p, &|d, t| {
-                    progress(d, t)
-                })?;
-                corr.stability = Some(data_stability(stability_inputs, &c, p)?);
-                fit.correction = Some(corr);
-            }
         }
         None => {
             return Err(crate::error::Error::param(
@@ -322,51 +299,13 @@ pub fn fit(cmd: &Fit, progress: StepProgress) -> Result<FitSummary> {
             ))
         }
     }
-    let truth = match truth_read {
-        Some(t) => t,
-        None => fit_truth()?,
+    let truth = match &cmd.truth {
+        Some(dir) => Some(crate::fit::channel::fit_truth(dir, &c, &params)?),
+        None => None,
     };
     // the table first, the model last: a model file on disk means the run completed
-    let out = fit.model_out();
-    out.check()?;
+    fit.model.check()?;
     crate::fit::channel::write_table1(&cmd.table, &c.manifest.name, &fit, truth.as_ref())?;
-    out.save(&cmd.out)?;
+    fit.model.save(&cmd.out)?;
     Ok(FitSummary { fit, truth })
-}
-
-/// The MPCs of a clustered MPC table and their `cluster_id` labels (None for −1).
-type Labelled = (Vec<crate::mpc::Mpc>, Vec<Option<usize>>);
-
-/// Read a clustered MPC table's MPCs and labels for [`data_stability`].
-fn data_stability_inputs(clusters: &Path) -> Result<Labelled> {
-    let mpcs = crate::mpc::read_mpcs(clusters)?;
-    let df = crate::table::read_parquet(clusters, None)?;
-    let ids = crate::table::i64_column(clusters, &df, "cluster_id")?;
-    let labels: Vec<Option<usize>> = ids
-        .iter()
-        .map(|&i| (i >= 0).then_some(i as usize))
-        .collect();
-    Ok((mpcs, labels))
-}
-
-/// The partition stability of a clustered table's MPCs and labels (its `cluster_id`
-/// against the default clustering of subsamples, the campaign's sector;
-/// `crate::correction::stability`).
-pub fn data_stability(
-    (mpcs, labels): Labelled,
-    c: &Campaign,
-    p: &crate::correction::CorrectionValid,
-) -> Result<crate::fit::corrected::PartitionStability> {
-    let headings: Vec<f64> = c.manifest.poses.iter().map(|p| p.heading_deg).collect();
-    let params = crate::cluster::ClusterParams::default()
-        .sector_deg(c.manifest.directions.width_deg())
-        .check()?;
-    crate::correction::stability::partition_stability(
-        &mpcs,
-        &labels,
-        &headings,
-        &params,
-        p.resamples,
-        p.seed.unwrap_or(c.manifest.seed),
-    )
 }

@@ -70,8 +70,7 @@
 //!     truth: Some("sim/truth".into()),
 //!     energy: Some("energy.parquet".into()),
 //!     params: pradar::fit::channel::FitParams::default(),
-//!     correction: Some(pradar::correction::CorrectionParams::default()),
-//! }, &none)?;
+//! })?;
 //! println!("{fit}");
 //! let synth = commands::synth(
 //!     &commands::Synth {

@@ -10,12 +10,9 @@
 //! * [`quantities`] — each quantity from its samples: value, interval, KS, AIC ranking;
 //! * [`diffuse`] — the dense component's quantities (`[diffuse]`) from the diffuse MPCs;
 //! * [`channel`] — the campaign fit ([`channel::fit_channel`], [`channel::fit_truth`]);
-//! * [`corrected`] — the bias-corrected Table 1 as data (computed by
-//!   [`crate::correction`], rendered by [`table1`]);
 //! * [`table1`] — Table 1 as one [`Table`](crate::export::Table) (Markdown, CSV, HTML).
 
 pub mod channel;
-pub mod corrected;
 pub mod diffuse;
 pub mod estimators;
 pub mod geometry;

@@ -81,9 +81,7 @@ pub(super) fn mean(s: &[f64]) -> Option<f64> {
 }
 
 /// How the intervals and p-values resample: `bootstrap` resamples of whole positions in
-/// blocks of `block`, streams keyed by `seed` and each quantity's offset. `bootstrap` 0
-/// gives the point estimates alone (no interval, KS or family ranking): the bias
-/// correction's inner loop, which fits every simulated draw.
+/// blocks of `block`, streams keyed by `seed` and each quantity's offset.
 pub(super) struct Resampling {
     pub(super) bootstrap: usize,
     pub(super) seed: u64,
@@ -164,26 +162,18 @@ fn quantity(
             r.block,
         ),
     };
-    // point estimates only (the bias correction's inner loop): no KS, no ranking
-    let (ks, ks_p) = if r.bootstrap == 0 {
-        (None, None)
-    } else {
-        let (d, p) = ks_bootstrap(&f, &x, r.bootstrap.min(500), r.seed ^ seed_off ^ 0xB5);
-        (Some(d), Some(p))
-    };
-    let mut aic: Vec<(String, f64)> = if r.bootstrap == 0 {
-        Vec::new()
-    } else {
-        (spec.candidates.iter())
-            .filter_map(|c| fit(*c, &x).ok().map(|f| (c.name().to_string(), f.aic())))
-            .collect()
-    };
+    let (ks, ks_p) = ks_bootstrap(&f, &x, r.bootstrap.min(500), r.seed ^ seed_off ^ 0xB5);
+    let mut aic: Vec<(String, f64)> = spec
+        .candidates
+        .iter()
+        .filter_map(|c| fit(*c, &x).ok().map(|f| (c.name().to_string(), f.aic())))
+        .collect();
     aic.sort_by(|a, b| a.1.total_cmp(&b.1));
     FittedQuantity {
         q: Quantity {
             interval,
-            ks,
-            ks_p,
+            ks: Some(ks),
+            ks_p: Some(ks_p),
             n: Some(n),
             ..Quantity::new(v, spec.unit, family.name())
         },

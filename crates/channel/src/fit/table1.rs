@@ -25,19 +25,12 @@
 //!   interval and KS p); its CSV value, lo, hi and ks_p are empty (a stated value is not
 //!   an estimate).
 //!   The same holds for the truth column.
-//! * With a bias correction (`crate::correction`, [`ChannelFit::correction`]) the value
-//!   column is headed "pradar (paper's method)" and three columns follow the interval:
-//!   "bias-corrected" (or "not identifiable from this campaign: …"), its 95 % interval and
-//!   the binding slope (CSV: `corrected, corrected_lo, corrected_hi, slope`); a row "rays
-//!   per cluster (mean)" is added (the correction moves it too), and the Markdown and the
-//!   report print the method, R and the partition stability under the table.
 //!
 //! [`ModelConfig::table1_defaults`]: crate::model::file::ModelConfig::table1_defaults
 
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
-
 use crate::model::file::{ModelConfig, Quantity};
 use crate::units::C0;
 use std::path::Path;
@@ -67,21 +60,6 @@ pub struct Table1Row {
     /// The same estimators on the simulator's truth: its value (NaN when not estimable)
     /// and its shown text.
     pub truth: Option<(f64, String)>,
-    /// The bias-corrected value (`crate::correction`), when the fit was corrected.
-    pub corrected: Option<CorrectedCell>,
-}
-
-/// A row's bias-corrected cells.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CorrectedCell {
-    /// The corrected value in the row's unit (NaN when not identifiable or not corrected).
-    pub value: f64,
-    /// As shown: the value with its unit, or "not identifiable from this campaign (slope s)".
-    pub shown: String,
-    /// Its 95 % interval.
-    pub interval: Option<[f64; 2]>,
-    /// The binding function's own slope (NaN where not measured).
-    pub slope: f64,
 }
 
 impl Table1Row {
@@ -97,7 +75,7 @@ impl Table1Row {
         self.truth.as_ref().map_or("—", |t| t.1.as_str())
     }
 
-    fn cells(&self, corrected: bool) -> Vec<Cell> {
+    fn cells(&self) -> Vec<Cell> {
         let opt = |v: Option<f64>| v.map_or(Cell::missing(""), |v| Cell::num(v, ""));
         // a value that is not a number (not estimable): its text, an empty CSV field
         let value = |v: f64, shown: &str| {
@@ -107,41 +85,16 @@ impl Table1Row {
                 Cell::num(v, shown)
             }
         };
-        let interval = |iv: Option<[f64; 2]>| match iv {
-            Some([lo, hi]) => Cell::interval(lo, hi, format!("[{lo:.3}, {hi:.3}]")),
-            None => Cell::missing("—"),
-        };
-        let mut cells = vec![
+        vec![
             Cell::text(self.parameter),
             value(self.value, &self.value_shown),
             Cell::text(self.unit.clone()),
-            interval(self.interval),
+            match self.interval {
+                Some([lo, hi]) => Cell::interval(lo, hi, self.interval_shown()),
+                None => Cell::missing("—"),
+            },
             opt(self.interval.map(|i| i[0])),
             opt(self.interval.map(|i| i[1])),
-        ];
-        if corrected {
-            match &self.corrected {
-                Some(c) => cells.extend([
-                    value(c.value, &c.shown),
-                    interval(c.interval),
-                    opt(c.interval.map(|i| i[0])),
-                    opt(c.interval.map(|i| i[1])),
-                    if c.slope.is_finite() {
-                        Cell::num(c.slope, format!("{:.2}", c.slope))
-                    } else {
-                        Cell::missing("—")
-                    },
-                ]),
-                None => cells.extend([
-                    Cell::missing("—"),
-                    Cell::missing("—"),
-                    Cell::missing(""),
-                    Cell::missing(""),
-                    Cell::missing("—"),
-                ]),
-            }
-        }
-        cells.extend([
             Cell::text(self.family.clone()),
             self.ks_p
                 .map_or(Cell::missing("—"), |p| Cell::num(p, format!("{p:.3}"))),
@@ -151,46 +104,28 @@ impl Table1Row {
             self.truth
                 .as_ref()
                 .map_or(Cell::missing("—"), |(v, shown)| value(*v, shown)),
-        ]);
-        cells
+        ]
     }
 }
 
 /// The columns of Table 1 (Markdown headers, the report's shorter HTML headers, CSV names);
 /// the truth's last, only when there is a truth.
-fn columns(truth: bool, corrected: bool) -> Vec<Column> {
+fn columns(truth: bool) -> Vec<Column> {
     let mut c = vec![
         Column::new("parameter", "parameter"),
-        if corrected {
-            Column::new("pradar (paper's method)", "value").html("pradar")
-        } else {
-            Column::new("pradar", "value")
-        },
+        Column::new("pradar", "value"),
         Column::new("unit", "unit").csv_only(),
         Column::new("95% interval (positions bootstrap)", "interval")
             .html("95% interval")
             .display_only(),
         Column::new("lo", "lo").csv_only(),
         Column::new("hi", "hi").csv_only(),
-    ];
-    if corrected {
-        c.extend([
-            Column::new("bias-corrected", "corrected"),
-            Column::new("corrected 95% interval", "corrected_interval")
-                .html("corrected interval")
-                .display_only(),
-            Column::new("corrected_lo", "corrected_lo").csv_only(),
-            Column::new("corrected_hi", "corrected_hi").csv_only(),
-            Column::new("binding slope", "slope").html("slope"),
-        ]);
-    }
-    c.extend([
         Column::new("family", "family"),
         Column::new("KS p (param. bootstrap)", "ks_p").html("KS p"),
         Column::new("best family by AIC", "best_aic").html("best by AIC"),
         Column::new("paper Table 1", "paper").html("paper"),
         Column::new("simulator truth (same estimators)", "truth"),
-    ]);
+    ];
     if !truth {
         c.pop();
     }
@@ -201,10 +136,9 @@ fn columns(truth: bool, corrected: bool) -> Vec<Column> {
 /// is `table1.csv`, `report::html_table(&t)` the report's. Without a truth there is no
 /// truth column (a measured campaign has none to show).
 pub fn table(f: &ChannelFit, truth: Option<&ChannelFit>) -> Table {
-    let corrected = f.correction.is_some();
-    let mut t = Table::new(columns(truth.is_some(), corrected));
+    let mut t = Table::new(columns(truth.is_some()));
     for r in rows(f, truth) {
-        let mut cells = r.cells(corrected);
+        let mut cells = r.cells();
         if truth.is_none() {
             cells.pop();
         }
@@ -235,11 +169,6 @@ pub fn write_table1(
     let t = table(f, truth);
     let mut s = format!("# Table 1: {name} channel parameters\n\n");
     s.push_str(&t.to_markdown());
-    if let Some(c) = &f.correction {
-        s.push('\n');
-        s.push_str(&c.summary_line());
-        s.push('\n');
-    }
     s.push_str("\nThe paper's values are printed beside ours for comparison; nothing is tuned toward them.\n");
     crate::io::write_bytes(md, s.as_bytes())?;
     crate::io::write_bytes(&md.with_extension("csv"), t.to_csv().as_bytes())
@@ -295,27 +224,6 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
         ),
         row("ray power decay γ", &m.ray_decay, String::new(), None),
     ];
-    if f.correction.is_some() {
-        rows.push(row(
-            "rays per cluster (mean)",
-            &m.rays_per_cluster,
-            String::new(),
-            None,
-        ));
-        let keys = [
-            "inter_cluster_rate",
-            "perimeter_spacing",
-            "intra_cluster_rate",
-            "intra_cluster_aoa",
-            "perimeter_offset",
-            "cluster_decay",
-            "ray_decay",
-            "rays_per_cluster",
-        ];
-        for (r, k) in rows.iter_mut().zip(keys) {
-            r.corrected = corrected_cell(f, k);
-        }
-    }
     // the dense component beside the discrete clusters (its truth column stays "—": the
     // simulator's walls are not clusters)
     rows.extend(diffuse_rows(m));
@@ -335,27 +243,8 @@ fn best_aic(f: &ChannelFit, k: &str) -> String {
         .unwrap_or_default()
 }
 
-/// Takes the fit and a quantity's key; gives its bias-corrected cell, when the fit has a
-/// correction of that quantity.
-fn corrected_cell(f: &ChannelFit, key: &str) -> Option<CorrectedCell> {
-    let m = &f.model;
-    let c = f.correction.as_ref()?.get(key)?;
-    let q = m.quantity(key)?;
-    Some(CorrectedCell {
-        value: c.value,
-        shown: match &c.not_identifiable {
-            Some(why) => why.clone(),
-            None if c.value == f64::INFINITY => "∞ (no excess decay)".to_string(),
-            None if c.value.is_nan() => "—".to_string(),
-            None => format!("{:.3} {}", c.value, q.unit),
-        },
-        interval: c.interval,
-        slope: c.slope,
-    })
-}
-
 /// Takes a row's parameter, its quantity, the best family by AIC and the paper's value;
-/// gives the row (no truth, no correction).
+/// gives the row (no truth).
 fn quantity_row(
     parameter: &'static str,
     q: &Quantity,
@@ -378,7 +267,6 @@ fn quantity_row(
         best_aic,
         paper,
         truth: None,
-        corrected: None,
     }
 }
 

@@ -101,7 +101,7 @@ pub use crate::fit::quantities::FittedQuantity;
 pub use crate::fit::table1::write_table1;
 
 /// One discrete ray (MPC, or a simulator's true ray) with its cluster: the fit's input
-/// row ([`fit_clustered`]).
+/// row (a clustering's: [`clustered_rays`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ClusteredRay {
     /// Position index in the campaign.
@@ -128,20 +128,6 @@ pub struct ChannelFit {
     pub details: BTreeMap<String, FittedQuantity>,
     /// d_c samples (m), for the Table 1 ns conversions.
     pub dc_m: Vec<f64>,
-    /// The bias correction (`crate::correction`), when run: Table 1's corrected column.
-    pub correction: Option<crate::fit::corrected::Corrected>,
-}
-
-impl ChannelFit {
-    /// The model file to write: the fit's model with the bias correction applied when it
-    /// was run ([`Corrected::apply`](crate::fit::corrected::Corrected::apply)), else the
-    /// paper's method's model as it is.
-    pub fn model_out(&self) -> ModelConfig {
-        match &self.correction {
-            Some(c) => c.apply(&self.model),
-            None => self.model.clone(),
-        }
-    }
 }
 
 /// Fit the channel model from a clustered MPC table.
@@ -161,13 +147,7 @@ impl ChannelFit {
 /// # }
 /// ```
 pub fn fit_channel(clusters: &Path, c: &Campaign, p: &FitValid) -> Result<ChannelFit> {
-    let mut f = fit_rays(
-        clusters,
-        read_rays(clusters, false)?,
-        c,
-        p.bootstrap,
-        p.seed,
-    )?;
+    let mut f = fit_rays(clusters, read_rays(clusters, false)?, c, p)?;
     let r = crate::fit::diffuse::Resample {
         bootstrap: p.bootstrap,
         seed: p.seed,
@@ -188,7 +168,7 @@ pub fn fit_clustering(
     c: &Campaign,
     p: &FitValid,
 ) -> Result<ChannelFit> {
-    let mut f = fit_rays(name, clustered_rays(clustering), c, p.bootstrap, p.seed)?;
+    let mut f = fit_rays(name, clustered_rays(clustering), c, p)?;
     let r = crate::fit::diffuse::Resample {
         bootstrap: p.bootstrap,
         seed: p.seed,
@@ -214,24 +194,7 @@ pub fn fit_truth(truth_dir: &Path, c: &Campaign, p: &FitValid) -> Result<Channel
         .into_iter()
         .filter(|r| r.angle_rel_deg.abs() <= 90.0 && r.delay_ns <= max)
         .collect();
-    fit_rays(&path, rays, c, p.bootstrap, p.seed)
-}
-
-/// The Table 1 estimators on rays already in memory (`name` is what errors name): with
-/// `p` as [`fit_channel`] (intervals, KS, families; no `[diffuse]`), without it the point
-/// estimates alone — what the bias correction (`crate::correction`) computes for each
-/// simulated draw. The rays are taken as given (filter a truth's to the half-plane and
-/// the table's delay span first, as [`fit_truth`] does).
-pub fn fit_clustered(
-    name: &Path,
-    rays: Vec<ClusteredRay>,
-    c: &Campaign,
-    p: Option<&FitValid>,
-) -> Result<ChannelFit> {
-    match p {
-        Some(p) => fit_rays(name, rays, c, p.bootstrap, p.seed),
-        None => fit_rays(name, rays, c, 0, 0),
-    }
+    fit_rays(&path, rays, c, p)
 }
 
 /// The discrete rays of a clustering (its MPCs with their campaign-wide cluster ids, as
@@ -261,13 +224,7 @@ pub fn read_clustered(path: &Path) -> Result<usize> {
 /// The campaign fit on rays read from `clusters` (named in errors), in steps: group the
 /// rays by (position, cluster), take the AoA offsets and their sector margin, gather the
 /// per-position samples, fit each quantity, assemble the model file.
-fn fit_rays(
-    clusters: &Path,
-    rays: Vec<Ray>,
-    c: &Campaign,
-    bootstrap: usize,
-    seed: u64,
-) -> Result<ChannelFit> {
+fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Result<ChannelFit> {
     let m = &c.manifest;
     let layout = Layout::load(&c.layout_path())?;
     let delta = 1e9 / m.band.bandwidth_hz();
@@ -286,8 +243,8 @@ fn fit_rays(
         margin,
     );
     let r = Resampling {
-        bootstrap,
-        seed,
+        bootstrap: p.bootstrap,
+        seed: p.seed,
         block: bootstrap_block(m),
     };
     let mut details = BTreeMap::new();
@@ -327,7 +284,7 @@ fn fit_rays(
         diffuse: None,
         walls: None,
         calibration: None,
-        correction: None,
+        legacy_correction: None,
     };
     model.check()?;
     nothing_estimable(clusters, rays.len(), &model)?;
@@ -339,7 +296,6 @@ fn fit_rays(
             .map(|d| d.samples.clone())
             .unwrap_or_default(),
         details,
-        correction: None,
     })
 }
 
@@ -411,11 +367,11 @@ mod tests {
                 });
             }
         }
-        let f = fit_clustered(
+        let f = fit_rays(
             Path::new("clusters.parquet"),
             rays,
             &c,
-            Some(&FitParams::default().check().unwrap()),
+            &FitParams::default().check().unwrap(),
         )
         .unwrap();
         let d = &f.details["perimeter_spacing"];
@@ -446,142 +402,6 @@ mod tests {
         assert!(dc.contains(",exponential,,,"), "{dc}");
     }
 
-    /// The point estimates alone (the bias correction's inner loop) are the full fit's
-    /// values without intervals, KS or family ranking; a fit carrying a correction shows
-    /// both columns in Table 1 and writes the corrected values, the flag of a quantity not
-    /// identifiable and `[correction]` into the model file.
-    #[test]
-    fn point_estimates_match_and_a_correction_shows_beside_the_raw_values() {
-        use crate::fit::corrected::{Corrected, CorrectedQuantity};
-        let (_dir, c) = hall_at_centre(2);
-        let mut rays = Vec::new();
-        for (position, cluster, x, y) in [(0, 0, 7.6, -1.0), (0, 1, 7.6, 2.0), (1, 2, 7.6, 0.0)] {
-            let (r, bearing) = (f64::hypot(x, y), f64::atan2(y, x).to_degrees());
-            let t0 = crate::units::delay_ns(r);
-            for (t, a, dp) in [(0.0, 0.0, 0.0), (1.5, 5.0, -3.0), (3.2, -4.0, -7.0)] {
-                rays.push(Ray {
-                    position,
-                    cluster,
-                    delay_ns: t0 + t,
-                    angle_rel_deg: bearing + a,
-                    power_db: -100.0 + dp,
-                });
-            }
-        }
-        let path = Path::new("clusters.parquet");
-        let p = FitParams::default().check().unwrap();
-        let full = fit_clustered(path, rays.clone(), &c, Some(&p)).unwrap();
-        let point = fit_clustered(path, rays, &c, None).unwrap();
-        for name in [
-            "inter_cluster_rate",
-            "intra_cluster_rate",
-            "intra_cluster_aoa",
-            "perimeter_offset",
-            "perimeter_spacing",
-            "cluster_decay",
-            "ray_decay",
-            "rays_per_cluster",
-        ] {
-            let (q, v) = (
-                full.model.quantity(name).unwrap(),
-                point.model.quantity(name).unwrap(),
-            );
-            assert!(
-                q.value == v.value || (q.value.is_nan() && v.value.is_nan()),
-                "{name}"
-            );
-            assert!(v.ks_p.is_none(), "{name}");
-        }
-        assert!(full.model.intra_cluster_rate.ks_p.is_some());
-        let lambda = full.model.intra_cluster_rate.value;
-        let mut f = full.clone();
-        f.correction = Some(Corrected {
-            quantities: vec![
-                CorrectedQuantity {
-                    key: "intra_cluster_rate",
-                    raw: lambda,
-                    value: 0.5 * lambda,
-                    interval: Some([0.4 * lambda, 0.6 * lambda]),
-                    slope: 0.8,
-                    not_identifiable: None,
-                },
-                CorrectedQuantity {
-                    key: "ray_decay",
-                    raw: f.model.ray_decay.value,
-                    value: f64::NAN,
-                    interval: None,
-                    slope: 0.1,
-                    not_identifiable: Some("not identifiable from this campaign: slope 0.1".into()),
-                },
-            ],
-            draws: 8,
-            iterations: 2,
-            settled: true,
-            chain_runs: 72,
-            seconds: 3.0,
-            seed: 9,
-            min_slope: 0.25,
-            far_factor: 3.0,
-            stability: None,
-        });
-        let t = crate::fit::table1::table(&f, None);
-        let md = t.to_markdown();
-        assert!(
-            md.contains("| pradar (paper's method) |") && md.contains("| bias-corrected |"),
-            "{md}"
-        );
-        let row = md
-            .lines()
-            .find(|l| l.contains("intra-cluster arrival rate"))
-            .unwrap();
-        assert!(
-            row.contains(&format!("| {:.3} 1/ns |", 0.5 * lambda)),
-            "{row}"
-        );
-        assert!(row.contains(&format!("| {:.3} 1/ns |", lambda)), "{row}");
-        assert!(row.contains("| 0.80 |"), "{row}");
-        let csv = t.to_csv();
-        assert!(
-            csv.starts_with(
-                "parameter,value,unit,lo,hi,corrected,corrected_lo,corrected_hi,slope,"
-            ),
-            "{csv}"
-        );
-        let gamma = csv
-            .lines()
-            .find(|l| l.starts_with("ray power decay"))
-            .unwrap();
-        // a quantity not identifiable: no corrected number, its slope
-        assert!(gamma.contains(",,,,0.1,"), "{gamma}");
-        let out = f.model_out();
-        assert_eq!(out.intra_cluster_rate.value, 0.5 * lambda);
-        assert_eq!(
-            out.intra_cluster_rate.interval,
-            Some([0.4 * lambda, 0.6 * lambda])
-        );
-        assert_eq!(out.ray_decay.value, f.model.ray_decay.value);
-        assert!(out
-            .ray_decay
-            .not_estimable
-            .as_deref()
-            .unwrap()
-            .contains("not identifiable"));
-        let meta = out.correction.as_ref().unwrap();
-        assert_eq!(meta.raw["intra_cluster_rate"], lambda);
-        assert_eq!((meta.draws, meta.iterations, meta.seed), (8, 2, 9));
-        // written and read back unchanged, and drawable
-        let dir = tempfile::tempdir().unwrap();
-        out.save(&dir.path().join("m.toml")).unwrap();
-        let back = ModelConfig::load(&dir.path().join("m.toml")).unwrap();
-        assert_eq!(back, out);
-        assert!(back.require_estimable(&Default::default()).is_ok());
-        // without a correction the table and the model are the paper's method's
-        assert!(!crate::fit::table1::table(&full, None)
-            .to_markdown()
-            .contains("bias-corrected"));
-        assert_eq!(full.model_out(), full.model);
-    }
-
     #[test]
     fn bad_input_stays_an_error_and_no_data_estimate_nothing() {
         let (_dir, c) = hall_at_centre(2);
@@ -594,28 +414,26 @@ mod tests {
             power_db: -90.0,
         };
         let path = Path::new("clusters.parquet");
-        let e = fit_clustered(path, vec![ray(f64::NAN)], &c, Some(&p))
+        let e = fit_rays(path, vec![ray(f64::NAN)], &c, &p)
             .unwrap_err()
             .to_string();
         assert!(
             e.contains("clusters.parquet") && e.contains("finite"),
             "{e}"
         );
-        let e = fit_clustered(
+        let e = fit_rays(
             path,
             vec![Ray {
                 position: 5,
                 ..ray(10.0)
             }],
             &c,
-            Some(&p),
+            &p,
         )
         .unwrap_err()
         .to_string();
         assert!(e.contains("outside the campaign"), "{e}");
-        let e = fit_clustered(path, Vec::new(), &c, Some(&p))
-            .unwrap_err()
-            .to_string();
+        let e = fit_rays(path, Vec::new(), &c, &p).unwrap_err().to_string();
         assert!(
             e.contains("no quantity can be estimated from 0 rays")
                 && e.contains("rays_per_cluster: no clusters")
@@ -624,7 +442,7 @@ mod tests {
         );
         // a single ray: the means are fitted, the rest marked with their reasons, and every
         // entry of `details` is there (the not-estimable ones without samples)
-        let f = fit_clustered(path, vec![ray(10.0)], &c, Some(&p)).unwrap();
+        let f = fit_rays(path, vec![ray(10.0)], &c, &p).unwrap();
         assert_eq!(f.model.rays_per_cluster.value, 1.0);
         assert_eq!(f.details.len(), 5);
         let ne = f.model.not_estimable();
