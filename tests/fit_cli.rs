@@ -122,7 +122,13 @@ fn fit_ignores_ground_truth_and_round_trips_its_model() {
         "{csv}"
     );
     for t in [&md, &csv] {
-        for word in ["corrected", "slope", "paper's method", "identifiable", "Bias"] {
+        for word in [
+            "corrected",
+            "slope",
+            "paper's method",
+            "identifiable",
+            "Bias",
+        ] {
             assert!(!t.contains(word), "{word} in Table 1:\n{t}");
         }
     }
