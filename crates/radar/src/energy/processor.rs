@@ -67,6 +67,8 @@ pub struct EnergyProcessor {
     nbins: usize,
     tw: f64,
     enbw: f64,
+    /// e^{jπi/L}, i = 0..2L: the baseband rotation of sample n is rot[n mod 2L].
+    rot: Vec<Complex64>,
 }
 
 impl std::fmt::Debug for EnergyProcessor {
@@ -112,6 +114,9 @@ impl EnergyProcessor {
         }
         let tw = (l * l) as f64 / s;
         let enbw = band.points as f64 * w2 / (wsum * wsum);
+        let rot = (0..2 * l)
+            .map(|i| Complex64::from_polar(1.0, PI * i as f64 / l as f64))
+            .collect();
         Ok(EnergyProcessor {
             band,
             proc,
@@ -123,6 +128,7 @@ impl EnergyProcessor {
             nbins,
             tw,
             enbw,
+            rot,
         })
     }
 
@@ -244,11 +250,13 @@ impl EnergyProcessor {
     /// (e^{jπn/L} = e^{jπB·n·dt}); `g` is the sum of a·e^{−j2πf_cτ}·r(t_n − τ) over the
     /// echoes.
     pub fn add_baseband(&self, cir: &mut [Complex64], first: i64, g: &[Complex64]) {
-        let (n, l) = (self.nfft as i64, self.proc.oversample as i64);
-        for (i, v) in g.iter().enumerate() {
-            let s = first + i as i64;
-            let rot = Complex64::from_polar(1.0, PI * s.rem_euclid(2 * l) as f64 / l as f64);
-            cir[s.rem_euclid(n) as usize] += v * rot;
+        let (n, l2) = (self.nfft, self.rot.len());
+        let mut j = first.rem_euclid(n as i64) as usize;
+        let mut r = first.rem_euclid(l2 as i64) as usize;
+        for v in g {
+            cir[j] += v * self.rot[r];
+            j = if j + 1 == n { 0 } else { j + 1 };
+            r = if r + 1 == l2 { 0 } else { r + 1 };
         }
     }
 
