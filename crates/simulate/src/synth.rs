@@ -13,9 +13,9 @@
 //!   the fractional part of f·τ (keeps the rotation accurate at large f·τ);
 //! * coupling: amplitude 10^{−|coupling_db|/20}·(1 + 0.1·cos(2π(f − f₀)/2 GHz)) at
 //!   `coupling_delay_ns` (the ripple gives replicas at ±0.5 ns);
-//! * noise: complex white of variance σ² per point, from a ChaCha stream per (position,
-//!   direction, pulse) seeded by a splitmix64 hash of the indices, so the bytes do not
-//!   depend on the thread count.
+//! * noise: complex white of variance σ² per point (the receiver's [`WhiteNoise`], which
+//!   `synth` draws too), from a ChaCha stream per (position, direction, pulse) seeded by a
+//!   splitmix64 hash of the indices, so the bytes do not depend on the thread count.
 
 use super::binned::BinnedTables;
 use super::paths::Path1;
@@ -23,9 +23,9 @@ use super::scene::SceneConfig;
 use crate::campaign::manifest::{ArrayConfig, Band, Manifest, Steering, C0};
 use crate::pattern::PatternTable;
 use num_complex::Complex64;
+use pradar_radar::energy::WhiteNoise;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::sync::{Arc, Mutex, Weak};
@@ -189,7 +189,7 @@ pub(super) struct SweepSynth<'a> {
     tables: Vec<Arc<PatternTable>>,
     angles_deg: Vec<f64>,
     coupling: Vec<Complex64>,
-    sigma: f64,
+    noise: WhiteNoise,
     cull: f64,
     /// The regrouped sum ([`super::binned`]) when it applies (mechanical steering, the
     /// pattern at every point, directions whole table cells apart); the tables are then
@@ -285,7 +285,7 @@ impl<'a> SweepSynth<'a> {
             binned,
             angles_deg,
             coupling,
-            sigma: (sigma2 / 2.0).sqrt(),
+            noise: WhiteNoise::new(sigma2),
             cull: 1e-5 * sigma2.sqrt(),
         }
     }
@@ -325,11 +325,8 @@ impl<'a> SweepSynth<'a> {
                 }
                 for k in 0..nk {
                     let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(m.seed, p, d, k));
-                    for (o, cv) in chunk[k * nf..(k + 1) * nf].iter_mut().zip(&clean) {
-                        let a: f64 = StandardNormal.sample(&mut rng);
-                        let b: f64 = StandardNormal.sample(&mut rng);
-                        *o = cv + Complex64::new(a, b) * self.sigma;
-                    }
+                    self.noise
+                        .add(&clean, &mut chunk[k * nf..(k + 1) * nf], &mut rng);
                 }
             });
         s21

@@ -44,24 +44,26 @@
 //!   a = ḡ(θ_arr)·|A|·e^{−j2πf_c(τ + τ_g)}, ḡ the window-weighted band average of |F|²λ
 //!   (33 frequency knots) and τ_g the antenna group delay (slope of arg F² over the band,
 //!   matters for the 1-bit transmitarray); mechanical or electronic steering as the campaign;
-//! * **delay domain**: the windowed, zero-padded IFFT of a flat echo is the window kernel
-//!   κ(t − τ) = e^{jπB(t−τ)}·r(t − τ) with r real (symmetric window), so the CIR on the
-//!   energy stage's oversampled grid is h(t_n) = e^{jπBt_n}·Σ a·r(t_n − τ) (the common phase
-//!   drops out of |h|²); r is tabulated at T_b/64 over ±16 bins. Rays add coherently (they
-//!   interfere as in a measurement). Samples inside the coupling gate are zeroed like the
-//!   energy stage's gate; the bin energy E_s is the mean of |h|² over the bin's L samples;
-//! * **energy-detector noise**: each bin's energy (mean over N_p pulses) is drawn from the
-//!   detector's law, a scaled non-central χ² with 2·TW·N_p degrees of freedom:
-//!   E = N0/(2N_p)·[χ²(2TW·N_p − 1) + (Z + √(2N_p·E_s/N0))²], whose mean is N0·TW + E_s and
-//!   variance (N0²·TW + 2·N0·E_s)/N_p (DESIGN §2). N0 comes from the campaign's `[noise]`
-//!   floor through the window (as the energy stage's N0), TW from the window. Neighbouring
-//!   bins are drawn independently (the window's bin-to-bin correlation is not modelled).
+//! * **delay domain**: the windowed, zero-padded IFFT of a flat echo is
+//!   e^{jπBt}·e^{−j2πf_cτ}·r(t − τ) with r the real window kernel (symmetric window),
+//!   periodic in delay with the sweep's period T = 1/Δf (r(t + T) = (−1)^{K−1}·r(t) for K
+//!   points: anti-periodic for an even K); so every ray, at any delay, adds coherently on
+//!   the energy stage's oversampled grid through its images τ + kT that reach the span, at
+//!   the level of its own path loss (an echo beyond c·T/2, 20 m for 801 points over 6 GHz,
+//!   folds in as a measurement's does); r is tabulated at T_b/64 over ±16 bins
+//!   ([`response`]);
+//! * **the receiver**: per pulse, complex white Gaussian noise per frequency point (the
+//!   `[noise]` floor, or the variance that reads the given N0) through the same window and
+//!   zero-padded IFFT as `energy`, the rays' CIR added to it, the coupling gate applied and
+//!   each bin's energy the mean of |h|² over its L samples, averaged over the N_p pulses:
+//!   the measurement's own noise, coloured across neighbouring bins, with mean N0·TW +
+//!   E_s and variance about (N0²·TW + 2·N0·E_s)/N_p per bin (DESIGN §2) ([`synth`](mod@synth)).
 //!
 //! Every draw comes from ChaCha streams keyed by the seed (the model) and by (seed,
 //! position, direction) (the noise), so the bytes do not depend on the thread count.
 //!
 //! Layout: [`params`] (the run's options), [`channel`] (the drawn clusters and the rays a
-//! pose sees), [`diffuse`] (the drawn wall points and the rays a pose sees), [`response`] (band-averaged pattern, window kernel), [`synth`](mod@synth)
+//! pose sees), [`diffuse`] (the drawn wall points and the rays a pose sees), [`response`] (band-averaged pattern, periodic window kernel), [`synth`](mod@synth)
 //! (the run: profiles, noise, truth and the energy table).
 
 pub mod channel;

@@ -1,15 +1,27 @@
 //! The array and delay-domain response synth puts each ray through: the band-averaged
-//! pattern ([`BandPattern`]) and the energy stage's window kernel (`Kernel`).
+//! pattern ([`BandPattern`]) and the energy stage's window kernel (`Kernel`), periodic in
+//! delay as the sweep's CIR is.
 //!
 //! * Array: each ray is seen as a = ḡ(θ_arr)·|A|·e^{−j2πf_c(τ + τ_g)}, ḡ the
 //!   window-weighted band average of |F|²λ over the pattern table's frequency knots and τ_g
 //!   the antenna group delay (the weighted least-squares slope of the unwrapped arg F²
 //!   against frequency, over 2π; it matters for the 1-bit transmitarray), zero where the
 //!   gain is below 10⁻³ of its peak and clamped to ±1 ns.
-//! * Delay domain: the windowed, zero-padded IFFT of a flat echo is the window kernel
-//!   κ(t − τ) = e^{jπB(t−τ)}·r(t − τ) with r real (symmetric window), so the CIR on the
-//!   energy stage's oversampled grid is h(t_n) = e^{jπBt_n}·Σ a·r(t_n − τ) (the common
-//!   phase drops out of |h|²); r is tabulated at T_b/64 over ±16 bins and read linearly.
+//! * Delay domain: a sweep of K points at step Δf (B = (K − 1)Δf) sampled on a flat echo
+//!   a·e^{−j2πfτ}, windowed and put through the zero-padded IFFT, gives
+//!   h(t) = e^{jπBt}·a·e^{−j2πf_cτ}·r(t − τ), with the real kernel (symmetric window)
+//!   r(t) = Σ_k w_k cos(2π(k − m)Δf t) / Σ_k w_k, m = (K − 1)/2.
+//!   Sampled at frequency steps Δf, the CIR is periodic in delay with period T = 1/Δf
+//!   (801 points over 6 GHz: T = 133.3 ns, c·T/2 = 20 m): with T, each term's argument
+//!   moves by 2π(k − m), so r(t + T) = cos(2π(k − m))·r(t) = (−1)^{K−1}·r(t) — periodic for
+//!   an odd K (m an integer), anti-periodic for an even K (m half an integer), while
+//!   e^{jπB(t+T)} = (−1)^{K−1}·e^{jπBt}, so h itself is periodic either way. An echo at any
+//!   delay τ thus reaches the span through its images: r(t − τ) = Σ_k ε^k·r̃(t − τ − kT),
+//!   ε = (−1)^{K−1}, r̃ the kernel over one period centred on 0, for every integer k that
+//!   brings τ + kT within the span ± the kernel's reach; the carrier phase e^{−j2πf_cτ}
+//!   stays on the true τ. r̃ is tabulated at T_b/64 over ±min(16, ⌊(K − 1)/2⌋) bins (no two
+//!   images overlap) and read linearly; beyond it r is taken as 0 (a Hann kernel is below
+//!   −80 dB there).
 
 use crate::campaign::manifest::WindowKind;
 use crate::energy::{self, EnergyProcessor};
@@ -20,7 +32,7 @@ use std::f64::consts::PI;
 /// Kernel table: samples per bin and half-width in bins.
 const KERNEL_FINE: usize = 64;
 /// Half-width of the kernel table, bins.
-pub(super) const KERNEL_BINS: usize = 16;
+const KERNEL_BINS: usize = 16;
 
 /// The band-averaged pattern of one steering table: ḡ(θ) = Σ w(f)|F(θ,f)|²λ(f) / Σ w(f) and
 /// the group delay τ_g(θ) on the table's angle grid.
@@ -118,13 +130,24 @@ impl BandPattern {
     }
 }
 
-/// The real window kernel r(t) of the energy stage, tabulated at T_b/64 over ±16 bins.
+/// The real window kernel r(t) of the energy stage, tabulated at T_b/64 over ±16 bins (at
+/// most half the period), and its periodic continuation (module docs).
 pub(super) struct Kernel {
     step_s: f64,
     half: usize,
     r: Vec<f64>,
-    /// tail[k] = max r(t)² over |t| ≥ k bins, k = 0..=KERNEL_BINS (non-increasing).
+    /// tail[k] = max r(t)² over |t| ≥ k bins, k = 0..=bins (non-increasing).
     tail: Vec<f64>,
+    /// Bins of the table's half-width: min(16, ⌊(K − 1)/2⌋).
+    bins: usize,
+    /// The period T = 1/Δf, s.
+    period_s: f64,
+    /// ε in r(t + T) = ε·r(t): +1 for an odd number of points K, −1 for an even one.
+    sign: f64,
+    /// The window w_k / Σw, Δf and (K − 1)/2, for the exact sum.
+    w: Vec<f64>,
+    df: f64,
+    mid: f64,
 }
 
 impl Kernel {
@@ -132,36 +155,50 @@ impl Kernel {
         let band = proc.band();
         let w = energy::window(proc.processing().window, band.points);
         let wsum: f64 = w.iter().sum();
+        let w: Vec<f64> = w.iter().map(|v| v / wsum).collect();
         let df = band.step_hz();
         let mid = (band.points - 1) as f64 / 2.0;
         let step_s = proc.bin_width_ns() * 1e-9 / KERNEL_FINE as f64;
-        let half = KERNEL_FINE * KERNEL_BINS;
-        let r = (0..=2 * half)
-            .map(|i| {
-                let t = (i as f64 - half as f64) * step_s;
-                w.iter()
-                    .enumerate()
-                    .map(|(k, wk)| wk * (2.0 * PI * (k as f64 - mid) * df * t).cos())
-                    .sum::<f64>()
-                    / wsum
-            })
-            .collect::<Vec<f64>>();
-        let tail = (0..=KERNEL_BINS)
-            .map(|k| {
-                let m = k * KERNEL_FINE;
-                r.iter()
-                    .enumerate()
+        // the images of one period must not overlap: at most half the period's K − 1 bins
+        let bins = KERNEL_BINS.min((band.points - 1) / 2);
+        let half = KERNEL_FINE * bins;
+        let mut k = Kernel {
+            step_s,
+            half,
+            r: Vec::new(),
+            tail: Vec::new(),
+            bins,
+            period_s: 1.0 / df,
+            sign: if band.points % 2 == 1 { 1.0 } else { -1.0 },
+            w,
+            df,
+            mid,
+        };
+        k.r = (0..=2 * half)
+            .map(|i| k.exact((i as f64 - half as f64) * step_s))
+            .collect();
+        k.tail = (0..=bins)
+            .map(|b| {
+                let m = b * KERNEL_FINE;
+                (k.r.iter().enumerate())
                     .filter(|(i, _)| i.abs_diff(half) >= m)
                     .map(|(_, v)| v * v)
                     .fold(0.0, f64::max)
             })
             .collect();
-        Kernel {
-            step_s,
-            half,
-            r,
-            tail,
-        }
+        k
+    }
+
+    /// r(t) = Σ_k w_k cos(2π(k − (K − 1)/2)Δf t) / Σ_k w_k, summed (exact at any t).
+    pub(super) fn exact(&self, t: f64) -> f64 {
+        (self.w.iter().enumerate())
+            .map(|(k, wk)| wk * (2.0 * PI * (k as f64 - self.mid) * self.df * t).cos())
+            .sum()
+    }
+
+    /// The table's half-width, s: the reach of one image.
+    pub(super) fn half_width_s(&self) -> f64 {
+        self.bins as f64 * KERNEL_FINE as f64 * self.step_s
     }
 
     /// The reach, s, beyond which r(t)² stays below `frac` (a ray's cull level over its
@@ -171,10 +208,11 @@ impl Kernel {
             .tail
             .iter()
             .position(|&t| t < frac)
-            .unwrap_or(KERNEL_BINS);
+            .unwrap_or(self.bins);
         k as f64 * KERNEL_FINE as f64 * self.step_s
     }
 
+    /// The table, read linearly: r(t) for −half-width ≤ t < half-width, else 0.
     #[inline]
     pub(super) fn at(&self, t: f64) -> f64 {
         let x = t / self.step_s + self.half as f64;
@@ -184,6 +222,36 @@ impl Kernel {
         let i = x as usize;
         let f = x - i as f64;
         self.r[i] * (1.0 - f) + self.r[i + 1] * f
+    }
+
+    /// The images of an echo at delay `tau` that reach a sample in [`lo`, `hi`] (s) within
+    /// `reach` of them: (τ + mT, ε^m) for every integer m with τ + mT in
+    /// [lo − reach, hi + reach], so r(t − τ) = Σ_m ε^m·r̃(t − τ − mT) on the samples, r̃ the
+    /// table.
+    pub(super) fn images(
+        &self,
+        tau: f64,
+        lo: f64,
+        hi: f64,
+        reach: f64,
+    ) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let t = self.period_s;
+        let m0 = ((lo - reach - tau) / t).ceil() as i64;
+        let m1 = ((hi + reach - tau) / t).floor() as i64;
+        (m0..=m1).map(move |m| {
+            let sign = if m.rem_euclid(2) == 1 { self.sign } else { 1.0 };
+            (tau + m as f64 * t, sign)
+        })
+    }
+
+    /// r(t) from the table and its images, Σ_m ε^m·r̃(t − mT) (what a sample at delay t
+    /// gets from an echo at delay 0).
+    #[cfg(test)]
+    pub(super) fn folded(&self, t: f64) -> f64 {
+        let reach = self.half_width_s();
+        self.images(0.0, t, t, reach)
+            .map(|(tm, sign)| sign * self.at(t - tm))
+            .sum()
     }
 }
 
@@ -217,6 +285,52 @@ mod tests {
                 (e - want).abs() < 1e-3 * want + 1e-7,
                 "bin {bin}: {e} vs {want}"
             );
+        }
+    }
+
+    /// r(t + T) = ε·r(t), ε = +1 for an odd number of points and −1 for an even one (the
+    /// exact sum), and the table's periodic continuation (its images with their signs)
+    /// equals the exact sum at any delay, several periods out and at negative delays.
+    #[test]
+    fn kernel_folds_periodic_for_odd_points_and_anti_periodic_for_even() {
+        for points in [401usize, 400, 801, 64, 65] {
+            let band = Band {
+                start_hz: 57.5e9,
+                stop_hz: 63.5e9,
+                points,
+            };
+            let proc = EnergyProcessor::new(band, Processing::default()).unwrap();
+            let k = Kernel::new(&proc);
+            let t_per = 1.0 / band.step_hz();
+            let tb = proc.bin_width_ns() * 1e-9;
+            let eps = if points % 2 == 1 { 1.0 } else { -1.0 };
+            assert_eq!(k.sign, eps);
+            let mut worst: f64 = 0.0;
+            for i in -400..=400 {
+                // fractions of a bin near 0 (the main lobe) and over the side lobes
+                let u = i as f64 * 0.0173 * tb;
+                for m in [-2.0, -1.0, 1.0, 1.3, 2.4, 3.0] {
+                    let t = u + m * t_per;
+                    let whole = m.fract() == 0.0;
+                    if whole {
+                        let want = eps.powi(m as i32) * k.exact(u);
+                        assert!(
+                            (k.exact(t) - want).abs() < 1e-9,
+                            "K = {points}: r({m}T + {u:e}) = {} vs {want}",
+                            k.exact(t)
+                        );
+                    }
+                    worst = worst.max((k.folded(t) - k.exact(t)).abs());
+                }
+            }
+            eprintln!("K = {points}: |folded − exact| ≤ {worst:.2e}");
+            // the linear reading of a T_b/64 table and the tails beyond it (4–7·10⁻⁵ of the
+            // peak measured)
+            let tol = 2e-4;
+            assert!(worst < tol, "K = {points}: {worst:e}");
+            // the sign matters: an echo one period late reads −r for an even K
+            let t = 0.2 * tb + t_per;
+            assert!((k.folded(t) - eps * k.exact(0.2 * tb)).abs() < 1e-3);
         }
     }
 }

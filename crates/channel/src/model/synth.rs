@@ -1,25 +1,41 @@
 //! The synth run: the drawn channel seen from every pose, through the array and the
-//! energy stage's kernel, with the energy detector's noise, written as an energy table
-//! and its truth.
+//! receiver the measurement has (the energy stage's window and zero-padded IFFT, with the
+//! receiver's white noise), written as an energy table and its truth.
 //!
-//! Per pose: the seen rays ([`ChannelModel::rays_from`]); per direction: the CIR on the
-//! energy stage's oversampled grid (rays add coherently; samples inside the coupling gate
-//! zeroed; rays weaker than `cull` × the mean noise-bin energy skipped), the bin energy
-//! E_s (mean of |h|² over the bin's L samples), and the detector's draw
-//! E = N0/(2N_p)·[χ²(2TW·N_p − 1) + (Z + √(2N_p·E_s/N0))²] (mean N0·TW + E_s, variance
-//! (N0²·TW + 2·N0·E_s)/N_p, DESIGN §2). N0 comes from the campaign's `[noise]` floor
-//! through the window (as the energy stage's N0) unless [`SynthParams::n0`] gives it (`check`
-//! and `calibrate` give the measured table's: [`EnergySimulator::for_table`]), TW from the
-//! window; neighbouring bins are drawn independently. The noise streams are keyed by (seed, position, direction), so the
-//! bytes do not depend on the thread count.
+//! Per pose: the seen rays ([`ChannelModel::rays_from`]; rays weaker than `cull` × the mean
+//! noise-bin energy after the pattern skipped); per direction:
+//! * the rays' CIR on the energy stage's oversampled grid t_n = n·T_b/L, added coherently
+//!   through the periodic kernel ([`response`](super::response) docs):
+//!   g(t_n) = Σ_rays a·e^{−j2πf_cτ} Σ_k ε^k·r̃(t_n − τ − kT), T = 1/Δf, ε = (−1)^{K−1},
+//!   every image k that reaches the span, so an echo later than the span (a far wall of a
+//!   hall) lands at τ mod T at the level its path loss gives, as the sweep folds it;
+//! * per pulse, the receiver noise: complex white Gaussian n_k of variance σ² per frequency
+//!   point ([`WhiteNoise`], the draw `simulate` makes), through the same window and
+//!   zero-padded IFFT, with the rays' CIR added in the delay domain:
+//!   h_n = Σ_k w_k n_k e^{j2πkn/N}/Σw + e^{jπn/L}·g(t_n), so the noise is coloured as the
+//!   measurement's (neighbouring bins correlated through the window) and adds coherently to
+//!   the echoes; the coupling gate zeroes h_n at |t_n| < gate (noise included, as in
+//!   `energy`), `mean` coupling removal subtracts the mean over the directions of the rays'
+//!   CIRs and of each pulse's noise spectra;
+//! * bin b's energy is the mean of |h_n|² over its L samples n = bL − (L−1)/2 … bL + (L−1)/2,
+//!   averaged over the N_p pulses: [`EnergyProcessor::receive_into`], the code `energy`
+//!   runs on a sweep.
+//!
+//! A noise-only bin then has mean N0·TW, N0 = σ²·Σw²/(Σw)²/TW (variance N0²·TW/N_p, the
+//! law of `energy::noise`): σ² is the campaign's `[noise]` floor (as `simulate` draws it)
+//! unless [`SynthParams::n0`] gives N0 (`check` and `calibrate` give the measured table's:
+//! [`EnergySimulator::for_table`]), then σ² = N0·TW·(Σw)²/Σw² ([`WhiteNoise::for_n0`];
+//! over 1 − 1/D under `mean` removal over D directions). The noise streams are keyed by
+//! (seed, position, direction), the pulses drawn in turn from one stream, so the bytes do
+//! not depend on the thread count. The truth lists every seen ray at its true delay.
 
 use super::channel::{ChannelModel, RaySource, SeenRay};
 use super::diffuse::DiffuseWalls;
 use super::params::{SynthParams, SynthValid};
-use super::response::{BandPattern, Kernel, KERNEL_BINS};
+use super::response::{BandPattern, Kernel};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, CouplingRemoval, Steering};
-use crate::energy::{self, EnergyProcessor};
+use crate::energy::{self, EnergyProcessor, WhiteNoise};
 use crate::error::{Error, Result};
 use crate::model::file::ModelConfig;
 use crate::params::ParamGuard;
@@ -31,7 +47,6 @@ use geo::Coord;
 use num_complex::Complex64;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Gamma, StandardNormal};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -119,7 +134,7 @@ pub fn synth_channel(
         None => None,
     };
     // a point weaker than the cull even at the pattern's peak is never in a profile
-    let min_amp2 = resp.cull * resp.noise_mean / (resp.g_peak * resp.g_peak);
+    let min_amp2 = resp.min_amp2;
     let truth_dir = params
         .truth_dir
         .clone()
@@ -232,7 +247,8 @@ impl EnergySimulator {
     /// The rays every pose sees from the layout's own parts for draws of `model` with
     /// `seed`: the diffuse wall points (`[diffuse]`) and the specular walls and vertices
     /// (`[walls]`), in the order [`EnergySimulator::energies`] adds them after the
-    /// clusters' rays, those arriving too late for any profile left out. They do not
+    /// clusters' rays, those below the cull even at the pattern's peak left out (they are
+    /// in no profile; a ray at any delay reaches the span through its images). They do not
     /// depend on the model's clusters, so a search over the cluster level (`model::levels`)
     /// makes them once per seed and hands them to [`EnergySimulator::energies_with`].
     pub fn layout_rays(&self, model: &ModelConfig, seed: u64) -> Result<LayoutRays> {
@@ -247,8 +263,7 @@ impl EnergySimulator {
             None => None,
         };
         let resp = &self.resp;
-        let min_amp2 = resp.cull * resp.noise_mean / (resp.g_peak * resp.g_peak);
-        let last = self.last_arrival();
+        let min_amp2 = resp.min_amp2;
         let per_pose = (self.poses.iter())
             .map(|&at| {
                 let mut rays = Vec::new();
@@ -258,7 +273,7 @@ impl EnergySimulator {
                 if let Some(w) = &model.walls {
                     rays.extend(super::walls::geometry_rays(&self.layout, at, w, seed));
                 }
-                rays.retain(|r| r.tau_s <= last);
+                rays.retain(|r| r.amp2 >= min_amp2);
                 rays
             })
             .collect();
@@ -290,28 +305,15 @@ impl EnergySimulator {
         }
         let resp = &self.resp;
         let (np, nd, nb) = self.shape();
-        let last = self.last_arrival();
         let mut energies = vec![0.0; np * nd * nb];
         for (p, profiles) in energies.chunks_mut(nd * nb).enumerate() {
             let at = self.poses[p];
             let heading = self.headings_deg[p];
             let mut rays = channel.rays_from(&self.layout, at, heading);
-            // a ray arriving after the last sample plus the kernel's reach (and the group
-            // delay, clamped to ±1 ns) adds nothing to any profile: dropped before the
-            // per-direction loop (the same energies, far fewer pattern look-ups in a
-            // large hall); the layout's rays were filtered alike
-            rays.retain(|r| r.tau_s <= last);
             rays.extend_from_slice(&fixed.per_pose[p]);
             resp.position(p, heading.to_radians(), &rays, seed, profiles);
         }
         Ok(energies)
-    }
-
-    /// The latest delay, s, a ray can have and still reach a profile: the last sample plus
-    /// the kernel's reach and 5 ns (the group delay is clamped to ±1 ns).
-    fn last_arrival(&self) -> f64 {
-        let resp = &self.resp;
-        (resp.proc.nbins() * resp.l) as f64 * resp.dt + resp.kernel_reach + 5e-9
     }
 }
 
@@ -417,7 +419,7 @@ fn write_truth(truth_dir: &Path, channel: &ChannelModel) -> Result<()> {
 }
 
 /// Everything a profile needs beyond the rays: the campaign's scan, array response, delay
-/// grid, kernel and detector.
+/// grid, kernel and receiver.
 struct Response {
     proc: EnergyProcessor,
     kernel: Kernel,
@@ -435,20 +437,23 @@ struct Response {
     fc: f64,
     /// Coupling gate, s (0 without one).
     gate: f64,
-    /// Noise per sample and the mean noise-bin energy N0·TW.
+    /// `mean` coupling removal: the mean over the directions subtracted, as `energy` does.
+    mean_removal: bool,
+    /// The noise level N0 the noise-only bins read and their mean N0·TW.
     n0: f64,
     noise_mean: f64,
-    /// Pulses N_p and the χ² law of 2TW·N_p − 1 degrees of freedom.
-    pulses: f64,
-    chi: Gamma<f64>,
+    /// The receiver's white noise per frequency point and the pulses N_p.
+    noise: WhiteNoise,
+    pulses: usize,
     /// The kernel's half-width, s.
     kernel_reach: f64,
     /// Broadside gain and wavelength at the centre frequency (truth powers).
     g0: f64,
     lc: f64,
     cull: f64,
-    /// Peak of ḡ over every band pattern (the diffuse points' pre-cull).
-    g_peak: f64,
+    /// |A|² below which a ray is under the cull even at the pattern's peak (ḡ's largest
+    /// over every band pattern): such rays and diffuse points are in no profile.
+    min_amp2: f64,
 }
 
 impl Response {
@@ -479,14 +484,25 @@ impl Response {
         } else {
             0.0
         };
-        let n0 = n0.unwrap_or_else(|| proc.noise_per_sample(m.noise.s21_variance()) / proc.tw());
+        // `mean` removal takes the mean over the directions away from each one's noise as
+        // well: what remains is (1 − 1/D) of it
+        let mean_removal = m.processing.coupling == CouplingRemoval::Mean;
+        let kept = if mean_removal && angles.len() > 1 {
+            1.0 - 1.0 / angles.len() as f64
+        } else {
+            1.0
+        };
+        let (noise, n0) = match n0 {
+            Some(n0) => (WhiteNoise::for_n0(&proc, n0 / kept), n0),
+            None => {
+                let noise = WhiteNoise::new(m.noise.s21_variance());
+                let n0 = proc.noise_per_sample(noise.variance()) * kept / proc.tw();
+                (noise, n0)
+            }
+        };
         let noise_mean = n0 * proc.tw();
-        let pulses = m.pulses as f64;
-        let dof = 2.0 * proc.tw() * pulses - 1.0;
-        let chi = Gamma::new(dof / 2.0, 2.0).map_err(|e| Error::input(&c.path, e.to_string()))?;
         let g_peak = bands.iter().map(BandPattern::peak).fold(0.0, f64::max);
         Ok(Response {
-            kernel,
             steering: m.array.steering,
             angles,
             bands,
@@ -495,13 +511,15 @@ impl Response {
             dt: tb / l as f64,
             fc,
             gate,
+            mean_removal,
             n0,
             noise_mean,
-            pulses,
-            chi,
-            kernel_reach: KERNEL_BINS as f64 * tb,
+            noise,
+            pulses: m.pulses,
+            kernel_reach: kernel.half_width_s(),
+            kernel,
             g0: pattern.gain(0.0, 0.0, fc),
-            g_peak,
+            min_amp2: cull * noise_mean / (g_peak * g_peak),
             lc: C0 / fc,
             cull,
             proc,
@@ -509,15 +527,47 @@ impl Response {
     }
 
     /// The energy profiles of position `p` (heading in rad), one per direction, into
-    /// `out` (directions × bins), in parallel over directions.
+    /// `out` (directions × bins), in parallel over directions: per direction the rays'
+    /// CIR ([`Response::cir`]) and the receiver noise of each pulse
+    /// ([`Response::noise_spectra`]), the means over the directions taken away under
+    /// `mean` coupling removal, then each pulse through the energy stage
+    /// ([`EnergyProcessor::receive_into`]) and the mean over the pulses.
     fn position(&self, p: usize, heading: f64, rays: &[SeenRay], seed: u64, out: &mut [f64]) {
-        out.par_chunks_mut(self.proc.nbins())
-            .enumerate()
-            .for_each(|(d, prof)| {
-                let h = self.cir(d, heading, rays);
-                let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(seed, p, d));
-                self.detect(&h, prof, &mut rng);
-            });
+        let nb = self.proc.nbins();
+        // a ray below the cull even at the pattern's peak is in no profile
+        let rays: Vec<SeenRay> = (rays.iter())
+            .filter(|r| r.amp2 >= self.min_amp2)
+            .copied()
+            .collect();
+        let mut parts: Vec<(Vec<Complex64>, Vec<Complex64>)> = (0..self.angles.len())
+            .into_par_iter()
+            .map(|d| (self.cir(d, heading, &rays), self.noise_spectra(seed, p, d)))
+            .collect();
+        if self.mean_removal {
+            subtract_mean(parts.iter_mut().map(|(g, _)| g));
+            subtract_mean(parts.iter_mut().map(|(_, n)| n));
+        }
+        let scale = 1.0 / self.pulses as f64;
+        let k = self.proc.band().points;
+        out.par_chunks_mut(nb).zip(parts.par_iter()).for_each_init(
+            || self.proc.scratch(),
+            |scratch, (prof, (g, spectra))| {
+                prof.fill(0.0);
+                for spectrum in spectra.chunks(k) {
+                    self.proc
+                        .receive_into(spectrum, -self.half, g, scratch, scale, prof);
+                }
+            },
+        );
+    }
+
+    /// The receiver noise of (position `p`, direction `d`): one spectrum of white noise per
+    /// pulse (pulses × points), from the stream keyed by (seed, p, d), pulse after pulse.
+    fn noise_spectra(&self, seed: u64, p: usize, d: usize) -> Vec<Complex64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(noise_seed(seed, p, d));
+        let mut n = vec![Complex64::new(0.0, 0.0); self.pulses * self.proc.band().points];
+        self.noise.draw(&mut n, &mut rng);
+        n
     }
 
     /// The rays direction `d` sees through the pattern with a received |amplitude|²
@@ -542,6 +592,16 @@ impl Response {
         })
     }
 
+    /// The first and last sample of the profiles' grid, s: bin 0's first (−half·dt) and the
+    /// last bin's last.
+    fn span(&self) -> (f64, f64) {
+        let nb = self.proc.nbins() as i64;
+        (
+            -self.half as f64 * self.dt,
+            (nb * self.l as i64 - self.half - 1) as f64 * self.dt,
+        )
+    }
+
     /// The samples n·dt (index from bin 0, sample −half; and t) within `reach` of `tau`,
     /// outside the coupling gate.
     fn samples(&self, tau: f64, reach: f64) -> impl Iterator<Item = (usize, f64)> + '_ {
@@ -556,7 +616,9 @@ impl Response {
         })
     }
 
-    /// The CIR h(t_n) of direction `d` on the oversampled grid (from bin 0, sample −half).
+    /// The baseband CIR g(t_n) = Σ a·e^{−j2πf_cτ}·r(t_n − τ) of direction `d` on the
+    /// oversampled grid (from bin 0, sample −half), every ray through its images
+    /// τ + kT ([`Kernel::images`]) with their signs.
     fn cir(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<Complex64> {
         let mut h = vec![Complex64::new(0.0, 0.0); self.proc.nbins() * self.l];
         for (r, a2, tau) in self.seen(d, heading, rays, self.cull * self.noise_mean) {
@@ -572,41 +634,37 @@ impl Response {
                     self.kernel.reach_s(self.cull * self.noise_mean / a2),
                 ),
             };
-            let a = Complex64::from_polar(a2.sqrt(), phase);
-            for (i, t) in self.samples(tau, reach) {
-                h[i] += a * self.kernel.at(t - tau);
-            }
+            self.add_ray(&mut h, Complex64::from_polar(a2.sqrt(), phase), tau, reach);
         }
         h
+    }
+
+    /// Add to the baseband CIR `h` ([`Response::cir`]) an echo of complex amplitude `a`
+    /// (carrier phase included) at delay `tau`: a·ε^k·r̃(t_n − τ − kT) on the samples within
+    /// `reach` of each image τ + kT that reaches the span.
+    fn add_ray(&self, h: &mut [Complex64], a: Complex64, tau: f64, reach: f64) {
+        let (lo, hi) = self.span();
+        for (tm, sign) in self.kernel.images(tau, lo, hi, reach) {
+            let am = a * sign;
+            for (i, t) in self.samples(tm, reach) {
+                h[i] += am * self.kernel.at(t - tm);
+            }
+        }
     }
 
     /// The CIR's expected power |h(t_n)|² of direction `d` with the rays added in power
-    /// (grid as [`Response::cir`], no cull).
+    /// (grid and images as [`Response::cir`], no cull).
     fn power(&self, d: usize, heading: f64, rays: &[SeenRay]) -> Vec<f64> {
         let mut h = vec![0.0; self.proc.nbins() * self.l];
+        let (lo, hi) = self.span();
         for (_, a2, tau) in self.seen(d, heading, rays, f64::MIN_POSITIVE) {
-            for (i, t) in self.samples(tau, self.kernel_reach) {
-                h[i] += a2 * self.kernel.at(t - tau).powi(2);
+            for (tm, _) in self.kernel.images(tau, lo, hi, self.kernel_reach) {
+                for (i, t) in self.samples(tm, self.kernel_reach) {
+                    h[i] += a2 * self.kernel.at(t - tm).powi(2);
+                }
             }
         }
         h
-    }
-
-    /// Each bin's detector energy: E_s the mean |h|² over its L samples, then the scaled
-    /// non-central χ² draw.
-    fn detect(&self, h: &[Complex64], prof: &mut [f64], rng: &mut ChaCha8Rng) {
-        let (l, pulses, n0) = (self.l, self.pulses, self.n0);
-        for (b, e) in prof.iter_mut().enumerate() {
-            let es = h[b * l..(b + 1) * l]
-                .iter()
-                .map(|v| v.norm_sqr())
-                .sum::<f64>()
-                / l as f64;
-            let z: f64 = StandardNormal.sample(rng);
-            let x = self.chi.sample(rng);
-            let nc = (2.0 * pulses * es / n0).sqrt();
-            *e = n0 / (2.0 * pulses) * (x + (z + nc).powi(2));
-        }
     }
 
     /// The truth rows of the seen rays (power through the broadside gain): cluster rays
@@ -634,6 +692,27 @@ impl Response {
     }
 }
 
+/// Subtract from each of `rows` (equal lengths) their mean: the `mean` coupling removal,
+/// which is linear, so on the CIRs as on the spectra.
+fn subtract_mean<'a>(rows: impl Iterator<Item = &'a mut Vec<Complex64>>) {
+    let mut rows: Vec<&mut Vec<Complex64>> = rows.collect();
+    let Some(n) = rows.first().map(|r| r.len()) else {
+        return;
+    };
+    let mut mean = vec![Complex64::new(0.0, 0.0); n];
+    for r in rows.iter() {
+        for (m, v) in mean.iter_mut().zip(r.iter()) {
+            *m += v;
+        }
+    }
+    let inv = 1.0 / rows.len() as f64;
+    for r in rows.iter_mut() {
+        for (v, m) in r.iter_mut().zip(&mean) {
+            *v -= m * inv;
+        }
+    }
+}
+
 fn noise_seed(seed: u64, p: usize, d: usize) -> u64 {
     let mut x = seed ^ 0x9e37_79b9_7f4a_7c15;
     for v in [p as u64, d as u64, 0x73796e] {
@@ -641,4 +720,127 @@ fn noise_seed(seed: u64, p: usize, d: usize) -> u64 {
         x ^= x >> 31;
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn campaign(points: usize, coupling: CouplingRemoval) -> Campaign {
+        let p = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../data/tests/point_target.toml"
+        );
+        let mut c = Campaign::load(Path::new(p)).unwrap();
+        c.set_elements(16).unwrap();
+        c.manifest.band.points = points;
+        c.manifest.processing.coupling = coupling;
+        c.manifest.processing.max_delay_ns = 60.0;
+        c
+    }
+
+    /// Echoes in the span and one, 2.4 and 3 periods later, interfering: synth's CIR (the
+    /// folded kernel) through the receiver without noise gives the energies the energy
+    /// stage computes from their exact spectrum Σ a·e^{−j2πfτ}, for an odd and an even
+    /// number of points (where the images alternate in sign).
+    #[test]
+    fn folded_rays_give_the_energy_stage_s_energies_of_their_spectrum() {
+        for points in [401usize, 400] {
+            for coupling in [CouplingRemoval::Gate, CouplingRemoval::None] {
+                let c = campaign(points, coupling);
+                let resp = Response::new(&c, 1e-3, None).unwrap();
+                let proc = &resp.proc;
+                let band = *proc.band();
+                let t_per = 1.0 / band.step_hz();
+                let echoes = [
+                    (Complex64::from_polar(1.0, 0.3), 20.0e-9),
+                    (Complex64::from_polar(0.8, 1.0), 20.27e-9 + t_per),
+                    (Complex64::from_polar(0.5, -2.0), 2.4 * t_per),
+                    (Complex64::from_polar(0.3, 2.5), 13.1e-9 + 3.0 * t_per),
+                    (Complex64::from_polar(0.4, 0.0), 1.0e-9 + t_per),
+                ];
+                let spectrum: Vec<Complex64> = (0..band.points)
+                    .map(|k| {
+                        let f = band.freq(k);
+                        (echoes.iter())
+                            .map(|(a, tau)| {
+                                a * Complex64::from_polar(1.0, -2.0 * PI * (f * tau).fract())
+                            })
+                            .sum()
+                    })
+                    .collect();
+                let nb = proc.nbins();
+                let mut want = vec![0.0; proc.nbins_full()];
+                proc.profile_into(&spectrum, &mut proc.scratch(), 1.0, &mut want);
+                let mut g = vec![Complex64::new(0.0, 0.0); nb * resp.l];
+                for (a, tau) in echoes {
+                    let carrier = Complex64::from_polar(1.0, -2.0 * PI * (resp.fc * tau).fract());
+                    resp.add_ray(&mut g, a * carrier, tau, resp.kernel_reach);
+                }
+                let zero = vec![Complex64::new(0.0, 0.0); band.points];
+                let mut got = vec![0.0; nb];
+                proc.receive_into(&zero, -resp.half, &g, &mut proc.scratch(), 1.0, &mut got);
+                let peak = want[..nb].iter().copied().fold(0.0, f64::max);
+                let worst = (0..nb)
+                    .map(|b| (got[b] - want[b]).abs())
+                    .fold(0.0, f64::max);
+                eprintln!(
+                    "K = {points} {coupling:?}: worst |synth − energy| = {:.2e} of the peak",
+                    worst / peak
+                );
+                assert!(
+                    worst < 5e-4 * peak,
+                    "K = {points} {coupling:?}: {worst:e} vs peak {peak:e}"
+                );
+                // and the folded echoes are there: the one at 2.4 T lands at 0.4 T
+                let b = (0.4 * t_per * 1e9 / proc.bin_width_ns()).round() as usize;
+                assert!(
+                    got[b] > 0.1 * peak,
+                    "K = {points}: bin {b} holds {:e}",
+                    got[b]
+                );
+            }
+        }
+    }
+
+    /// The noise-only bins read the N0 asked for (N0·TW on average) with and without `mean`
+    /// coupling removal, and the profiles' bytes do not depend on the thread count.
+    #[test]
+    fn receiver_noise_reads_the_given_n0() {
+        for coupling in [CouplingRemoval::Gate, CouplingRemoval::Mean] {
+            let mut c = campaign(401, coupling);
+            c.manifest.pulses = 2;
+            let n0 = 2.5e-13;
+            let resp = Response::new(&c, 1e-3, Some(n0)).unwrap();
+            let (nd, nb) = (resp.angles.len(), resp.proc.nbins());
+            let first =
+                ((c.manifest.processing.gate_ns + 2.0) / resp.proc.bin_width_ns()).ceil() as usize;
+            let (mut sum, mut count) = (0.0, 0usize);
+            for p in 0..20 {
+                let mut out = vec![0.0; nd * nb];
+                resp.position(p, 0.0, &[], 7, &mut out);
+                for prof in out.chunks(nb) {
+                    sum += prof[first..].iter().sum::<f64>();
+                    count += nb - first;
+                }
+            }
+            let ratio = sum / count as f64 / (n0 * resp.proc.tw());
+            eprintln!("{coupling:?}: noise bins' mean {ratio:.4} × N0·TW");
+            assert!((ratio - 1.0).abs() < 0.01, "{coupling:?}: {ratio}");
+            assert_eq!(resp.noise_mean, n0 * resp.proc.tw());
+        }
+        let c = campaign(401, CouplingRemoval::Gate);
+        let resp = Response::new(&c, 1e-3, None).unwrap();
+        let n = resp.angles.len() * resp.proc.nbins();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut out = vec![0.0; n];
+            pool.install(|| resp.position(3, 0.1, &[], 9, &mut out));
+            out
+        };
+        assert_eq!(run(1), run(3));
+    }
 }

@@ -41,7 +41,8 @@
 //! e.g. a `[calibration] background` that is the measurement itself leaves an all-zero
 //! table).
 //!
-//! Layout: [`processor`] (window, IFFT, bins, TW/ENBW), [`matrix`] (the table read back,
+//! Layout: [`processor`] (window, IFFT, bins, TW/ENBW), [`receiver`] (the white noise per
+//! frequency point the simulator and `synth` draw), [`matrix`] (the table read back,
 //! campaign check), [`writer`] (table and metadata); [`run`] streams a campaign through them
 //! and estimates N0.
 
@@ -49,10 +50,12 @@ pub mod calibration;
 pub mod matrix;
 pub mod noise;
 pub mod processor;
+pub mod receiver;
 pub mod writer;
 
 pub use matrix::{check_campaign, EnergyMatrix, EnergyMeta, EnergySource, EnergyTable};
 pub use processor::{window, EnergyProcessor};
+pub use receiver::WhiteNoise;
 pub use writer::{table_metadata, write_table, EnergyWriter};
 
 use crate::campaign::manifest::Campaign;

@@ -13,6 +13,11 @@
 //! * TW = L² / Σ_{n,m∈bin} |ρ(n−m)|², ρ(Δ) = Σ w_k² e^{j2πkΔ/N} / Σ w_k², and
 //!   ENBW = K·Σw²/(Σw)².
 //!
+//! The steps are public ([`EnergyProcessor::cir_into`], [`EnergyProcessor::add_baseband`],
+//! [`EnergyProcessor::gate`], [`EnergyProcessor::bins_into`]; together
+//! [`EnergyProcessor::receive_into`]) so `synth` puts its receiver noise through the same
+//! code, with its rays added to the CIR in the delay domain.
+//!
 //! `Band` and `Processing` are validated by their own inherent `check` (manifest file
 //! contents, checked where the manifest is read and again here, cheaply): they are not a
 //! `ParamGuard` parameter set, since the values come from the campaign file, not from flags.
@@ -62,6 +67,8 @@ pub struct EnergyProcessor {
     nbins: usize,
     tw: f64,
     enbw: f64,
+    /// e^{jπi/L}, i = 0..2L: the baseband rotation of sample n is rot[n mod 2L].
+    rot: Vec<Complex64>,
 }
 
 impl std::fmt::Debug for EnergyProcessor {
@@ -107,6 +114,9 @@ impl EnergyProcessor {
         }
         let tw = (l * l) as f64 / s;
         let enbw = band.points as f64 * w2 / (wsum * wsum);
+        let rot = (0..2 * l)
+            .map(|i| Complex64::from_polar(1.0, PI * i as f64 / l as f64))
+            .collect();
         Ok(EnergyProcessor {
             band,
             proc,
@@ -118,6 +128,7 @@ impl EnergyProcessor {
             nbins,
             tw,
             enbw,
+            rot,
         })
     }
 
@@ -184,7 +195,7 @@ impl EnergyProcessor {
     }
 
     /// Energy of every bin (`nbins_full` of them) of one sweep, added with weight `scale` to
-    /// `out`.
+    /// `out`: [`Self::cir_into`], [`Self::gate`], [`Self::bins_into`].
     pub fn profile_into(
         &self,
         s21: &[Complex64],
@@ -192,6 +203,35 @@ impl EnergyProcessor {
         scale: f64,
         out: &mut [f64],
     ) {
+        let nb = out.len().min(self.nbins_full);
+        self.receive_into(s21, 0, &[], scratch, scale, &mut out[..nb]);
+    }
+
+    /// One sweep of the receiver with a CIR added in the delay domain: the spectrum `s21`
+    /// through the window and zero-padded IFFT ([`Self::cir_into`]), plus the baseband CIR
+    /// `g` given at the signed samples `first`, `first + 1`, … ([`Self::add_baseband`]),
+    /// gated ([`Self::gate`]), and the energies of the first `out.len()` bins added with
+    /// weight `scale` to `out` ([`Self::bins_into`]). With `g` empty this is
+    /// [`Self::profile_into`]; `synth` passes the receiver noise as `s21` and its rays as `g`.
+    pub fn receive_into(
+        &self,
+        s21: &[Complex64],
+        first: i64,
+        g: &[Complex64],
+        scratch: &mut (Vec<Complex64>, Vec<Complex64>),
+        scale: f64,
+        out: &mut [f64],
+    ) {
+        self.cir_into(s21, scratch);
+        let buf = &mut scratch.0;
+        self.add_baseband(buf, first, g);
+        self.gate(buf);
+        self.bins_into(buf, scale, out);
+    }
+
+    /// The CIR of one sweep into `scratch.0` (N = (K−1)·L samples, sample n at delay
+    /// n·dt, circular): h_n = Σ_k w_k S_k e^{j2πkn/N} / Σ_k w_k.
+    pub fn cir_into(&self, s21: &[Complex64], scratch: &mut (Vec<Complex64>, Vec<Complex64>)) {
         let (buf, fft_scratch) = scratch;
         let inv = 1.0 / self.wsum;
         for (b, (s, w)) in buf.iter_mut().zip(s21.iter().zip(&self.win)) {
@@ -201,19 +241,47 @@ impl EnergyProcessor {
             *b = Complex64::new(0.0, 0.0);
         }
         self.fft.process_with_scratch(buf, fft_scratch);
-        let l = self.proc.oversample;
-        let half = (l - 1) / 2;
+    }
+
+    /// Add to the CIR `cir` ([`Self::cir_into`]) a baseband CIR `g` given at the signed
+    /// samples n = `first` + i: cir[n mod N] += e^{jπn/L}·g_i. A flat echo a·e^{−j2πfτ} over
+    /// the band gives h_n = e^{jπn/L}·a·e^{−j2πf_cτ}·r(n·dt − τ), f_c the centre frequency
+    /// and r(t) = Σ_k w_k cos(2π(k − (K−1)/2)Δf t) / Σ_k w_k the real window kernel
+    /// (e^{jπn/L} = e^{jπB·n·dt}); `g` is the sum of a·e^{−j2πf_cτ}·r(t_n − τ) over the
+    /// echoes.
+    pub fn add_baseband(&self, cir: &mut [Complex64], first: i64, g: &[Complex64]) {
+        let (n, l2) = (self.nfft, self.rot.len());
+        let mut j = first.rem_euclid(n as i64) as usize;
+        let mut r = first.rem_euclid(l2 as i64) as usize;
+        for v in g {
+            cir[j] += v * self.rot[r];
+            j = if j + 1 == n { 0 } else { j + 1 };
+            r = if r + 1 == l2 { 0 } else { r + 1 };
+        }
+    }
+
+    /// The `gate` coupling removal: zero the ⌈gate/dt⌉ samples at each end of the CIR
+    /// (signed delays in [−gate, gate)); nothing for the other removals.
+    pub fn gate(&self, cir: &mut [Complex64]) {
         if self.proc.coupling == CouplingRemoval::Gate {
-            let dt_ns = self.bin_width_ns() / l as f64;
+            let dt_ns = self.bin_width_ns() / self.proc.oversample as f64;
             let g = (self.proc.gate_ns / dt_ns).ceil() as usize;
             let g = g.min(self.nfft / 2);
-            for b in buf[..g].iter_mut() {
+            for b in cir[..g].iter_mut() {
                 *b = Complex64::new(0.0, 0.0);
             }
-            for b in buf[self.nfft - g..].iter_mut() {
+            for b in cir[self.nfft - g..].iter_mut() {
                 *b = Complex64::new(0.0, 0.0);
             }
         }
+    }
+
+    /// The energies of bins 0..`out.len()` (at most `nbins_full`) of the CIR `cir`, added
+    /// with weight `scale` to `out`: bin b the mean of |h_n|² over its L samples
+    /// n = bL − (L−1)/2 … bL + (L−1)/2 (circular).
+    pub fn bins_into(&self, cir: &[Complex64], scale: f64, out: &mut [f64]) {
+        let l = self.proc.oversample;
+        let half = (l - 1) / 2;
         let norm = scale / l as f64;
         let n = self.nfft;
         for (bin, o) in out.iter_mut().enumerate().take(self.nbins_full) {
@@ -221,12 +289,12 @@ impl EnergyProcessor {
             // bins that wrap past either end, summed in the same order either way
             let start = (bin * l + n - half) % n;
             let e = if start + l <= n {
-                buf[start..start + l]
+                cir[start..start + l]
                     .iter()
                     .map(|v| v.norm_sqr())
                     .sum::<f64>()
             } else {
-                let (a, b) = (&buf[start..], &buf[..start + l - n]);
+                let (a, b) = (&cir[start..], &cir[..start + l - n]);
                 a.iter().chain(b).map(|v| v.norm_sqr()).sum::<f64>()
             };
             *o += e * norm;
