@@ -42,6 +42,7 @@ use crate::campaign::manifest::Campaign;
 use crate::chain::{extract_and_cluster, ChainParams};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
+use crate::export::{Cell, Column, Table};
 use crate::fit::channel::{fit_clustering, FitParams};
 use crate::model::file::ModelConfig;
 use crate::model::levels::fit_levels;
@@ -145,6 +146,37 @@ impl HoldoutResult {
             if self.passes() { "PASS" } else { "FAIL" },
             ps.join(", ")
         )
+    }
+
+    /// The table: one row per way — the halves, the max-T p-value, the noise floor's
+    /// offset from the draws', the misses and the verdict.
+    pub fn table(&self) -> Table {
+        let mut t = Table::new(vec![
+            Column::new("fitted on", "fitted_on"),
+            Column::new("checked on", "checked_on"),
+            Column::new("max-T p", "p"),
+            Column::new("noise floor − draws' (dB)", "noise_offset_db"),
+            Column::new("misses", "misses"),
+            Column::new("verdict", "verdict"),
+        ]);
+        for w in &self.ways {
+            let (fit, on) = self.pair(w);
+            let r = &w.result;
+            let misses = r.misses();
+            t.push(vec![
+                Cell::text(fit.describe()),
+                Cell::text(on.describe()),
+                Cell::num(r.joint_p, format!("{:.3}", r.joint_p)),
+                Cell::fixed(r.noise.offset_db(), 1),
+                if misses.is_empty() {
+                    Cell::missing("—")
+                } else {
+                    Cell::text(misses.join(", "))
+                },
+                Cell::text(if r.passes() { "PASS" } else { "FAIL" }),
+            ]);
+        }
+        t
     }
 
     /// Both ways' lines, then the combined verdict.
