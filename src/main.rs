@@ -222,11 +222,30 @@ fn import(a: ImportArgs, quiet: bool) -> Result<()> {
 /// error when the check fails.
 fn check(a: CheckArgs, quiet: bool) -> Result<()> {
     let fail_below = a.fail_below;
-    let cmd = a.into_command();
+    let cmd = match a.into_command() {
+        cli::params::CheckCommand::Model(cmd) => cmd,
+        cli::params::CheckCommand::Holdout(cmd) => return holdout(&cmd, fail_below, quiet),
+    };
     let summary = with_bar(quiet, "check", |p| commands::check(&cmd, p))?;
     if quiet {
         // `--quiet` silences progress and the table, never the verdict
         println!("{}", summary.result.verdict());
+    } else {
+        report(quiet, &summary);
+    }
+    if let Some(msg) = fail_below.and_then(|p| summary.failure(p)) {
+        anyhow::bail!(msg);
+    }
+    Ok(())
+}
+
+/// `check --holdout`: each way's table and the verdict lines (with `--quiet` the verdict
+/// lines only: both ways' and the combined one), then with `--fail-below` an error when
+/// either way fails.
+fn holdout(cmd: &commands::Holdout, fail_below: Option<f64>, quiet: bool) -> Result<()> {
+    let summary = with_bar(quiet, "check", |p| commands::holdout(cmd, p))?;
+    if quiet {
+        println!("{}", summary.verdict());
     } else {
         report(quiet, &summary);
     }

@@ -14,6 +14,7 @@
 use crate::common;
 use pradar::campaign::manifest::SweepFormat;
 use pradar::campaign::Campaign;
+use pradar::check::stats::Statistics;
 use pradar::check::{check, CheckParams, CheckResult};
 use pradar::energy::EnergyMatrix;
 use pradar::model::file::ModelConfig;
@@ -510,4 +511,87 @@ fn check_command() {
         "p2",
     );
     common::assert_one_line_error(&o, "no_such_quantity");
+}
+
+/// The held-out check (`check::holdout`, `pradar check --holdout`) on the corridor cut to
+/// six poses (halves of three), 19 draws: two ways, fitted on A = positions 0–2 and
+/// checked on B = 3–5 and back, each a check of R draws with a p-value in (0, 1]; the
+/// command with `--quiet` prints exactly the three verdict lines the library gives (both
+/// ways' and the combined one), writes its files, and refuses `--model` beside
+/// `--holdout` naming both.
+#[test]
+fn holdout_fits_each_half_and_checks_the_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = common::corridor();
+    t.get_mut("poses")
+        .and_then(|p| p.as_array_mut())
+        .unwrap()
+        .truncate(6);
+    let (c, em) = common::chain(&dir.path().join("a"), &t, SweepFormat::Parquet);
+    let path = dir.path().join("a/energy.parquet");
+    let params = CheckParams {
+        draws: pradar::check::MIN_DRAWS,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
+    let t0 = std::time::Instant::now();
+    let r = pradar::check::holdout(&c, &em, &path, &params, &|_, _| {}).unwrap();
+    println!(
+        "{}\n{}\n({:.1} s)",
+        r.table().to_markdown(),
+        r.lines().join("\n"),
+        t0.elapsed().as_secs_f64()
+    );
+    let labels: Vec<Vec<String>> = r.halves.iter().map(|h| h.labels.clone()).collect();
+    assert_eq!(labels, [["0", "1", "2"], ["3", "4", "5"]]);
+    assert_eq!(r.halves[1].positions, [3, 4, 5]);
+    assert_eq!([r.ways[0].fitted_on, r.ways[1].fitted_on], [0, 1]);
+    for w in &r.ways {
+        let p = w.result.joint_p;
+        assert!(p > 0.0 && p <= 1.0, "{p}");
+        assert_eq!(w.result.draws.len(), pradar::check::MIN_DRAWS);
+        // checked on the other half: that half's rows of the table
+        let other = em.restrict(&r.halves[1 - w.fitted_on].positions).unwrap();
+        let ctx = pradar::check::context(&other);
+        assert_eq!(ctx.np, 3);
+        assert_eq!(w.result.measured, Statistics::of(&ctx, &other.data));
+    }
+    let lines = r.lines();
+    assert_eq!(lines.len(), 3);
+    assert!(lines[0]
+        .starts_with("held out, fitted on A (positions 0–2) → checked on B (positions 3–5): "));
+    assert!(lines[1]
+        .starts_with("held out, fitted on B (positions 3–5) → checked on A (positions 0–2): "));
+    let want = if r.passes() {
+        "held-out check: PASS"
+    } else {
+        "held-out check: FAIL"
+    };
+    assert!(lines[2].starts_with(want), "{}", lines[2]);
+    // the command: the same verdict lines with --quiet, and its files
+    let out = dir.path().join("hc");
+    let mut argv = vec![
+        "check",
+        "--holdout",
+        "--campaign",
+        common::path_str(&c.path),
+        "--energy",
+        common::path_str(&path),
+        "--draws",
+        "19",
+    ];
+    argv.extend(["--out", common::path_str(&out)]);
+    let o = common::pradar_quiet(&argv);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(String::from_utf8_lossy(&o.stdout), lines.join("\n") + "\n");
+    for f in pradar::report::check::holdout_files() {
+        assert!(out.join(&f).is_file(), "{f}");
+    }
+    let m = ModelConfig::load(&out.join("fit_A_check_B/model.toml")).unwrap();
+    assert_eq!(m, r.ways[0].model);
+    argv.extend(["--model", "m.toml"]);
+    let o = common::pradar_quiet(&argv);
+    common::assert_one_line_error(&o, "--holdout");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--model"));
 }

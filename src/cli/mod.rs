@@ -253,8 +253,11 @@ pub struct CalibrateArgs {
 #[derive(Args)]
 pub struct CheckArgs {
     /// Model file (fitted, calibrated or hand-made).
+    #[arg(long, required_unless_present = "holdout", conflicts_with = "holdout")]
+    pub model: Option<PathBuf>,
+    /// Instead of --model: fit a model on each half of the walk, check it on the other half.
     #[arg(long)]
-    pub model: PathBuf,
+    pub holdout: bool,
     /// Campaign manifest (poses, directions, band, array, noise, processing, layout).
     #[arg(long)]
     pub campaign: PathBuf,
@@ -276,7 +279,7 @@ pub struct CheckArgs {
     pub fail_below: Option<f64>,
     /// `calibrate`'s posterior CSV (<stem>_posterior.csv): each draw's free quantities
     /// from a particle drawn by weight (the posterior predictive), the rest from --model.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "holdout")]
     pub posterior: Option<PathBuf>,
 }
 

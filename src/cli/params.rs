@@ -102,20 +102,39 @@ impl CalibrateArgs {
     }
 }
 
+/// What `check` runs: the check of `--model`, or the held-out check (`--holdout`, which
+/// clap keeps apart from `--model` and `--posterior`).
+pub enum CheckCommand {
+    /// `check --model M`.
+    Model(commands::Check),
+    /// `check --holdout`.
+    Holdout(commands::Holdout),
+}
+
 impl CheckArgs {
     /// `check`'s command (`--fail-below` stays with the arguments).
-    pub fn into_command(self) -> commands::Check {
-        commands::Check {
-            model: self.model,
-            campaign: self.campaign,
-            energy: self.energy,
-            out: self.out,
-            params: pradar::check::CheckParams {
-                draws: self.draws,
-                seed: self.seed,
-                ..Default::default()
-            },
-            posterior: self.posterior,
+    pub fn into_command(self) -> CheckCommand {
+        let params = pradar::check::CheckParams {
+            draws: self.draws,
+            seed: self.seed,
+            ..Default::default()
+        };
+        match self.model {
+            Some(model) => CheckCommand::Model(commands::Check {
+                model,
+                campaign: self.campaign,
+                energy: self.energy,
+                out: self.out,
+                params,
+                posterior: self.posterior,
+            }),
+            // clap requires --model unless --holdout
+            None => CheckCommand::Holdout(commands::Holdout {
+                campaign: self.campaign,
+                energy: self.energy,
+                out: self.out,
+                params,
+            }),
         }
     }
 }
@@ -303,6 +322,7 @@ impl ExploreArgs {
 #[cfg(test)]
 mod tests {
     use super::super::{Cli, Cmd};
+    use super::CheckCommand;
     use clap::Parser;
     use pradar::mapping::job::PoseNoise;
     use pradar::mapping::{EkfParams, GridParams, OgParams};
@@ -313,6 +333,29 @@ mod tests {
         let mut full = vec!["pradar"];
         full.extend_from_slice(argv);
         Cli::try_parse_from(full).unwrap().cmd
+    }
+
+    /// `check --holdout` fits its own models: `--model` and `--posterior` beside it are
+    /// refused naming both flags, and without either `--model` is required.
+    #[test]
+    fn check_holdout_conflicts_with_model() {
+        let base = [
+            "pradar",
+            "check",
+            "--campaign",
+            "c.toml",
+            "--energy",
+            "e.parquet",
+        ];
+        for extra in [["--model", "m.toml"], ["--posterior", "p.csv"]] {
+            let mut argv = base.to_vec();
+            argv.push("--holdout");
+            argv.extend(extra);
+            let e = Cli::try_parse_from(argv).err().unwrap().to_string();
+            assert!(e.contains("--holdout") && e.contains(extra[0]), "{e}");
+        }
+        let e = Cli::try_parse_from(base).err().unwrap().to_string();
+        assert!(e.contains("--model"), "{e}");
     }
 
     /// `map` without mapper flags gives the library's defaults: the CLI's defaults cannot
@@ -380,11 +423,22 @@ mod tests {
         match parse(&["check", m, "m.toml", c, "c.toml", e, "e.parquet"]) {
             Cmd::Check(a) => {
                 assert!(a.fail_below.is_none());
-                assert_eq!(
-                    a.into_command().params,
-                    pradar::check::CheckParams::default()
-                );
+                match a.into_command() {
+                    CheckCommand::Model(cmd) => {
+                        assert_eq!(cmd.params, pradar::check::CheckParams::default())
+                    }
+                    CheckCommand::Holdout(_) => unreachable!(),
+                }
             }
+            _ => unreachable!(),
+        }
+        match parse(&["check", "--holdout", c, "c.toml", e, "e.parquet"]) {
+            Cmd::Check(a) => match a.into_command() {
+                CheckCommand::Holdout(cmd) => {
+                    assert_eq!(cmd.params, pradar::check::CheckParams::default())
+                }
+                CheckCommand::Model(_) => unreachable!(),
+            },
             _ => unreachable!(),
         }
         match parse(&["extract", e, "e.parquet", c, "c.toml", o, "m.parquet"]) {

@@ -3,11 +3,12 @@
 //! (black) inside the draws' band (the pointwise 5–95 % range of the draws' CDFs, shaded;
 //! their pointwise median, blue), on 200 points spanning every draw's and the measured
 //! values. The curve statistic (mean delay power profile) is drawn as its normalised
-//! cumulative power against delay.
+//! cumulative power against delay. The held-out check ([`HoldoutResult`]) has its table and
+//! lines ([`holdout_html`]) and `check --holdout --out`'s files ([`write_holdout`]).
 
 use super::{html_escape, html_table, plot_err, register_font, Section};
 use crate::check::stats::NAMES;
-use crate::check::CheckResult;
+use crate::check::{CheckResult, HoldoutResult};
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
@@ -176,4 +177,91 @@ pub fn write(dir: &Path, what: &str, r: &CheckResult) -> Result<()> {
         "check_cdfs.png",
     );
     super::write_index(&dir.join("index.html"), "pradar check", &[sec])
+}
+
+/// The held-out check's lines and table (HTML): one row per way with its p-value and
+/// misses, then the combined verdict, for the report's check section and `check
+/// --holdout --out`'s page.
+pub fn holdout_html(r: &HoldoutResult) -> String {
+    let levels: String = (r.ways.iter())
+        .filter_map(|w| {
+            w.levels_error.as_ref().map(|e| {
+                format!(
+                    "<p>The levels could not be read from half {} (its model is the cluster fit's): {}</p>\n",
+                    html_escape(r.halves[w.fitted_on].name),
+                    html_escape(e)
+                )
+            })
+        })
+        .collect();
+    format!(
+        "<p>Held out (<code>pradar check --holdout</code>): the positions cut in walk order into \
+         half {} and half {}; a model fitted on each half by the same chain (CLEAN, K-means, \
+         fit, levels), checked by the same rule ({} draws each) against the other half's \
+         table. It passes only when both ways pass.</p>\n{}{levels}<p><b>{}</b></p>\n",
+        html_escape(&r.halves[0].describe()),
+        html_escape(&r.halves[1].describe()),
+        r.ways[0].result.draws.len(),
+        html_table(&r.table()),
+        html_escape(&r.verdict())
+    )
+}
+
+/// The folder of the way fitted on half `fitted_on` (0: A): `fit_A_check_B`.
+pub fn way_dir(fitted_on: usize) -> String {
+    let n = crate::check::holdout::NAMES;
+    format!("fit_{}_check_{}", n[fitted_on], n[1 - fitted_on])
+}
+
+/// The files `check --holdout --out` writes, relative to its folder: `holdout.md` (the
+/// lines, then the table), `holdout.csv`, `index.html` and, per way, `fit_A_check_B/`
+/// (`model.toml`, the model fitted on A, and `check.csv`, `check.md`, `check_cdfs.png` of
+/// its check on B).
+pub fn holdout_files() -> Vec<String> {
+    let mut v: Vec<String> = ["holdout.md", "holdout.csv", "index.html"]
+        .map(String::from)
+        .to_vec();
+    for k in 0..2 {
+        let d = way_dir(k);
+        for f in ["model.toml", "check.csv", "check.md", "check_cdfs.png"] {
+            v.push(format!("{d}/{f}"));
+        }
+    }
+    v
+}
+
+/// Write [`holdout_files`] into `dir`; `what` names the campaign's table.
+pub fn write_holdout(dir: &Path, what: &str, r: &HoldoutResult) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let t = r.table();
+    crate::io::write_bytes(&dir.join("holdout.csv"), t.to_csv().as_bytes())?;
+    let md = format!("{}\n\n{}", r.lines().join("\n"), t.to_markdown());
+    crate::io::write_bytes(&dir.join("holdout.md"), md.as_bytes())?;
+    let mut sections = vec![Section {
+        title: "Does the model reproduce positions the fit did not see?".into(),
+        html: format!("<p>{}</p>\n{}", html_escape(what), holdout_html(r)),
+    }];
+    for w in &r.ways {
+        let d = way_dir(w.fitted_on);
+        let sub = dir.join(&d);
+        std::fs::create_dir_all(&sub).map_err(|e| Error::io(&sub, e))?;
+        w.model.save(&sub.join("model.toml"))?;
+        let t = w.result.table();
+        crate::io::write_bytes(&sub.join("check.csv"), t.to_csv().as_bytes())?;
+        let md = format!("{}\n\n{}", r.way_line(w), t.to_markdown());
+        crate::io::write_bytes(&sub.join("check.md"), md.as_bytes())?;
+        cdf_plot(&sub.join("check_cdfs.png"), &w.result)?;
+        let (fit, on) = r.pair(w);
+        sections.push(section(
+            &format!("Fitted on {}, checked on {}", fit.describe(), on.describe()),
+            &format!(
+                "the model fitted on half {} ({d}/model.toml) against half {} of {what}",
+                fit.describe(),
+                on.describe()
+            ),
+            &w.result,
+            &format!("{d}/check_cdfs.png"),
+        ));
+    }
+    super::write_index(&dir.join("index.html"), "pradar check --holdout", &sections)
 }

@@ -6,7 +6,8 @@
 //! model file and a simulator's truth folder; gives `out/index.html` with the campaign
 //! summary, the energy heat maps with their MPCs, the clusters, Table 1 (titled with the
 //! campaign's name; a truth column only with a truth), the fitted model with its predictive
-//! check, the OG and EKF maps with their metrics against the layout, the experiments, and
+//! check (and the held-out check: a model fitted on each half of the walk, checked on the
+//! other), the OG and EKF maps with their metrics against the layout, the experiments, and
 //! the stage timings.
 //!
 //! * **Stages that cannot run say why on the page** and the rest still stands: the
@@ -56,7 +57,8 @@ use crate::simulate::has_scene;
 use experiments::run_experiments;
 use gather::obtain;
 use render::{
-    campaign_summary, check_section, explore_section, mpc_summary, table1_section, write_plots,
+    campaign_summary, check_section, explore_section, holdout_html, mpc_summary, table1_section,
+    write_plots,
 };
 use std::collections::HashSet;
 use std::ffi::OsString;
@@ -397,6 +399,15 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
             let check = timings.time("check (20 synth draws)", || {
                 Ok(check_section(job, &s, &a, progress))
             })?;
+            // the held-out check beside the in-sample one, in its section
+            let held_out = timings.time(
+                "held-out check (fit on each half, check on the other)",
+                || Ok(holdout_html(job, &s, progress)),
+            )?;
+            let check = Section {
+                html: check.html + &held_out,
+                ..check
+            };
             Ok((s, a, table1, check))
         })();
         (main, side.join().expect("geometry-only thread"))

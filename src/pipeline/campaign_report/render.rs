@@ -1,5 +1,5 @@
 //! The report's sections: Table 1 with its fit plots and the K_max table, the predictive
-//! check, the heat maps and cluster plots, the campaign and MPC summaries, and the
+//! check (in sample and held out), the heat maps and cluster plots, the campaign and MPC summaries, and the
 //! `pradar explore` section.
 //!
 //! Takes the gathered [`Data`] and the [`Analysis`]; gives each
@@ -82,6 +82,30 @@ pub(super) fn check_section(job: &Job, s: &Data, a: &Analysis, progress: Progres
         title: title.into(),
         html: page::failed("check", &e),
     })
+}
+
+/// The held-out check of the campaign's table ([`crate::check::holdout()`]: a model fitted
+/// on each half of the walk, checked on the other; `out/check/holdout.md` and
+/// `holdout.csv`): its lines and table for the check section, or why it did not run (a
+/// campaign of fewer than 4 positions, a half whose fit fails).
+pub(super) fn holdout_html(job: &Job, s: &Data, progress: Progress) -> String {
+    // a campaign too small to halve is not a failure of the check
+    if let Err(e) = crate::check::holdout::halves(&s.campaign) {
+        return page::not_run(&format!("the held-out check: {e}")) + "\n";
+    }
+    let run = || -> Result<String> {
+        let params = crate::check::CheckParams::default().check()?;
+        let cb = progress("held-out check", 2 * params.draws);
+        let r = crate::check::holdout(&s.campaign, &s.em, &s.energy_path, &params, &*cb)?;
+        let dir = job.out.join("check");
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let t = r.table();
+        crate::io::write_bytes(&dir.join("holdout.csv"), t.to_csv().as_bytes())?;
+        let md = format!("{}\n\n{}", r.lines().join("\n"), t.to_markdown());
+        crate::io::write_bytes(&dir.join("holdout.md"), md.as_bytes())?;
+        Ok(crate::report::check::holdout_html(&r))
+    };
+    run().unwrap_or_else(|e| page::failed("the held-out check", &e) + "\n")
 }
 
 /// Table 1 (`fitted_model.toml`, `table1.md`, the fit plots) beside the simulator's truth

@@ -132,7 +132,8 @@ pub use import::{
 };
 pub use map::{map, Map, MapSummary};
 pub use model::{
-    calibrate, check, posterior_csv, Calibrate, CalibrateSummary, Check, CheckSummary,
+    calibrate, check, holdout, posterior_csv, Calibrate, CalibrateSummary, Check, CheckSummary,
+    Holdout, HoldoutSummary,
 };
 pub use zoo::{zoo, Zoo, ZooSummary};
 

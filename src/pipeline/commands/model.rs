@@ -1,8 +1,11 @@
 //! The model commands: `calibrate` (an energy table and its campaign into a model file by
 //! ABC-SMC, with its posterior CSV and an optional report) and `check` (a model file
 //! against an energy table: the posterior-predictive check, its table and plots, and the
-//! `--fail-below` verdict). Each takes its command struct and gives a summary whose
-//! `Display` is printed.
+//! `--fail-below` verdict). `check --holdout` runs the held-out check instead
+//! ([`holdout`], [`crate::check::holdout`]): no model file is given — a model is fitted on
+//! each half of the walk and checked on the other half, both ways — so `--model` (and
+//! `--posterior`, a posterior of a model) conflict with it. Each takes its command struct
+//! and gives a summary whose `Display` is printed.
 
 use super::{campaign_inputs, refuse, StepProgress};
 use crate::campaign::manifest::Campaign;
@@ -320,6 +323,103 @@ pub fn check(cmd: &Check, progress: StepProgress) -> Result<CheckSummary> {
         crate::report::check::write(o, &what, &result)?;
     }
     Ok(CheckSummary {
+        result,
+        out: cmd.out.clone(),
+    })
+}
+
+/// `pradar check --holdout`: the held-out check of a campaign's energy table
+/// ([`crate::check::holdout()`]).
+#[derive(Debug, Clone)]
+pub struct Holdout {
+    /// Campaign manifest.
+    pub campaign: PathBuf,
+    /// The campaign's measured energy table.
+    pub energy: PathBuf,
+    /// Output folder ([`crate::report::check::holdout_files`]), if any.
+    pub out: Option<PathBuf>,
+    /// Draws, seed, cull (no posterior).
+    pub params: crate::check::CheckParams,
+}
+
+/// What `check --holdout` found.
+#[derive(Debug, Clone)]
+pub struct HoldoutSummary {
+    /// The result.
+    pub result: crate::check::HoldoutResult,
+    /// The output folder, if any.
+    pub out: Option<PathBuf>,
+}
+
+impl fmt::Display for HoldoutSummary {
+    /// Each way's table, then both ways' verdict lines and the combined verdict.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.result;
+        for w in &r.ways {
+            let (fit, on) = r.pair(w);
+            writeln!(
+                f,
+                "fitted on {} ({:.1} s), checked on {} ({:.1} s):\n",
+                fit.describe(),
+                w.fit_s,
+                on.describe(),
+                w.result.wall_s
+            )?;
+            writeln!(f, "{}", w.result.table().to_markdown())?;
+        }
+        write!(f, "{} ({:.1} s)", r.lines().join("\n"), r.wall_s)?;
+        if let Some(o) = &self.out {
+            write!(f, " -> {}", o.display())?;
+        }
+        Ok(())
+    }
+}
+
+impl HoldoutSummary {
+    /// The verdict lines `--quiet` prints: both ways' and the combined one.
+    pub fn verdict(&self) -> String {
+        self.result.lines().join("\n")
+    }
+
+    /// The check against `check --holdout --fail-below P`: the message the command fails
+    /// with when either way's p-value is at or below `fail_below` or its noise floors
+    /// differ, `None` when both pass.
+    pub fn failure(&self, fail_below: f64) -> Option<String> {
+        let r = &self.result;
+        let failed: Vec<String> = (r.ways.iter())
+            .filter(|w| w.result.joint_p <= fail_below || !w.result.noise.agree())
+            .map(|w| r.way_line(w))
+            .collect();
+        (!failed.is_empty()).then(|| {
+            format!(
+                "held-out check failed (--fail-below {fail_below}): {}",
+                failed.join("; ")
+            )
+        })
+    }
+}
+
+/// Run `pradar check --holdout`; writes the files when `out` is set.
+pub fn holdout(cmd: &Holdout, progress: StepProgress) -> Result<HoldoutSummary> {
+    let c = Campaign::load(&cmd.campaign)?;
+    let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
+    let params = cmd.params.check()?;
+    // the halves (and a campaign too small for them) known before the outputs are named
+    crate::check::holdout::halves(&c)?;
+    if let Some(o) = &cmd.out {
+        let mut inputs: Vec<(PathBuf, &str)> = campaign_inputs(&c).into();
+        inputs.push((cmd.energy.clone(), "--energy"));
+        let outputs: Vec<(PathBuf, &str)> = (crate::report::check::holdout_files().iter())
+            .map(|n| (o.join(n), "--out"))
+            .collect();
+        refuse(&outputs, &inputs)?;
+    }
+    let result = crate::check::holdout(&c, &em, &cmd.energy, &params, progress)?;
+    if let Some(o) = &cmd.out {
+        let what = format!("the energy table {}", cmd.energy.display());
+        crate::report::check::write_holdout(o, &what, &result)?;
+    }
+    Ok(HoldoutSummary {
         result,
         out: cmd.out.clone(),
     })

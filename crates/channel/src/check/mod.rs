@@ -77,8 +77,11 @@
 //! the draw counts), `posterior` (the posterior sample and each draw's particle), `noise`
 //! (the noise floors), `rule` (rank p-values, leave-one-out distances, max-T), `result`
 //! (per statistic and the whole check: verdict, table), all re-exported here; this module
-//! runs the check ([`check`]). The table and plots are in [`crate::report::check`].
+//! runs the check ([`check`]); [`holdout`] runs it on positions the fit did not see (fit on
+//! one half of the walk, check on the other, both ways). The table and plots are in
+//! [`crate::report::check`].
 
+pub mod holdout;
 mod noise;
 mod options;
 mod posterior;
@@ -86,6 +89,7 @@ mod result;
 mod rule;
 pub mod stats;
 
+pub use holdout::{holdout, HoldoutResult};
 pub use noise::{noise_floor, NoiseFloors, FLOOR_QUANTILE};
 pub use options::{
     draws_why, CheckParams, CheckValid, ALPHA, DEFAULT_DRAWS, DRAWS_RANGE, MAX_NOISE_DB, MIN_DRAWS,

@@ -43,14 +43,15 @@
 //!
 //! Layout: [`processor`] (window, IFFT, bins, TW/ENBW), [`receiver`] (the white noise per
 //! frequency point the simulator and `synth` draw), [`matrix`] (the table read back,
-//! campaign check), [`writer`] (table and metadata); [`run`] streams a campaign through them
-//! and estimates N0.
+//! campaign check), [`writer`] (table and metadata), [`restrict`] (a matrix of some of its
+//! positions); [`run`] streams a campaign through them and estimates N0.
 
 pub mod calibration;
 pub mod matrix;
 pub mod noise;
 pub mod processor;
 pub mod receiver;
+pub mod restrict;
 pub mod writer;
 
 pub use matrix::{check_campaign, EnergyMatrix, EnergyMeta, EnergySource, EnergyTable};

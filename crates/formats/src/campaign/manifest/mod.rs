@@ -10,6 +10,9 @@
 //! The sub-sections' `check` methods (`Band`, `ArrayConfig`, `Directions`, `Processing`, …)
 //! stay inherent: they validate file contents where the manifest is read, not algorithm
 //! parameters, so they are not [`crate::params::ParamGuard`] sets (no `Valid` wrapper).
+//!
+//! [`Manifest::restrict`] (`restrict`) gives the manifest of some of its positions, every
+//! position-indexed field remapped (the held-out check's halves).
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -44,8 +47,10 @@ pub mod limits {
 }
 use limits::*;
 
+mod restrict;
 mod sections;
 
+pub use restrict::check_keep;
 pub use sections::*;
 
 /// Sweep file format.
