@@ -157,6 +157,17 @@ impl PoseView<'_> {
     }
 }
 
+/// w: half the two-way half-power beamwidth or half the direction step, whichever is
+/// larger, degrees (the rays cast across an MPC's bearing are θ̂ ± w).
+pub(crate) fn beam_half_width_deg(fp: &Footprint, angles_rel_deg: &[f64]) -> f64 {
+    let step = if angles_rel_deg.len() > 1 {
+        (angles_rel_deg[1] - angles_rel_deg[0]).abs()
+    } else {
+        0.0
+    };
+    (fp.half_power_deg() / 2.0).max(step / 2.0)
+}
+
 /// Label every MPC of `mpcs` discrete or diffuse (in place).
 pub(crate) fn label(
     mpcs: &mut [Mpc],
@@ -174,12 +185,7 @@ pub(crate) fn label(
     let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
     let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
     let lc = C0 / m.band.center_hz();
-    let step = if angles_rel_deg.len() > 1 {
-        (angles_rel_deg[1] - angles_rel_deg[0]).abs()
-    } else {
-        0.0
-    };
-    let w = (fp.half_power_deg() / 2.0).max(step / 2.0);
+    let w = beam_half_width_deg(fp, angles_rel_deg);
     let reach = fp.reach_deg(1e-3);
     let dr = params.range_bins * range_m(bin_width_ns);
     // per MPC: Some((ρ, cell)) when on a wall curve
