@@ -6,6 +6,12 @@
 //! four poses 10 m from its west wall on the axis, looking east, so the east wall (110 m
 //! away) and the side walls seen at less than 17.5° from the axis lie beyond R_u while the
 //! kept span (80 ns, 12 m) lies within it.
+//!
+//! Measured (release build): 664 MPCs, 133 folded, 513 diffuse, 18 discrete; the east
+//! wall's echo found 3.2 cm beyond its predicted fold (the chain's delay offset) at every
+//! pose; against the truth 133 folded and far, 0 folded but near, 0 far but not folded.
+//! The bounds asserted (precision ≥ 0.8, recall ≥ 0.5) are the issue's "most", not these
+//! figures.
 
 use crate::common::{chain, corridor, set};
 use pradar::campaign::fold::unambiguous_range_m;
@@ -111,6 +117,27 @@ fn wall_echoes_from_beyond_the_unambiguous_range_are_labelled_folded_and_not_clu
         assert!(near, "{x:?} is not near a folded wall range");
     }
 
+    // against the simulator's per-path truth: the strongest truth ray in each MPC's cell
+    // (same position, within half the direction step in angle and 0.5 ns in delay once the
+    // truth delay is folded modulo T = 1/Δf; the chain's delay offset is 0.2 ns) is from
+    // beyond R_u (`far`) or not
+    let (tp, fp, fneg, near_ok, unseen) =
+        score_against_truth(&dir.join("sim/truth/rays.parquet"), &mpcs, m);
+    eprintln!(
+        "truth: folded and far {tp}, folded but near {fp}, far but not folded {fneg}, \
+         neither {near_ok}, no truth ray in the cell {unseen}"
+    );
+    assert!(
+        tp as f64 >= 0.8 * (tp + fp) as f64,
+        "precision {tp}/{}",
+        tp + fp
+    );
+    assert!(
+        tp as f64 >= 0.5 * (tp + fneg) as f64,
+        "recall {tp}/{}",
+        tp + fneg
+    );
+
     // the clusters contain none of them
     let headings: Vec<f64> = m.poses.iter().map(|p| p.heading_deg).collect();
     let cl = cluster(&mpcs, &headings, &ClusterParams::default().check().unwrap()).unwrap();
@@ -124,4 +151,45 @@ fn wall_echoes_from_beyond_the_unambiguous_range_are_labelled_folded_and_not_clu
     }
     let clustered: usize = cl.positions.iter().map(|p| p.labels.len()).sum();
     assert_eq!(clustered, discrete);
+}
+
+/// Score the fold labels against `rays.parquet`: (folded and far, folded but near, far but
+/// not folded, neither, no truth ray in the cell), the cell as in the test.
+fn score_against_truth(
+    path: &std::path::Path,
+    mpcs: &[pradar::mpc::Mpc],
+    m: &pradar::campaign::manifest::Manifest,
+) -> (usize, usize, usize, usize, usize) {
+    let df = pradar::table::read_parquet(path, None).unwrap();
+    let pos = pradar::table::i64_column(path, &df, "position").unwrap();
+    let a = pradar::table::f64_column(path, &df, "angle_rel_deg").unwrap();
+    let d = pradar::table::f64_column(path, &df, "delay_ns").unwrap();
+    let pw = pradar::table::f64_column_or_nan(path, &df, "power_db")
+        .unwrap()
+        .unwrap();
+    let period_ns = 1e9 / m.band.step_hz();
+    let half_deg = m.directions.step_deg / 2.0;
+    let mut out = (0, 0, 0, 0, 0);
+    for x in mpcs {
+        let best = (0..pos.len())
+            .filter(|&i| pos[i] as usize == x.position && pw[i].is_finite())
+            .filter(|&i| (a[i] - x.angle_rel_deg).abs() <= half_deg)
+            .filter(|&i| {
+                let f = d[i] - (d[i] / period_ns).floor() * period_ns;
+                let e = (f - x.delay_ns).abs();
+                e.min(period_ns - e) <= 0.5
+            })
+            .max_by(|&i, &j| pw[i].total_cmp(&pw[j]));
+        let Some(i) = best else {
+            out.4 += 1;
+            continue;
+        };
+        match (x.component == Component::Folded, d[i] >= period_ns) {
+            (true, true) => out.0 += 1,
+            (true, false) => out.1 += 1,
+            (false, true) => out.2 += 1,
+            (false, false) => out.3 += 1,
+        }
+    }
+    out
 }
