@@ -10,43 +10,59 @@
 //! A sweep of N points stepping by Δf has the unambiguous range R_u = c/(2Δf)
 //! ([`unambiguous_range_m`]): its delay profile is periodic in delay with period 1/Δf, so a
 //! wall echo at range r_w > R_u reads at r_w − k·R_u, the k ≥ 1 that brings it into
-//! [0, R_u). Along an MPC's bearing θ̂ the layout predicts the first-hit wall ranges
-//! r_w(θ) ([`Layout::first_hit`]) over the rays θ ∈ θ̂ ± w (every 0.1°, w as in
-//! [`diffuse`](super::diffuse): half the two-way half-power beamwidth or half the direction
-//! step, whichever is larger). The rays beyond R_u give intervals of true range: a single
-//! ray its own range, two neighbouring rays on the same wall the range between them (a
-//! wall is a straight segment, its range continuous between two rays 0.1° apart; rays on
-//! different walls are not joined, so an occlusion edge does not become a band of all the
-//! ranges behind it). An MPC at range r = c·τ/2 is **folded** when, for some k ≥ 1,
+//! [0, R_u). An MPC at pose p, bearing θ̂, range r = c·τ/2 is **folded** when, for some
+//! k ≥ 1, r + k·R_u lies within Δr of a far wall echo the layout predicts along the beam
+//! θ̂ ± w (w as in [`diffuse`](super::diffuse): half the two-way half-power beamwidth or half
+//! the direction step, whichever is larger; Δr = `range_bins` bins of c·T_b/2, the diffuse
+//! stage's tolerance; the test is cyclic, an MPC just above 0 matches a fold just below
+//! R_u). Two kinds of far echo count:
 //!
-//!   r + k·R_u ∈ [lo − Δr, hi + Δr]     for one such interval [lo, hi], hi > R_u,
+//! 1. *compact* ([`Fold::far_points_m`]): a wall's specular point (the foot of the
+//!    perpendicular from the pose, on the segment) and each wall end point (corners and
+//!    edges), beyond R_u, their bearing within the beam and no wall nearer along it. These
+//!    are point-like and strong (the specular return of a wall seen at normal incidence, a
+//!    corner's dihedral), so they are labelled on the geometry alone. Vertices are cast
+//!    apart from the walls' rays because a corner is a scatterer of its own, not only the
+//!    end of its walls' curves.
+//! 2. *continuum*: the wall's diffuse return. Along the rays θ ∈ θ̂ ± w (every 0.1°) the
+//!    first hits ([`Layout::first_hit`]) beyond R_u give intervals of true range
+//!    ([`Fold::far_ranges_m`]: a ray its own range, two neighbouring rays on the same wall
+//!    the range between them; rays on different walls are not joined, so an occlusion edge
+//!    does not become a band of every range behind it). An MPC with r + k·R_u in
+//!    [lo − Δr, hi + Δr] of one of them is on the folded wall curve; it is folded when also
+//!    at the diffuse level: E / E₁ᶠ ≤ σ̂·10^(`discrete_db`/10), E₁ᶠ the diffuse stage's
+//!    unit-wall energy E₁ in the MPC's cell summed over the rays whose wall lies beyond
+//!    R_u only, each at its delay folded to the copy nearest the MPC's, and σ̂ the diffuse
+//!    level the diffuse stage read (without one — the stage off or no dense component —
+//!    only the compact folds are labelled). The level test matters: a wall seen at grazing
+//!    incidence spreads over more range within the beam than R_u, so its folded curve
+//!    covers every range and, without the level, every MPC of such a beam (the room's own
+//!    objects at 20–40 dB above the folded continuum) would be called folded.
 //!
-//! (lo taken at least R_u: only the part of a wall beyond R_u folds), Δr = `range_bins`
-//! bins of c·T_b/2, the diffuse stage's tolerance. The test is cyclic: an MPC just above 0
-//! matches a fold just below R_u.
-//!
-//! Wall vertices are not cast apart: a visible corner is the end of a wall segment whose
-//! rays reach it within the 0.1° ray step, so its folded range is already inside its wall's
-//! interval; an occluded one sends no first-order echo. Multi-bounce paths and objects
-//! beyond R_u are not predicted (the layout has no objects' levels and a multi-bounce
-//! path's range is not a first hit); they stay as the earlier stages labelled them.
+//! Not predicted: clutter and objects beyond R_u (the layout has neither their places nor
+//! their levels) and multi-bounce paths (their range is not a first hit); they stay as the
+//! earlier stages labelled them, and are clustered when discrete.
 //!
 //! Precedence: a folded echo is not at its true range, so neither its delay nor its power
 //! belongs to a cluster at that range, nor to the diffuse continuum there. **Folded wins**
 //! over both labels: a discrete or diffuse MPC that matches is relabelled folded (the
 //! summary counts the diffuse ones moved, [`FoldSummary::from_diffuse`]); the diffuse level
 //! σ̂ is read before the fold, the folded among its on-curve MPCs moving its median only by
-//! their share. Its weakness: a true near echo (a corner, an object) within Δr of a
-//! predicted fold is called folded.
+//! their share. Its weakness: a true near echo within Δr of a compact fold is called
+//! folded. Measurements against the simulator's per-path truth are in `tests/fold.rs` and
+//! `docs/zoo.md` ("Fold").
 //!
 //! The stage runs only when the layout reaches beyond R_u from some pose ([`Fold::new`]:
 //! the reach of [`Reach`], to the walls' end points through walls); otherwise it touches no
 //! MPC, and the MPCs of a campaign within range are those of the chain without it.
 
+use super::diffuse::{unit_wall_energy, Cell};
+use super::footprint::Footprint;
 use super::{Component, Mpc};
 use crate::campaign::fold::{unambiguous_range_m, Reach};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, Manifest, Pose};
+use crate::units::wrap_deg;
 use geo::Coord;
 use rayon::prelude::*;
 
@@ -149,15 +165,63 @@ impl Fold {
         })
     }
 
-    /// Label folded every MPC of `mpcs` (in place) whose range folds from a wall beyond R_u
-    /// along its bearing ± `w_deg`, within `tolerance_m` (module docs); `poses` by position.
-    pub fn label(
+    /// The true ranges beyond R_u of the compact far echoes seen along the rays
+    /// `deg ± w_deg` from `at`: each wall's specular point (the foot of the perpendicular
+    /// from `at`, on the segment) and each wall end point, when its bearing lies within the
+    /// beam and no wall hides it (module docs).
+    pub fn far_points_m(&self, at: Coord<f64>, deg: f64, w_deg: f64) -> Vec<f64> {
+        let ru = self.unambiguous_range_m;
+        let mut out = Vec::new();
+        let mut consider = |p: Coord<f64>| {
+            let (dx, dy) = (p.x - at.x, p.y - at.y);
+            let dist = dx.hypot(dy);
+            if dist <= ru {
+                return;
+            }
+            let bearing = dy.atan2(dx).to_degrees();
+            if wrap_deg(bearing - deg).abs() > w_deg {
+                return;
+            }
+            // visible: the first wall along the bearing is not nearer (a ray through a
+            // vertex may slip past both of its walls to a farther one)
+            let seen = (self.layout.first_hit(at, bearing.to_radians()))
+                .is_none_or(|h| h.0 >= dist - 1e-6 * dist - 1e-3);
+            if seen {
+                out.push(dist);
+            }
+        };
+        for w in &self.layout.walls {
+            let (s, e) = (w.line.start, w.line.end);
+            let d = e - s;
+            let l2 = d.x * d.x + d.y * d.y;
+            if l2 > 0.0 {
+                let t = ((at.x - s.x) * d.x + (at.y - s.y) * d.y) / l2;
+                if (0.0..=1.0).contains(&t) {
+                    consider(Coord {
+                        x: s.x + t * d.x,
+                        y: s.y + t * d.y,
+                    });
+                }
+            }
+            consider(s);
+            consider(e);
+        }
+        out
+    }
+
+    /// Label folded every MPC of `mpcs` (in place) that is a compact fold (a specular
+    /// point or a wall end point beyond R_u within `w_deg` of its bearing, within
+    /// `tolerance_m`), or a continuum fold (on the folded wall curve and at most `level`'s
+    /// limit over the folded walls' unit energy); `poses` by position (module docs).
+    pub(crate) fn label(
         &self,
         mpcs: &mut [Mpc],
         poses: &[Pose],
         w_deg: f64,
         tolerance_m: f64,
+        level: Option<&FoldLevel>,
     ) -> FoldSummary {
+        let period_ns = crate::units::delay_ns(self.unambiguous_range_m);
         let folded: Vec<bool> = mpcs
             .par_iter()
             .map(|x| {
@@ -168,8 +232,35 @@ impl Fold {
                     x: pose.x_m,
                     y: pose.y_m,
                 };
+                let r = crate::units::range_m(x.delay_ns);
+                let points: Vec<(f64, f64)> = (self.far_points_m(at, x.angle_global_deg, w_deg))
+                    .into_iter()
+                    .map(|p| (p, p))
+                    .collect();
+                if self.folds_onto(r, &points, tolerance_m) {
+                    return true;
+                }
+                let Some(level) = level else {
+                    return false;
+                };
                 let far = self.far_ranges_m(at, x.angle_global_deg, w_deg);
-                self.folds_onto(crate::units::range_m(x.delay_ns), &far, tolerance_m)
+                if !self.folds_onto(r, &far, tolerance_m) {
+                    return false;
+                }
+                let Some(&beam) = level.angles_rel_deg.get(x.direction) else {
+                    return false;
+                };
+                let cell = Cell {
+                    fp: level.fp,
+                    x,
+                    beam,
+                    reach: level.reach_deg,
+                    bin_width_ns: level.bin_width_ns,
+                    gl: level.gl,
+                };
+                let e1 =
+                    unit_wall_energy(&self.layout, at, pose.heading_deg, &cell, Some(period_ns));
+                e1 > 0.0 && 10f64.powf(x.power_db / 10.0) / e1 <= level.limit_m2_per_m
             })
             .collect();
         let mut out = FoldSummary {
@@ -188,6 +279,23 @@ impl Fold {
         }
         out
     }
+}
+
+/// The level test of the continuum folds: the diffuse stage's footprint, beams, bin width,
+/// G₀²λ², rays' reach and limit σ̂·10^(`discrete_db`/10).
+pub(crate) struct FoldLevel<'a> {
+    /// The footprint (two-way pattern and window kernel).
+    pub(crate) fp: &'a Footprint,
+    /// The beams' angles relative to the heading, degrees.
+    pub(crate) angles_rel_deg: &'a [f64],
+    /// The energy table's bin width, ns.
+    pub(crate) bin_width_ns: f64,
+    /// G₀²λ².
+    pub(crate) gl: f64,
+    /// The rays summed, degrees either side of the beam.
+    pub(crate) reach_deg: f64,
+    /// σ̂·10^(`discrete_db`/10), m²/m.
+    pub(crate) limit_m2_per_m: f64,
 }
 
 #[cfg(test)]
@@ -267,7 +375,7 @@ mod tests {
             mpc(folded_m, 0.0),
         ];
         mpcs[5].component = Component::Diffuse;
-        let s = f.label(&mut mpcs, &m.poses, w_deg, tol_m);
+        let s = f.label(&mut mpcs, &m.poses, w_deg, tol_m, None);
         let got: Vec<Component> = mpcs.iter().map(|x| x.component).collect();
         use Component::*;
         assert_eq!(
@@ -302,6 +410,36 @@ mod tests {
         let edge = [(2.0 * ru - 0.005, 2.0 * ru - 0.005)];
         assert!(f.folds_onto(0.004, &edge, 0.01));
         assert!(!f.folds_onto(0.02, &edge, 0.01));
+    }
+
+    /// Without a diffuse level only the compact folds count: the hall's north-east corner
+    /// (55.15 m at 4.16°) folds, the north wall's continuum at x = 50 m (45.18 m at 5.08°)
+    /// does not, though it lies on the folded wall curve.
+    #[test]
+    fn a_far_corner_folds_and_the_continuum_needs_the_level() {
+        let m = manifest();
+        let f = Fold::new(&m, layout(HALL)).unwrap();
+        let ru = f.unambiguous_range_m();
+        let corner_m = 55f64.hypot(4.0);
+        let corner_deg = 4f64.atan2(55.0).to_degrees();
+        // the north wall at x = 50 m
+        let wall_deg = 4f64.atan2(45.0).to_degrees();
+        let wall_m = 45f64.hypot(4.0);
+        let at = Coord { x: 5.0, y: 0.0 };
+        let points = f.far_points_m(at, corner_deg, 1.0);
+        assert!(
+            points.iter().any(|p| (p - corner_m).abs() < 1e-9),
+            "{points:?}"
+        );
+        let mut mpcs = vec![
+            mpc(corner_m - 2.0 * ru, corner_deg),
+            mpc(wall_m - 2.0 * ru, wall_deg),
+        ];
+        assert!(f.folds_onto(wall_m - 2.0 * ru, &f.far_ranges_m(at, wall_deg, 0.5), 0.05));
+        let s = f.label(&mut mpcs, &m.poses, 0.5, 0.05, None);
+        assert_eq!(mpcs[0].component, Component::Folded);
+        assert_eq!(mpcs[1].component, Component::Discrete);
+        assert_eq!(s.folded, 1);
     }
 
     /// A room within R_u from every pose: no fold, and nothing labelled.

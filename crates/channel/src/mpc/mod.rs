@@ -344,12 +344,33 @@ pub fn extract_labelled(
         None => DiffuseSummary::none(),
     };
     let fold = match (&fold, &fp) {
-        (Some(f), Some(fp)) if !mpcs.is_empty() => f.label(
-            &mut mpcs,
-            &c.manifest.poses,
-            diffuse::beam_half_width_deg(fp, &em.angles_rel_deg),
-            params.diffuse.range_bins * crate::units::range_m(em.meta.bin_width_ns),
-        ),
+        (Some(f), Some(fp)) if !mpcs.is_empty() => {
+            // the continuum folds need the diffuse level; without it only the compact ones
+            let m = &c.manifest;
+            let level = if summary.level_m2_per_m.is_finite() {
+                let pattern = crate::pattern::ArrayPattern::new(m.array, m.band.center_hz())?;
+                let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
+                let lc = crate::units::C0 / m.band.center_hz();
+                Some(fold::FoldLevel {
+                    fp,
+                    angles_rel_deg: &em.angles_rel_deg,
+                    bin_width_ns: em.meta.bin_width_ns,
+                    gl: g0 * g0 * lc * lc,
+                    reach_deg: fp.reach_deg(1e-3),
+                    limit_m2_per_m: summary.level_m2_per_m
+                        * 10f64.powf(params.diffuse.discrete_db / 10.0),
+                })
+            } else {
+                None
+            };
+            f.label(
+                &mut mpcs,
+                &m.poses,
+                diffuse::beam_half_width_deg(fp, &em.angles_rel_deg),
+                params.diffuse.range_bins * crate::units::range_m(em.meta.bin_width_ns),
+                level.as_ref(),
+            )
+        }
         _ => FoldSummary::none(),
     };
     Ok((
