@@ -1,6 +1,6 @@
 //! pradar's channel layer: from energy matrices to a fitted, checked channel model.
 //!
-//! [`mpc`] (2-D CLEAN or peaks, diffuse wall returns labelled) → [`cluster`] (K-means, K per
+//! [`mpc`] (2-D CLEAN or peaks, diffuse and folded wall returns labelled) → [`cluster`] (K-means, K per
 //! position) → [`fit`] (Table 1: MLEs, block-bootstrap intervals, the layout's levels) →
 //! [`model`] (the model file drawn: rays, walls, `synth`) → [`check`] (the predictive check);
 //! [`chain`] runs extraction, clustering and the fit in memory, as every caller does;
