@@ -374,7 +374,7 @@ pub(super) fn mpc_summary(
         (
             "folded MPCs (kept out of the clusters)".to_string(),
             format!(
-                "{folded}: wall echoes the layout predicts from beyond the unambiguous range {:.1} m",
+                "{folded}: wall echoes from beyond the unambiguous range {:.1} m",
                 crate::campaign::fold::unambiguous_range_m(&m.band)
             ),
         )
