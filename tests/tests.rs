@@ -21,6 +21,7 @@ mod explore;
 mod fit_cli;
 mod fit_coverage;
 mod fit_estimators;
+mod fold;
 #[cfg(feature = "fuzz")]
 mod fuzz;
 mod import;

@@ -385,7 +385,7 @@ pub struct ExtractArgs {
         allow_negative_numbers = true
     )]
     pub dynamic_range_db: f64,
-    /// Do not label diffuse wall returns (every MPC discrete).
+    /// Do not label diffuse wall returns (every MPC discrete, but the folded wall echoes).
     #[arg(long)]
     pub no_diffuse: bool,
     /// An MPC on a wall's curve this far above the diffuse level is discrete, dB.

@@ -1,10 +1,10 @@
 //! pradar's channel layer: from energy matrices to a fitted, checked channel model.
 //!
-//! [`mpc`] (2-D CLEAN or peaks, diffuse wall returns labelled) → [`cluster`] (K-means, K per
-//! position) → [`fit`] (Table 1: MLEs, block-bootstrap intervals, the layout's levels) →
-//! [`model`] (the model file drawn: rays, walls, `synth`) → [`check`] (the predictive check);
-//! [`chain`] runs extraction, clustering and the fit in memory, as every caller does;
-//! [`calibrate`] (ABC-SMC with `synth`) fits the model by simulation.
+//! [`mpc`] (2-D CLEAN or peaks, diffuse and folded wall returns labelled) → [`cluster`]
+//! (K-means, K per position) → [`fit`] (Table 1: MLEs, block-bootstrap intervals, the
+//! layout's levels) → [`model`] (the model file drawn: rays, walls, `synth`) → [`check`]
+//! (the predictive check); [`chain`] runs extraction, clustering and the fit in memory, as
+//! every caller does; [`calibrate`] (ABC-SMC with `synth`) fits the model by simulation.
 //!
 //! Takes the formats (`pradar-formats`), the processing (`pradar-radar`) and the simulator's
 //! shared draws (`pradar-simulate`); used by the mappers and the `pradar` crate.

@@ -185,7 +185,8 @@ pub(super) fn write_plots(s: &Data, a: &Analysis, out: &Path, progress: Progress
         let heat = out.join(format!("energy_p{p:02}.png"));
         let label = s.campaign.manifest.label(p);
         report::energy_heatmap(em, p, &label, &heat, -60.0, &marks)?;
-        // the position's MPCs with their labels local to the position (None: diffuse)
+        // the position's MPCs with their labels local to the position (None: diffuse or
+        // folded)
         let mut labels = clustering.positions[p].labels.iter();
         let (pts, local): (Vec<Point3>, Vec<Option<usize>>) = mpcs
             .iter()
@@ -193,7 +194,7 @@ pub(super) fn write_plots(s: &Data, a: &Analysis, out: &Path, progress: Progress
             .map(|m| {
                 let l = match m.component {
                     crate::mpc::Component::Discrete => labels.next().copied(),
-                    crate::mpc::Component::Diffuse => None,
+                    crate::mpc::Component::Diffuse | crate::mpc::Component::Folded => None,
                 };
                 ((m.angle_rel_deg, m.delay_ns, m.power_db), l)
             })
@@ -201,9 +202,9 @@ pub(super) fn write_plots(s: &Data, a: &Analysis, out: &Path, progress: Progress
         report::mpc_clusters_plot(
             &out.join(format!("clusters_p{p:02}.png")),
             &format!(
-                "position {label}: {} MPCs ({} diffuse) in {} clusters",
+                "position {label}: {} MPCs ({}) in {} clusters",
                 pts.len(),
-                local.iter().filter(|l| l.is_none()).count(),
+                unclustered(mpcs.iter().filter(|m| m.position == p)),
                 clustering.positions[p].k
             ),
             &pts,
@@ -335,6 +336,24 @@ pub(super) fn campaign_summary(s: &Data) -> Vec<(String, String)> {
     rows
 }
 
+/// The unclustered among `mpcs`: "N diffuse", with ", M folded" when some are.
+fn unclustered<'a>(mpcs: impl Iterator<Item = &'a crate::mpc::Mpc>) -> String {
+    use crate::mpc::Component;
+    let (mut diffuse, mut folded) = (0, 0);
+    for m in mpcs {
+        match m.component {
+            Component::Diffuse => diffuse += 1,
+            Component::Folded => folded += 1,
+            Component::Discrete => {}
+        }
+    }
+    if folded > 0 {
+        format!("{diffuse} diffuse, {folded} folded")
+    } else {
+        format!("{diffuse} diffuse")
+    }
+}
+
 /// The MPC and cluster summary: counts, files and K per position.
 pub(super) fn mpc_summary(
     a: &Analysis,
@@ -347,7 +366,20 @@ pub(super) fn mpc_summary(
             None => c.k.to_string(),
         })
         .collect();
-    vec![
+    let folded = (a.mpcs.iter())
+        .filter(|x| x.component == crate::mpc::Component::Folded)
+        .count();
+    // the fold stage's count, beside the fold warning's figures (shown only when it labelled)
+    let fold = (folded > 0).then(|| {
+        (
+            "folded MPCs (kept out of the clusters)".to_string(),
+            format!(
+                "{folded}: wall echoes from beyond the unambiguous range {:.1} m",
+                crate::campaign::fold::unambiguous_range_m(&m.band)
+            ),
+        )
+    });
+    let mut rows = vec![
         (
             "MPCs".to_string(),
             format!(
@@ -367,5 +399,7 @@ pub(super) fn mpc_summary(
             "K per position (cross-validated criterion)".to_string(),
             ks.join(", "),
         ),
-    ]
+    ];
+    rows.extend(fold);
+    rows
 }

@@ -35,6 +35,8 @@ pub struct ExtractSummary {
     pub mpcs: usize,
     /// Of which diffuse.
     pub diffuse: usize,
+    /// Of which folded (wall echoes from beyond the unambiguous range).
+    pub folded: usize,
     /// Positions of the energy table.
     pub positions: usize,
     /// The MPC Parquet written.
@@ -43,9 +45,16 @@ pub struct ExtractSummary {
 
 impl fmt::Display for ExtractSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // the folded count only when the fold stage labelled some (outputs within range
+        // read as before)
+        let folded = if self.folded > 0 {
+            format!(", {} folded", self.folded)
+        } else {
+            String::new()
+        };
         write!(
             f,
-            "{} MPCs ({} diffuse) from {} positions -> {}",
+            "{} MPCs ({} diffuse{folded}) from {} positions -> {}",
             self.mpcs,
             self.diffuse,
             self.positions,
@@ -66,18 +75,19 @@ pub fn extract(cmd: &Extract) -> Result<ExtractSummary> {
     // checked here, where the energy file's name is known, so a mismatch names it
     crate::energy::check_campaign(&c, em, &cmd.energy)?;
     em.meta.check_noise(&cmd.energy)?;
-    let (mpcs, diffuse) = crate::mpc::extract_labelled(&table, &c, &cmd.params.check()?)?;
+    let (mpcs, labels) = crate::mpc::extract_labelled(&table, &c, &cmd.params.check()?)?;
     let mut meta = crate::mpc::table_metadata(em, &c, &cmd.params);
     meta.push((
         "diffuse_level_m2_per_m".into(),
-        format!("{:.17e}", diffuse.level_m2_per_m),
+        format!("{:.17e}", labels.diffuse.level_m2_per_m),
     ));
     // the energy table, for `fit`'s levels (through `cluster`), relative to the output's folder
     meta.extend(crate::cluster::io::energy_entry(&cmd.out, &cmd.energy));
     crate::mpc::write_mpcs(&cmd.out, &mpcs, meta)?;
     Ok(ExtractSummary {
         mpcs: mpcs.len(),
-        diffuse: diffuse.diffuse,
+        diffuse: labels.diffuse(),
+        folded: labels.fold.folded,
         positions: em.positions,
         out: cmd.out.clone(),
     })

@@ -1,8 +1,8 @@
 //! Parquet output of a clustering (DESIGN §3): the clustered MPC table (the MPC columns plus
-//! `cluster_id`, −1 for diffuse MPCs) and the per-cluster summary `<stem>_summary.parquet`, both with
-//! `schema_version` 1. The clustered table also carries the MPC table's `energy` key (the
-//! energy table it came from, [`ENERGY_KEY`]) when given ([`write_with()`]): `fit` reads the
-//! model's levels from that table.
+//! `cluster_id`, −1 for diffuse and folded MPCs) and the per-cluster summary
+//! `<stem>_summary.parquet`, both with `schema_version` 1. The clustered table also carries
+//! the MPC table's `energy` key (the energy table it came from, [`ENERGY_KEY`]) when given
+//! ([`write_with()`]): `fit` reads the model's levels from that table.
 //!
 //! The key names the energy table relative to the folder of the table that carries it
 //! ([`energy_entry`]; absolute only when no relative path exists, another drive say), and a

@@ -98,8 +98,8 @@ pub struct PositionClustering {
 pub struct Clustering {
     /// MPCs in input order.
     pub mpcs: Vec<Mpc>,
-    /// Campaign-wide cluster id per MPC (None for a diffuse MPC: the dense component is not
-    /// clustered).
+    /// Campaign-wide cluster id per MPC (None for a diffuse or folded MPC: the dense
+    /// component and the echoes from beyond the unambiguous range are not clustered).
     pub cluster_id: Vec<Option<usize>>,
     /// Per-cluster summaries.
     pub summary: Vec<ClusterSummary>,

@@ -157,6 +157,17 @@ impl PoseView<'_> {
     }
 }
 
+/// w: half the two-way half-power beamwidth or half the direction step, whichever is
+/// larger, degrees (the rays cast across an MPC's bearing are θ̂ ± w).
+pub(crate) fn beam_half_width_deg(fp: &Footprint, angles_rel_deg: &[f64]) -> f64 {
+    let step = if angles_rel_deg.len() > 1 {
+        (angles_rel_deg[1] - angles_rel_deg[0]).abs()
+    } else {
+        0.0
+    };
+    (fp.half_power_deg() / 2.0).max(step / 2.0)
+}
+
 /// Label every MPC of `mpcs` discrete or diffuse (in place).
 pub(crate) fn label(
     mpcs: &mut [Mpc],
@@ -174,12 +185,7 @@ pub(crate) fn label(
     let pattern = ArrayPattern::new(m.array, m.band.center_hz())?;
     let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
     let lc = C0 / m.band.center_hz();
-    let step = if angles_rel_deg.len() > 1 {
-        (angles_rel_deg[1] - angles_rel_deg[0]).abs()
-    } else {
-        0.0
-    };
-    let w = (fp.half_power_deg() / 2.0).max(step / 2.0);
+    let w = beam_half_width_deg(fp, angles_rel_deg);
     let reach = fp.reach_deg(1e-3);
     let dr = params.range_bins * range_m(bin_width_ns);
     // per MPC: Some((ρ, cell)) when on a wall curve
@@ -269,25 +275,63 @@ impl PoseView<'_> {
         bin_width_ns: f64,
         gl: f64,
     ) -> f64 {
-        let n = (2.0 * reach / RAY_STEP_DEG).ceil() as usize;
-        let dphi = RAY_STEP_DEG.to_radians();
-        let k4 = (4.0 * PI).powi(3);
-        (0..=n)
-            .map(|i| {
-                let rel = beam - reach + i as f64 * RAY_STEP_DEG;
-                let Some((r, _cos)) = self.range(self.heading_deg + rel) else {
-                    return 0.0;
-                };
-                let wgt = fp.w(rel, x.direction, beam);
-                if wgt <= 0.0 {
+        let cell = Cell {
+            fp,
+            x,
+            beam,
+            reach,
+            bin_width_ns,
+            gl,
+        };
+        unit_wall_energy(self.layout, self.at, self.heading_deg, &cell, None)
+    }
+}
+
+/// An MPC's cell as [`unit_wall_energy`] reads it: the footprint, the MPC, its beam (deg
+/// relative), the rays' reach (deg), the bin width (ns) and G₀²λ².
+pub(crate) struct Cell<'a> {
+    pub(crate) fp: &'a Footprint,
+    pub(crate) x: &'a Mpc,
+    pub(crate) beam: f64,
+    pub(crate) reach: f64,
+    pub(crate) bin_width_ns: f64,
+    pub(crate) gl: f64,
+}
+
+/// E₁ of the module docs for the pose at `at` with heading `heading_deg`; with
+/// `fold_period_ns` = Some(T) only the rays whose wall lies beyond the unambiguous range
+/// (delay ≥ T) count, each at its delay folded modulo T to the copy nearest the MPC's.
+pub(crate) fn unit_wall_energy(
+    layout: &Layout,
+    at: Coord<f64>,
+    heading_deg: f64,
+    c: &Cell,
+    fold_period_ns: Option<f64>,
+) -> f64 {
+    let n = (2.0 * c.reach / RAY_STEP_DEG).ceil() as usize;
+    let dphi = RAY_STEP_DEG.to_radians();
+    let k4 = (4.0 * PI).powi(3);
+    (0..=n)
+        .map(|i| {
+            let rel = c.beam - c.reach + i as f64 * RAY_STEP_DEG;
+            let Some((r, _, _cos)) = layout.first_hit(at, (heading_deg + rel).to_radians()) else {
+                return 0.0;
+            };
+            let wgt = c.fp.w(rel, c.x.direction, c.beam);
+            if wgt <= 0.0 {
+                return 0.0;
+            }
+            let mut tau = crate::units::delay_ns(r);
+            if let Some(t) = fold_period_ns {
+                if tau < t {
                     return 0.0;
                 }
-                let tau_bins = crate::units::delay_ns(r) / bin_width_ns;
-                let k = fp.k(tau_bins - x.bin as f64);
-                gl * wgt * k * r * dphi / (k4 * r.powi(4))
-            })
-            .sum()
-    }
+                tau -= ((tau - c.x.delay_ns) / t).round() * t;
+            }
+            let k = c.fp.k(tau / c.bin_width_ns - c.x.bin as f64);
+            c.gl * wgt * k * r * dphi / (k4 * r.powi(4))
+        })
+        .sum()
 }
 
 #[cfg(test)]

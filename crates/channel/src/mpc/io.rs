@@ -180,7 +180,7 @@ pub fn read_mpcs(path: &Path) -> Result<Vec<Mpc>> {
                     Error::input(
                         path,
                         format!(
-                            "column `component` row {i}: {:?} (expected discrete or diffuse)",
+                            "column `component` row {i}: {:?} (expected discrete, diffuse or folded)",
                             c[i]
                         ),
                     )
@@ -257,8 +257,10 @@ mod tests {
             unit_db: -95.5,
             incidence_deg: 30.0,
         });
-        write_mpcs(&p, &[m.clone(), one_mpc()], vec![]).unwrap();
-        assert_eq!(read_mpcs(&p).unwrap(), vec![m, one_mpc()]);
+        let mut f = one_mpc();
+        f.component = Component::Folded;
+        write_mpcs(&p, &[m.clone(), one_mpc(), f.clone()], vec![]).unwrap();
+        assert_eq!(read_mpcs(&p).unwrap(), vec![m, one_mpc(), f]);
         // a table of the original ten columns: discrete, no wall
         let mut df = mpc_frame(&p, &[one_mpc()]).unwrap();
         for c in ["component", "wall_unit_db", "incidence_deg"] {

@@ -38,12 +38,14 @@
 pub mod clean;
 pub mod diffuse;
 pub mod edge;
+pub mod fold;
 pub mod footprint;
 pub mod io;
 pub mod params;
 pub mod peaks;
 
 pub use diffuse::{DiffuseParams, DiffuseSummary, DiffuseValid};
+pub use fold::{Fold, FoldSummary};
 pub use io::{mpc_frame, read_mpcs, read_sector_deg, table_metadata, write_mpcs, MPC_COLUMNS};
 pub use params::{ExtractParams, ExtractValid, Method};
 
@@ -77,8 +79,9 @@ pub struct Mpc {
     pub direction: usize,
     /// Bin index of the peak cell.
     pub bin: usize,
-    /// Discrete or diffuse (dense wall return); [`Component::Discrete`] until labelled by
-    /// [`diffuse`].
+    /// Discrete, diffuse (dense wall return) or folded (a wall echo from beyond the
+    /// unambiguous range); [`Component::Discrete`] until labelled by [`diffuse`] and
+    /// [`fold`].
     pub component: Component,
     /// The wall curve the MPC lies on, when it does ([`diffuse`]).
     pub wall: Option<WallCell>,
@@ -102,6 +105,9 @@ pub enum Component {
     Discrete,
     /// A diffuse wall return (the dense component).
     Diffuse,
+    /// A wall echo from beyond the sweep's unambiguous range, folded into the kept bins
+    /// ([`fold`]): not at its true range, kept out of the clusters and the fits.
+    Folded,
 }
 
 impl Component {
@@ -110,6 +116,7 @@ impl Component {
         match self {
             Component::Discrete => "discrete",
             Component::Diffuse => "diffuse",
+            Component::Folded => "folded",
         }
     }
 
@@ -118,6 +125,7 @@ impl Component {
         match s {
             "discrete" => Some(Component::Discrete),
             "diffuse" => Some(Component::Diffuse),
+            "folded" => Some(Component::Folded),
             _ => None,
         }
     }
@@ -259,7 +267,7 @@ pub fn auto_min_delay_ns(em: &EnergyMatrix) -> f64 {
 }
 
 /// Extract MPCs from every position (positions in parallel, results in position order),
-/// each labelled discrete or diffuse by [`diffuse`].
+/// each labelled discrete or diffuse by [`diffuse`], then folded by [`fold`].
 pub fn extract(em: &EnergyMatrix, c: &Campaign, params: &ExtractValid) -> Result<Vec<Mpc>> {
     extract_labelled(em, c, params).map(|x| x.0)
 }
@@ -270,13 +278,30 @@ fn load_positions(nd: usize, nb: usize) -> usize {
     (4 * crate::energy::writer::group_positions(nd, nb)).max(2 * rayon::current_num_threads())
 }
 
-/// [`extract`], with what the diffuse stage found, from any [`EnergySource`] (a whole
-/// matrix, or a table read a few positions at a time: the MPCs do not depend on which).
+/// What the labelling stages found ([`extract_labelled`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Labels {
+    /// The diffuse stage's summary (its counts before the fold relabels some).
+    pub diffuse: DiffuseSummary,
+    /// The fold stage's summary ([`FoldSummary::none`] when nothing can fold).
+    pub fold: FoldSummary,
+}
+
+impl Labels {
+    /// MPCs labelled diffuse after the fold.
+    pub fn diffuse(&self) -> usize {
+        self.diffuse.diffuse - self.fold.from_diffuse
+    }
+}
+
+/// [`extract`], with what the diffuse and fold stages found, from any [`EnergySource`] (a
+/// whole matrix, or a table read a few positions at a time: the MPCs do not depend on
+/// which).
 pub fn extract_labelled(
     src: &dyn EnergySource,
     c: &Campaign,
     params: &ExtractValid,
-) -> Result<(Vec<Mpc>, DiffuseSummary)> {
+) -> Result<(Vec<Mpc>, Labels)> {
     let em = src.header();
     crate::energy::check_campaign(c, em, &c.path)?;
     let floor = em.meta.noise_mean();
@@ -286,7 +311,9 @@ pub fn extract_labelled(
             "energy table has no positive noise estimate",
         ));
     }
-    let fp = if params.method == Method::Clean || params.diffuse.enabled {
+    // the fold stage runs whatever `diffuse.enabled` says; it needs the beam's width
+    let fold = Fold::of(c);
+    let fp = if params.method == Method::Clean || params.diffuse.enabled || fold.is_some() {
         Some(Footprint::new(c, em, params.kernel_bins)?)
     } else {
         None
@@ -316,5 +343,41 @@ pub fn extract_labelled(
         )?,
         None => DiffuseSummary::none(),
     };
-    Ok((mpcs, summary))
+    let fold = match (&fold, &fp) {
+        (Some(f), Some(fp)) if !mpcs.is_empty() => {
+            // the continuum folds need the diffuse level; without it only the compact ones
+            let m = &c.manifest;
+            let level = if summary.level_m2_per_m.is_finite() {
+                let pattern = crate::pattern::ArrayPattern::new(m.array, m.band.center_hz())?;
+                let g0 = pattern.gain(0.0, 0.0, m.band.center_hz());
+                let lc = crate::units::C0 / m.band.center_hz();
+                Some(fold::FoldLevel {
+                    fp,
+                    angles_rel_deg: &em.angles_rel_deg,
+                    bin_width_ns: em.meta.bin_width_ns,
+                    gl: g0 * g0 * lc * lc,
+                    reach_deg: fp.reach_deg(1e-3),
+                    limit_m2_per_m: summary.level_m2_per_m
+                        * 10f64.powf(params.diffuse.discrete_db / 10.0),
+                })
+            } else {
+                None
+            };
+            f.label(
+                &mut mpcs,
+                &m.poses,
+                diffuse::beam_half_width_deg(fp, &em.angles_rel_deg),
+                params.diffuse.range_bins * crate::units::range_m(em.meta.bin_width_ns),
+                level.as_ref(),
+            )
+        }
+        _ => FoldSummary::none(),
+    };
+    Ok((
+        mpcs,
+        Labels {
+            diffuse: summary,
+            fold,
+        },
+    ))
 }

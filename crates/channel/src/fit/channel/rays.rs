@@ -26,23 +26,26 @@ pub(super) fn read_rays(path: &Path, truth: bool) -> Result<Vec<Ray>> {
     let d = table::f64_column(path, &df, "delay_ns")?;
     let a = table::f64_column(path, &df, "angle_rel_deg")?;
     let pw = table::f64_column(path, &df, "power_db")?;
-    // the dense component (diffuse MPCs, cluster_id −1) is fitted apart (`fit::diffuse`)
-    let diffuse = match table::str_column(path, &df, "component")? {
+    // the dense component (diffuse MPCs, cluster_id −1) is fitted apart (`fit::diffuse`);
+    // folded MPCs (cluster_id −1) are not at their true range and are left out
+    let apart = match table::str_column(path, &df, "component")? {
         None => vec![false; pos.len()],
         Some(c) => c
             .iter()
             .enumerate()
             .map(|(i, x)| match crate::mpc::Component::parse(x) {
-                Some(k) => Ok(k == crate::mpc::Component::Diffuse),
+                Some(k) => Ok(k != crate::mpc::Component::Discrete),
                 None => Err(Error::input(
                     path,
-                    format!("column `component` row {i}: {x:?} (expected discrete or diffuse)"),
+                    format!(
+                        "column `component` row {i}: {x:?} (expected discrete, diffuse or folded)"
+                    ),
                 )),
             })
             .collect::<Result<Vec<_>>>()?,
     };
     (0..pos.len())
-        .filter(|&i| !diffuse[i] && (!truth || cid[i] >= 0))
+        .filter(|&i| !apart[i] && (!truth || cid[i] >= 0))
         .map(|i| {
             if pos[i] < 0 || cid[i] < 0 {
                 return Err(Error::input(
