@@ -30,7 +30,9 @@
 //!   p > α and the noise floors within [`MAX_NOISE_DB`](super::MAX_NOISE_DB)); the
 //!   held-out check **passes only when both ways pass**, and both p-values are reported.
 //!   Each way rejects a correct model with probability at most α, so the pair does with at
-//!   most 2α (10 % at α = 0.05; the ways share no draws, but the same building). A fit
+//!   most 2α (10 % at α = 0.05), whatever their dependence: the ways share the building, and
+//!   with equal halves their draws' noise streams too (keyed by the check's seed and the
+//!   half's own position index). A fit
 //!   that fails on a half (too few clusters, a quantity not drawable) is an error naming
 //!   the half.
 //!

@@ -118,7 +118,8 @@ pub(super) fn fit_diffuse(mpcs: &[Mpc], np: usize, r: &Resample) -> Option<Diffu
     let mut diffuse_power = vec![0.0; np];
     for m in mpcs {
         let lin = 10f64.powf(m.power_db / 10.0);
-        if m.position < np {
+        // a folded echo is not at its range: out of the share's total as of the fit
+        if m.position < np && m.component != Component::Folded {
             total[m.position] += lin;
         }
         let (Component::Diffuse, Some(w), true) = (m.component, m.wall, m.position < np) else {

@@ -21,7 +21,8 @@
 //!   brings τ + kT within the span ± the kernel's reach; the carrier phase e^{−j2πf_cτ}
 //!   stays on the true τ. r̃ is tabulated at T_b/64 over ±min(16, ⌊(K − 1)/2⌋) bins (no two
 //!   images overlap) and read linearly; beyond it r is taken as 0 (a Hann kernel is below
-//!   −80 dB there).
+//!   −80 dB at ±16 bins; a rectangular window's, or a sweep of so few points that the
+//!   reach is capped below 16 bins, is cut higher, near −34 dB for `rect`).
 
 use crate::campaign::manifest::WindowKind;
 use crate::energy::{self, EnergyProcessor};

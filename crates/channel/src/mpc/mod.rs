@@ -12,6 +12,9 @@
 //!   mechanical scan (possibly a source beyond the scanned sector).
 //! * [`peaks`]: every cell that is a strict maximum of its 3×3 neighbourhood above
 //!   F·10^(margin/10): no footprint, so side lobes and range side lobes become MPCs.
+//! * [`diffuse`]: each MPC labelled discrete or diffuse from the layout's wall curve and
+//!   level; [`fold`]: wall echoes the layout places beyond the unambiguous range c/(2Δf),
+//!   folded into the span, labelled folded (both kept out of the clusters and Table 1).
 //! * [`io`]: the MPC table (Parquet) and its metadata.
 //!
 //! Every MPC's delay is (b + δ_b)·T_b (clamped at 0), its relative angle the beam's plus
