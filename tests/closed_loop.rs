@@ -168,7 +168,7 @@ impl Scene {
         .unwrap();
         let path = dir.join("campaign.toml");
         // 3201 points: an unambiguous range of 80 m, so only the hall's clusters 80–92 m
-        // (160–172 m, …) away fold into the 80 ns the chain reads, 16 dB and more below
+        // (160–172 m, …) away fold into the 80 ns the chain reads, ≥ 33 dB (r⁻⁴) below
         // those at 12 m; at 801 points (20 m) every cluster 20–32 m away folds in
         // (figures in docs/history.md)
         let manifest = common::hall_manifest(STEP_DEG, &self.poses)
