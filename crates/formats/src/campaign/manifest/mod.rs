@@ -248,6 +248,14 @@ impl Manifest {
         self.array.check()?;
         self.directions.check()?;
         self.processing.check_with(&self.band)?;
+        if self.processing.coupling == CouplingRemoval::Mean && self.directions.count() < 2 {
+            // the mean over one direction is that direction's sweep: echoes and all
+            return Err(Error::param(
+                "processing.coupling",
+                "\"mean\" subtracts the mean sweep over the directions; with one direction \
+                 it removes the echoes too (use \"gate\")",
+            ));
+        }
         if !self.noise.floor_dbm.is_finite() || !self.noise.tx_power_dbm.is_finite() {
             return Err(Error::param("noise.floor_dbm", "must be finite"));
         }
@@ -726,5 +734,29 @@ mod tests {
         }
         let e = "Parquet".parse::<SweepFormat>().unwrap_err().to_string();
         assert!(e.contains("(touchstone|parquet)"), "{e}");
+    }
+
+    /// `coupling = "mean"` over a single direction would subtract every echo: refused,
+    /// naming the field; over two directions it is accepted.
+    #[test]
+    fn mean_coupling_needs_two_directions() {
+        let text = |stop: f64| {
+            format!(
+                "schema_version = 1\nname = \"t\"\nlayout = \"l.geojson\"\nseed = 3\n\
+                 [band]\nstart_hz = 57.5e9\nstop_hz = 63.5e9\npoints = 801\n\
+                 [array]\nelements = 16\n\
+                 [directions]\nstart_deg = 0.0\nstop_deg = {stop:?}\nstep_deg = 10.0\n\
+                 [noise]\nfloor_dbm = -100.0\n[processing]\ncoupling = \"mean\"\n\
+                 [[poses]]\nx_m = 0.5\ny_m = 0.5\nheading_deg = 0.0\n"
+            )
+        };
+        let one: Manifest = toml::from_str(&text(0.0)).unwrap();
+        let e = one.check().unwrap_err().to_string();
+        assert!(
+            e.contains("processing.coupling") && e.contains("one direction"),
+            "{e}"
+        );
+        let two: Manifest = toml::from_str(&text(10.0)).unwrap();
+        two.check().unwrap();
     }
 }
