@@ -21,17 +21,14 @@ type TruthCell = Vec<(f64, f64, f64, bool, i64)>;
 
 /// The truth rays of `rays.parquet`, by position.
 fn truth_rays(path: &Path, positions: usize) -> Vec<TruthCell> {
-    let df = pradar::table::read_parquet(path, None).unwrap();
-    let pos = pradar::table::i64_column(path, &df, "position").unwrap();
-    let a = pradar::table::f64_column(path, &df, "angle_rel_deg").unwrap();
-    let d = pradar::table::f64_column(path, &df, "delay_ns").unwrap();
-    let pw = pradar::table::f64_column_or_nan(path, &df, "power_db")
-        .unwrap()
-        .unwrap();
-    let kind = pradar::table::str_column(path, &df, "kind")
-        .unwrap()
-        .unwrap();
-    let tc = pradar::table::i64_column(path, &df, "truth_cluster").unwrap();
+    let common::TruthRays {
+        pos,
+        a,
+        d,
+        pw,
+        kind,
+        truth_cluster: tc,
+    } = common::truth_rays(path);
     let mut out = vec![Vec::new(); positions];
     for i in 0..pos.len() {
         if pw[i].is_finite() {

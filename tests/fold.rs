@@ -163,16 +163,14 @@ fn score_against_truth(
     mpcs: &[pradar::mpc::Mpc],
     m: &pradar::campaign::manifest::Manifest,
 ) -> (usize, usize, usize, usize, usize, usize) {
-    let df = pradar::table::read_parquet(path, None).unwrap();
-    let pos = pradar::table::i64_column(path, &df, "position").unwrap();
-    let a = pradar::table::f64_column(path, &df, "angle_rel_deg").unwrap();
-    let d = pradar::table::f64_column(path, &df, "delay_ns").unwrap();
-    let pw = pradar::table::f64_column_or_nan(path, &df, "power_db")
-        .unwrap()
-        .unwrap();
-    let kind = pradar::table::str_column(path, &df, "kind")
-        .unwrap()
-        .unwrap();
+    let crate::common::TruthRays {
+        pos,
+        a,
+        d,
+        pw,
+        kind,
+        ..
+    } = crate::common::truth_rays(path);
     let wall = |i: usize| ["diffuse", "specular", "corner", "edge"].contains(&kind[i].as_str());
     let period_ns = 1e9 / m.band.step_hz();
     let half_deg = m.directions.step_deg / 2.0;

@@ -161,3 +161,42 @@ pub fn hall_model(lambda: f64, aoa_deg: f64, dc_m: f64) -> pradar::model::file::
     m.rays_per_cluster = Quantity::new(5.0, "count", "poisson");
     m
 }
+
+/// The columns of a simulator's truth `rays.parquet` the per-path scorers read.
+pub struct TruthRays {
+    /// Position index per ray.
+    pub pos: Vec<i64>,
+    /// Relative angle, degrees.
+    pub a: Vec<f64>,
+    /// True delay, ns (not folded).
+    pub d: Vec<f64>,
+    /// Power, dB (NaN when not seen).
+    pub pw: Vec<f64>,
+    /// Kind (`diffuse`, `specular`, `corner`, `edge`, cluster kinds).
+    pub kind: Vec<String>,
+    /// Truth cluster id.
+    pub truth_cluster: Vec<i64>,
+}
+
+/// Read a truth `rays.parquet` ([`TruthRays`]).
+pub fn truth_rays(path: &Path) -> TruthRays {
+    let df = pradar::table::read_parquet(path, None).unwrap();
+    let pos = pradar::table::i64_column(path, &df, "position").unwrap();
+    let a = pradar::table::f64_column(path, &df, "angle_rel_deg").unwrap();
+    let d = pradar::table::f64_column(path, &df, "delay_ns").unwrap();
+    let pw = pradar::table::f64_column_or_nan(path, &df, "power_db")
+        .unwrap()
+        .unwrap();
+    let kind = pradar::table::str_column(path, &df, "kind")
+        .unwrap()
+        .unwrap();
+    let truth_cluster = pradar::table::i64_column(path, &df, "truth_cluster").unwrap();
+    TruthRays {
+        pos,
+        a,
+        d,
+        pw,
+        kind,
+        truth_cluster,
+    }
+}
