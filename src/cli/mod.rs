@@ -328,7 +328,8 @@ pub struct MapArgs {
     /// EKF implementation: dense (exact) or scalable (tiled).
     #[arg(long, default_value_t = EkfParams::default().variant, value_parser = choice(&EkfVariant::ALL, EkfVariant::name), hide_possible_values = true, help_heading = "EKF (ekf)")]
     pub ekf: EkfVariant,
-    /// EKF linearisation of the energy rows: first-order or second-order.
+    /// EKF linearisation of the energy rows: first-order or second-order (a consistent
+    /// confidence, NEES ≈ 2 against ≈ 97, for about half the walls found).
     #[arg(long, default_value_t = EkfParams::default().update, value_parser = choice(&EkfUpdate::ALL, EkfUpdate::name), hide_possible_values = true, help_heading = "EKF (ekf)")]
     pub ekf_update: EkfUpdate,
     /// Prior mean of the RRCS μ0, m.
