@@ -10,6 +10,7 @@ use super::{html_escape, html_table, plot_err, register_font, Section};
 use crate::check::stats::NAMES;
 use crate::check::{CheckResult, HoldoutResult};
 use crate::error::{Error, Result};
+use crate::export::Table;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -165,10 +166,7 @@ pub fn section(title: &str, what: &str, r: &CheckResult, png: &str) -> Section {
 /// Write `check.csv`, `check.md`, `check_cdfs.png` and `index.html` into `dir`.
 pub fn write(dir: &Path, what: &str, r: &CheckResult) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let t = r.table();
-    crate::io::write_bytes(&dir.join("check.csv"), t.to_csv().as_bytes())?;
-    let md = format!("{}\n\n{}", r.verdict(), t.to_markdown());
-    crate::io::write_bytes(&dir.join("check.md"), md.as_bytes())?;
+    write_tables(dir, "check", &r.verdict(), &r.table())?;
     cdf_plot(&dir.join("check_cdfs.png"), r)?;
     let sec = section(
         "Does the model reproduce the channel?",
@@ -177,6 +175,19 @@ pub fn write(dir: &Path, what: &str, r: &CheckResult) -> Result<()> {
         "check_cdfs.png",
     );
     super::write_index(&dir.join("index.html"), "pradar check", &[sec])
+}
+
+/// A table as `<stem>.csv` and as `<stem>.md` under its `head` line (a verdict).
+fn write_tables(dir: &Path, stem: &str, head: &str, t: &Table) -> Result<()> {
+    crate::io::write_bytes(&dir.join(format!("{stem}.csv")), t.to_csv().as_bytes())?;
+    let md = format!("{head}\n\n{}", t.to_markdown());
+    crate::io::write_bytes(&dir.join(format!("{stem}.md")), md.as_bytes())
+}
+
+/// The held-out check's `holdout.csv` and `holdout.md` (both ways' lines and the combined
+/// verdict above the table) in `dir`, which must exist.
+pub fn write_holdout_tables(dir: &Path, r: &HoldoutResult) -> Result<()> {
+    write_tables(dir, "holdout", &r.lines().join("\n"), &r.table())
 }
 
 /// The held-out check's lines and table (HTML): one row per way with its p-value and
@@ -233,10 +244,7 @@ pub fn holdout_files() -> Vec<String> {
 /// Write [`holdout_files`] into `dir`; `what` names the campaign's table.
 pub fn write_holdout(dir: &Path, what: &str, r: &HoldoutResult) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let t = r.table();
-    crate::io::write_bytes(&dir.join("holdout.csv"), t.to_csv().as_bytes())?;
-    let md = format!("{}\n\n{}", r.lines().join("\n"), t.to_markdown());
-    crate::io::write_bytes(&dir.join("holdout.md"), md.as_bytes())?;
+    write_holdout_tables(dir, r)?;
     let mut sections = vec![Section {
         title: "Does the model reproduce positions the fit did not see?".into(),
         html: format!("<p>{}</p>\n{}", html_escape(what), holdout_html(r)),
@@ -246,10 +254,7 @@ pub fn write_holdout(dir: &Path, what: &str, r: &HoldoutResult) -> Result<()> {
         let sub = dir.join(&d);
         std::fs::create_dir_all(&sub).map_err(|e| Error::io(&sub, e))?;
         w.model.save(&sub.join("model.toml"))?;
-        let t = w.result.table();
-        crate::io::write_bytes(&sub.join("check.csv"), t.to_csv().as_bytes())?;
-        let md = format!("{}\n\n{}", r.way_line(w), t.to_markdown());
-        crate::io::write_bytes(&sub.join("check.md"), md.as_bytes())?;
+        write_tables(&sub, "check", &r.way_line(w), &w.result.table())?;
         cdf_plot(&sub.join("check_cdfs.png"), &w.result)?;
         let (fit, on) = r.pair(w);
         sections.push(section(

@@ -99,10 +99,7 @@ pub(super) fn holdout_html(job: &Job, s: &Data, progress: Progress) -> String {
         let r = crate::check::holdout(&s.campaign, &s.em, &s.energy_path, &params, &*cb)?;
         let dir = job.out.join("check");
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-        let t = r.table();
-        crate::io::write_bytes(&dir.join("holdout.csv"), t.to_csv().as_bytes())?;
-        let md = format!("{}\n\n{}", r.lines().join("\n"), t.to_markdown());
-        crate::io::write_bytes(&dir.join("holdout.md"), md.as_bytes())?;
+        crate::report::check::write_holdout_tables(&dir, &r)?;
         Ok(crate::report::check::holdout_html(&r))
     };
     run().unwrap_or_else(|e| page::failed("the held-out check", &e) + "\n")

@@ -278,7 +278,7 @@ impl CheckSummary {
     /// [`crate::check::MAX_NOISE_DB`], `None` when it passes.
     pub fn failure(&self, fail_below: f64) -> Option<String> {
         let r = &self.result;
-        (r.joint_p <= fail_below || !r.noise.agree())
+        (!r.passes_at(fail_below))
             .then(|| format!("check failed (--fail-below {fail_below}): {}", r.verdict()))
     }
 }
@@ -387,7 +387,7 @@ impl HoldoutSummary {
     pub fn failure(&self, fail_below: f64) -> Option<String> {
         let r = &self.result;
         let failed: Vec<String> = (r.ways.iter())
-            .filter(|w| w.result.joint_p <= fail_below || !w.result.noise.agree())
+            .filter(|w| !w.result.passes_at(fail_below))
             .map(|w| r.way_line(w))
             .collect();
         (!failed.is_empty()).then(|| {

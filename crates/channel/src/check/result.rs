@@ -89,7 +89,13 @@ impl CheckResult {
     /// Whether the model passes (module docs' rule): p > [`ALPHA`] and the noise floors
     /// within [`MAX_NOISE_DB`].
     pub fn passes(&self) -> bool {
-        self.joint_p > ALPHA && self.noise.agree()
+        self.passes_at(ALPHA)
+    }
+
+    /// The rule at level `alpha` (`--fail-below`): p > `alpha` and the noise floors within
+    /// [`MAX_NOISE_DB`].
+    pub fn passes_at(&self, alpha: f64) -> bool {
+        self.joint_p > alpha && self.noise.agree()
     }
 
     /// The statistics that miss (adjusted p at or below [`ALPHA`]), and `noise` when the
