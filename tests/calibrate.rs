@@ -538,7 +538,7 @@ fn hall(dir: &Path, hx: f64, n: usize) -> PathBuf {
     )
     .unwrap();
     let path = dir.join("campaign.toml");
-    std::fs::write(&path, common::hall_manifest(3.0, &poses)).unwrap();
+    std::fs::write(&path, common::hall_manifest(3.0, 801, &poses)).unwrap();
     path
 }
 

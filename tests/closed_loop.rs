@@ -171,9 +171,7 @@ impl Scene {
         // (160–172 m, …) away fold into the 80 ns the chain reads, ≥ 33 dB (r⁻⁴) below
         // those at 12 m; at 801 points (20 m) every cluster 20–32 m away folds in
         // (figures in docs/history.md)
-        let manifest = common::hall_manifest(STEP_DEG, &self.poses)
-            .replace("points = 801", &format!("points = {POINTS}"));
-        std::fs::write(&path, manifest).unwrap();
+        std::fs::write(&path, common::hall_manifest(STEP_DEG, POINTS, &self.poses)).unwrap();
         path
     }
 }

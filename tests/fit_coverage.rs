@@ -36,7 +36,7 @@ fn hall_campaign(dir: &std::path::Path) -> Campaign {
         .collect();
     poses.sort_by(|a, b| a[0].total_cmp(&b[0]));
     let path = dir.join("campaign.toml");
-    std::fs::write(&path, common::hall_manifest(90.0, &poses)).unwrap();
+    std::fs::write(&path, common::hall_manifest(90.0, 801, &poses)).unwrap();
     Campaign::load(&path).unwrap()
 }
 

@@ -111,10 +111,10 @@ pub fn assert_one_line_error(o: &std::process::Output, must_name: &str) {
 }
 
 /// The manifest of the fit tests in a hall (`tests/closed_loop.rs`, `tests/fit_coverage.rs`):
-/// layout `hall.geojson` beside it, seed 77, 801 points over 57.5–63.5 GHz, 400 elements, a
+/// layout `hall.geojson` beside it, seed 77, `points` over 57.5–63.5 GHz, 400 elements, a
 /// half-plane scan in `step_deg` steps, noise floor −100 dBm, 80 ns of delay behind a 3 ns
 /// coupling gate, and `poses` as [x_m, y_m, heading_deg].
-pub fn hall_manifest(step_deg: f64, poses: &[[f64; 3]]) -> String {
+pub fn hall_manifest(step_deg: f64, points: usize, poses: &[[f64; 3]]) -> String {
     let mut t = format!(
         r#"schema_version = 1
 name = "hall"
@@ -123,7 +123,7 @@ seed = 77
 [band]
 start_hz = 57.5e9
 stop_hz = 63.5e9
-points = 801
+points = {points}
 [array]
 elements = 400
 [directions]
