@@ -536,7 +536,15 @@ fn holdout_fits_each_half_and_checks_the_other() {
     .check()
     .unwrap();
     let t0 = std::time::Instant::now();
-    let r = pradar::check::holdout(&c, &em, &path, &params, &|_, _| {}).unwrap();
+    let r = pradar::check::holdout(
+        &c,
+        &em,
+        &path,
+        &params,
+        &pradar::check::Estimator::Chain,
+        &|_, _| {},
+    )
+    .unwrap();
     println!(
         "{}\n{}\n({:.1} s)",
         r.table().to_markdown(),
@@ -590,8 +598,49 @@ fn holdout_fits_each_half_and_checks_the_other() {
     }
     let m = ModelConfig::load(&out.join("fit_A_check_B/model.toml")).unwrap();
     assert_eq!(m, r.ways[0].model);
+    // the refined estimator: each way's model is the chain's refined on its own half (the
+    // same clusters and levels, then smm: `[calibration]` names it and its distance fell)
+    let smm = pradar::smm::SmmParams {
+        draws: 4,
+        iterations: 10,
+        ..Default::default()
+    };
+    let rs = pradar::check::holdout(
+        &c,
+        &em,
+        &path,
+        &params,
+        &pradar::check::Estimator::Smm(smm.check().unwrap()),
+        &|_, _| {},
+    )
+    .unwrap();
+    println!("smm: {}", rs.lines().join("\n"));
+    for (w, chain) in rs.ways.iter().zip(&r.ways) {
+        assert_eq!(w.model.inter_cluster_rate, chain.model.inter_cluster_rate);
+        match &w.model.calibration {
+            Some(cal) => {
+                assert!(cal.method.starts_with("smm"), "{}", cal.method);
+                assert!(cal.epsilon > 0.0 && cal.simulations >= 4 * 10);
+                assert_ne!(w.model, chain.model);
+            }
+            // nothing beat the chain's model: it is returned unchanged
+            None => assert_eq!(w.model, chain.model),
+        }
+        let p = w.result.joint_p;
+        assert!(p > 0.0 && p <= 1.0, "{p}");
+    }
+    // --estimator needs --holdout; a name it does not know is refused listing the three
+    let mut bad = argv.clone();
+    bad.extend(["--estimator", "nope"]);
+    let o = common::pradar_quiet(&bad);
+    common::assert_one_line_error(&o, "--estimator");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("calibrate"));
     argv.extend(["--model", "m.toml"]);
     let o = common::pradar_quiet(&argv);
     common::assert_one_line_error(&o, "--holdout");
     assert!(String::from_utf8_lossy(&o.stderr).contains("--model"));
+    let mut argv: Vec<&str> = argv.into_iter().filter(|a| *a != "--holdout").collect();
+    argv.extend(["--estimator", "smm"]);
+    let o = common::pradar_quiet(&argv);
+    common::assert_one_line_error(&o, "--estimator");
 }

@@ -33,6 +33,7 @@ mod occlusion;
 mod physics;
 mod report;
 mod responsiveness;
+mod smm;
 mod streaming;
 mod synth;
 mod touchstone;

@@ -281,6 +281,9 @@ pub struct CheckArgs {
     /// from a particle drawn by weight (the posterior predictive), the rest from --model.
     #[arg(long, conflicts_with = "holdout")]
     pub posterior: Option<PathBuf>,
+    /// With --holdout: each half's model by chain (default), smm or calibrate (docs/cli.md).
+    #[arg(long, conflicts_with = "model", value_parser = pradar::check::Estimator::NAMES)]
+    pub estimator: Option<String>,
 }
 
 // `pradar map`

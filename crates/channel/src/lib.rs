@@ -17,6 +17,7 @@ pub mod cluster;
 pub mod fit;
 pub mod model;
 pub mod mpc;
+pub mod smm;
 
 // the lower layers' modules under their old paths (`crate::campaign::…`)
 use pradar_formats::{campaign, error, export, io, params, stats, table, units};

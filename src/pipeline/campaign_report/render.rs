@@ -96,7 +96,14 @@ pub(super) fn holdout_html(job: &Job, s: &Data, progress: Progress) -> String {
     let run = || -> Result<String> {
         let params = crate::check::CheckParams::default().check()?;
         let cb = progress("held-out check", 2 * params.draws);
-        let r = crate::check::holdout(&s.campaign, &s.em, &s.energy_path, &params, &*cb)?;
+        let r = crate::check::holdout(
+            &s.campaign,
+            &s.em,
+            &s.energy_path,
+            &params,
+            &crate::check::Estimator::Chain,
+            &*cb,
+        )?;
         let dir = job.out.join("check");
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         crate::report::check::write_holdout_tables(&dir, &r)?;

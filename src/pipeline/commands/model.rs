@@ -340,6 +340,9 @@ pub struct Holdout {
     pub out: Option<PathBuf>,
     /// Draws, seed, cull (no posterior).
     pub params: crate::check::CheckParams,
+    /// The estimator of each half's model (`--estimator`: chain, smm or calibrate, each
+    /// with its default options).
+    pub estimator: &'static str,
 }
 
 /// What `check --holdout` found.
@@ -404,6 +407,13 @@ pub fn holdout(cmd: &Holdout, progress: StepProgress) -> Result<HoldoutSummary> 
     let c = Campaign::load(&cmd.campaign)?;
     let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
     let params = cmd.params.check()?;
+    let estimator = match cmd.estimator {
+        "smm" => crate::check::Estimator::Smm(crate::smm::SmmParams::default().check()?),
+        "calibrate" => crate::check::Estimator::Calibrate(
+            crate::calibrate::CalibrateParams::default().check()?,
+        ),
+        _ => crate::check::Estimator::Chain,
+    };
     // the halves (and a campaign too small for them) known before the outputs are named
     crate::check::holdout::halves(&c)?;
     if let Some(o) = &cmd.out {
@@ -414,7 +424,7 @@ pub fn holdout(cmd: &Holdout, progress: StepProgress) -> Result<HoldoutSummary> 
             .collect();
         refuse(&outputs, &inputs)?;
     }
-    let result = crate::check::holdout(&c, &em, &cmd.energy, &params, progress)?;
+    let result = crate::check::holdout(&c, &em, &cmd.energy, &params, &estimator, progress)?;
     if let Some(o) = &cmd.out {
         let what = format!("the energy table {}", cmd.energy.display());
         crate::report::check::write_holdout(o, &what, &result)?;

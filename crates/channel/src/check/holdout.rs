@@ -40,6 +40,7 @@
 //! about one fit and one check of the whole table.
 
 use super::{check, CheckResult, CheckValid, ALPHA};
+use crate::calibrate::{calibrate, CalibrateValid, Prior};
 use crate::campaign::manifest::Campaign;
 use crate::chain::{extract_and_cluster, ChainParams};
 use crate::energy::EnergyMatrix;
@@ -49,6 +50,7 @@ use crate::fit::channel::{fit_clustering, FitParams};
 use crate::model::file::ModelConfig;
 use crate::model::levels::fit_levels;
 use crate::params::ParamGuard;
+use crate::smm::{refine, SmmValid};
 use std::path::Path;
 
 /// Fewest positions a half may have.
@@ -212,13 +214,45 @@ pub fn halves(c: &Campaign) -> Result<[Half; 2]> {
     Ok([half(0, 0..cut), half(1, cut..n)])
 }
 
+/// The estimator whose model a way writes and checks.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Estimator {
+    /// The chain as `report` runs it (the paper's method, then the layout's levels).
+    Chain,
+    /// The chain's model refined by simulated minimum distance ([`crate::smm`]) on the
+    /// fit half's table.
+    Smm(SmmValid),
+    /// `calibrate` on the fit half's table under the default prior ([`Prior::default_prior`],
+    /// every quantity of the model free): its written model (posterior medians), plug-in.
+    Calibrate(CalibrateValid),
+}
+
+impl Estimator {
+    /// The names the CLI takes.
+    pub const NAMES: [&'static str; 3] = ["chain", "smm", "calibrate"];
+
+    /// Its name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Estimator::Chain => "chain",
+            Estimator::Smm(_) => "smm",
+            Estimator::Calibrate(_) => "calibrate",
+        }
+    }
+}
+
 /// The model of the chain on (`c`, `em`), as `pipeline::analyse` fits it (module docs),
-/// and why its levels failed, if so.
+/// refined when the estimator says so, and why its levels failed, if so.
 fn fit_model(
     c: &Campaign,
     em: &EnergyMatrix,
     path: &Path,
+    estimator: &Estimator,
 ) -> Result<(ModelConfig, Option<String>)> {
+    if let Estimator::Calibrate(p) = estimator {
+        let cal = calibrate(c, em, path, &Prior::default_prior(), p, &|_, _| {})?;
+        return Ok((cal.model, None));
+    }
     let chain = ChainParams::for_campaign(c)?;
     let (_, clustering) = extract_and_cluster(em, c, &chain)?;
     let fit = fit_clustering(path, &clustering, c, &FitParams::default().check()?)?;
@@ -226,7 +260,12 @@ fn fit_model(
         Ok((m, _)) => (m, None),
         Err(e) => (fit.model, Some(e.to_string())),
     };
-    Ok((model.require_estimable(&Default::default())?, levels_error))
+    let model = model.require_estimable(&Default::default())?;
+    match estimator {
+        Estimator::Chain => Ok((model, levels_error)),
+        Estimator::Smm(p) => Ok((refine(c, em, path, &model, p, &|_| {})?.model, levels_error)),
+        Estimator::Calibrate(_) => unreachable!("returned above"),
+    }
 }
 
 /// The held-out check of campaign `c` on its energy table `em` (read from `energy_path`,
@@ -237,6 +276,7 @@ pub fn holdout(
     em: &EnergyMatrix,
     energy_path: &Path,
     params: &CheckValid,
+    estimator: &Estimator,
     progress: &dyn Fn(usize, usize),
 ) -> Result<HoldoutResult> {
     let t0 = std::time::Instant::now();
@@ -258,7 +298,7 @@ pub fn holdout(
     for k in 0..2 {
         let ((fc, fe), (oc, oe)) = (&parts[k], &parts[1 - k]);
         let t = std::time::Instant::now();
-        let (model, levels_error) = fit_model(fc, fe, energy_path).map_err(|e| {
+        let (model, levels_error) = fit_model(fc, fe, energy_path, estimator).map_err(|e| {
             Error::input(
                 energy_path,
                 format!(
