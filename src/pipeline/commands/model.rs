@@ -409,9 +409,7 @@ pub fn holdout(cmd: &Holdout, progress: StepProgress) -> Result<HoldoutSummary> 
     let params = cmd.params.check()?;
     let estimator = match cmd.estimator {
         "smm" => crate::check::Estimator::Smm(crate::smm::SmmParams::default().check()?),
-        "calibrate" => crate::check::Estimator::Calibrate(
-            crate::calibrate::CalibrateParams::default().check()?,
-        ),
+        "calibrate" => crate::check::Estimator::calibrate()?,
         _ => crate::check::Estimator::Chain,
     };
     // the halves (and a campaign too small for them) known before the outputs are named
