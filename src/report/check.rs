@@ -205,11 +205,26 @@ pub fn holdout_html(r: &HoldoutResult) -> String {
             })
         })
         .collect();
+    let by = match r.estimator {
+        "smm" => {
+            "by the chain (CLEAN, K-means, fit, levels), then refined by simulated minimum \
+                  distance (<code>--estimator smm</code>)"
+        }
+        "calibrate" => {
+            "by <code>calibrate</code> (ABC-SMC, 600 simulations; its posterior \
+                        medians, <code>--estimator calibrate</code>)"
+        }
+        _ => {
+            "by the same chain (CLEAN, K-means, fit, levels); <code>--estimator smm</code> or \
+              <code>calibrate</code> checks another estimator's model the same way (minutes \
+              each; compared on the zoo in docs/zoo.md)"
+        }
+    };
     format!(
         "<p>Held out (<code>pradar check --holdout</code>): the positions cut in walk order into \
-         half {} and half {}; a model fitted on each half by the same chain (CLEAN, K-means, \
-         fit, levels), checked by the same rule ({} draws each) against the other half's \
-         table. It passes only when both ways pass.</p>\n{}{levels}<p><b>{}</b></p>\n",
+         half {} and half {}; a model fitted on each half {by}, checked by the same rule ({} \
+         draws each) against the other half's table. It passes only when both ways \
+         pass.</p>\n{}{levels}<p><b>{}</b></p>\n",
         html_escape(&r.halves[0].describe()),
         html_escape(&r.halves[1].describe()),
         r.ways[0].result.draws.len(),

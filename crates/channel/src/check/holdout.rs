@@ -106,6 +106,8 @@ pub struct HoldoutResult {
     pub halves: [Half; 2],
     /// Fitted on A → checked on B, then fitted on B → checked on A.
     pub ways: [Way; 2],
+    /// The estimator of both ways' models ([`Estimator::name`]).
+    pub estimator: &'static str,
     /// Wall time, s.
     pub wall_s: f64,
 }
@@ -342,6 +344,7 @@ pub fn holdout(
     Ok(HoldoutResult {
         halves,
         ways,
+        estimator: estimator.name(),
         wall_s: t0.elapsed().as_secs_f64(),
     })
 }
