@@ -210,10 +210,11 @@ pub fn holdout_html(r: &HoldoutResult) -> String {
             "by the chain (CLEAN, K-means, fit, levels), then refined by simulated minimum \
                   distance (<code>--estimator smm</code>)"
         }
-        "calibrate" => {
-            "by <code>calibrate</code> (ABC-SMC, 600 simulations; its posterior \
-                        medians, <code>--estimator calibrate</code>)"
-        }
+        "calibrate" => &format!(
+            "by <code>calibrate</code> (ABC-SMC, {} simulations; its posterior medians, \
+             <code>--estimator calibrate</code>)",
+            crate::check::holdout::CALIBRATE_SIMULATIONS
+        ),
         _ => {
             "by the same chain (CLEAN, K-means, fit, levels); <code>--estimator smm</code> or \
               <code>calibrate</code> checks another estimator's model the same way (minutes \
