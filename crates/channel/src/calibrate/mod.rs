@@ -460,11 +460,7 @@ pub fn calibrate(
         (f, None)
     };
     let simulate = |x: &[f64], s: u64| -> Result<Vec<f64>> {
-        let mut e = sim.energies(&prior.model_at(x), s)?;
-        // the measured campaign's missing sweeps are missing from the simulations too
-        energy
-            .meta
-            .mask_missing(energy.directions(), energy.bins, &mut e);
+        let e = crate::check::table_draw(&sim, energy, &prior.model_at(x), s)?;
         Ok(match &reference {
             // the subsample's stream: the simulation's seed, under its own key
             Some(r) => vec![r.distance(&stat_ctx, &e, s ^ 0x4d4d_445f_5355_4253)],

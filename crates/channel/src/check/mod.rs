@@ -129,9 +129,39 @@ pub fn context(energy: &EnergyMatrix) -> StatContext {
 
 /// The seed of draw r.
 fn draw_seed(seed: u64, r: usize) -> u64 {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
+    keyed_seed(seed, STREAM, r)
+}
+
+/// The seed of draw r of the stream `key` (xor-ed into `seed`): ChaCha8 keyed by
+/// `seed ^ key`, stream r + 1, its first word. The check's draws use [`STREAM`]; another
+/// user of synth draws (the refinement, [`crate::smm`]) its own key, so it never replays
+/// the check's draws.
+pub fn keyed_seed(seed: u64, key: u64, r: usize) -> u64 {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ key);
     rng.set_stream(r as u64 + 1);
     rng.next_u64()
+}
+
+/// The statistics' context of a draw of `energy`'s table by `sim`: the table's, thresholded
+/// at the N0·TW the draw was made with (each table at its own noise).
+pub fn draw_context(energy: &EnergyMatrix, sim: &EnergySimulator) -> StatContext {
+    StatContext {
+        mu: sim.noise().0,
+        ..context(energy)
+    }
+}
+
+/// A draw of `model` with `seed` shaped as the measured table `energy`: its missing sweeps
+/// are missing from the draw too.
+pub fn table_draw(
+    sim: &EnergySimulator,
+    energy: &EnergyMatrix,
+    model: &ModelConfig,
+    seed: u64,
+) -> Result<Vec<f64>> {
+    let mut e = sim.energies(model, seed)?;
+    (energy.meta).mask_missing(energy.directions(), energy.bins, &mut e);
+    Ok(e)
 }
 
 /// Check `model` against the energy table `energy` (read from `energy_path`) of campaign
@@ -149,10 +179,7 @@ pub fn check(
     let sim = EnergySimulator::for_table(c, energy, energy_path, params.cull)?;
     let ctx = context(energy);
     // each table thresholded at its own noise: a draw at the N0·TW it was drawn with
-    let draw_ctx = StatContext {
-        mu: sim.noise().0,
-        ..ctx.clone()
-    };
+    let draw_ctx = draw_context(energy, &sim);
     let (tw, pulses) = (energy.meta.tw, energy.meta.pulses);
     let measured = Statistics::of(&ctx, &energy.data);
     let measured_floor = noise_floor(&ctx, &energy.data, tw, pulses);
@@ -172,11 +199,7 @@ pub fn check(
                     Some(post) => Cow::Owned(post.model(model, post.particle(seed, i))?),
                     None => Cow::Borrowed(model),
                 };
-                let mut e = sim.energies(&drawn, draw_seed(seed, i))?;
-                // the measured campaign's missing sweeps are missing from the draws too
-                energy
-                    .meta
-                    .mask_missing(energy.directions(), energy.bins, &mut e);
+                let e = table_draw(&sim, energy, &drawn, draw_seed(seed, i))?;
                 Ok((
                     Statistics::of(&draw_ctx, &e),
                     noise_floor(&draw_ctx, &e, tw, pulses),

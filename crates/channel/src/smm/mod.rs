@@ -55,15 +55,16 @@
 //! Quantities not moved (within [`SAME_LN`] of the start) keep their value and theirs,
 //! bit for bit.
 //!
-//! Cost: the scale's R draws, then n + 2 evaluations before the first iteration and 1 to
-//! n + 2 per iteration (a shrink re-evaluates the simplex), each R draws; at the defaults
-//! (R = 8, 60 iterations, 12 free quantities) 100–170 evaluations on the zoo's halves.
+//! Cost: the start's R draws (its scale and its D), then n + 1 evaluations (the simplex)
+//! before the first iteration and 1 to n + 2 per iteration (a shrink re-evaluates the
+//! simplex), each R draws; at the defaults (R = 8, 60 iterations, 12 free quantities) about
+//! 100–170 evaluations on the zoo's halves.
 //! `[calibration]` records the draws made (`simulations`).
 
 use crate::calibrate::{DEFAULT_PRIOR, EXCESS_DECAY_PRIOR};
 use crate::campaign::manifest::Campaign;
-use crate::check::context;
 use crate::check::stats::{ks_distance, StatContext, Statistics, NAMES};
+use crate::check::{context, draw_context, keyed_seed, table_draw};
 use crate::energy::EnergyMatrix;
 use crate::error::{Error, Result};
 use crate::model::file::{CalibrationMeta, ModelConfig};
@@ -71,8 +72,6 @@ use crate::model::EnergySimulator;
 use crate::params::{ParamGuard, Valid};
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
-use rand::{RngCore, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -275,8 +274,7 @@ impl Objective<'_> {
         self.seeds
             .par_iter()
             .map(|s| {
-                let mut e = self.sim.energies(model, *s)?;
-                (self.energy.meta).mask_missing(self.energy.directions(), self.energy.bins, &mut e);
+                let e = table_draw(self.sim, self.energy, model, *s)?;
                 Ok(Statistics::of(&self.draw_ctx, &e))
             })
             .collect()
@@ -293,6 +291,11 @@ impl Objective<'_> {
             return REFUSED;
         };
         self.simulations.fetch_add(draws.len(), Ordering::Relaxed);
+        self.distance_of(&draws)
+    }
+
+    /// D of the draws `draws` (module docs); [`REFUSED`] when it is not finite.
+    fn distance_of(&self, draws: &[Statistics]) -> f64 {
         let k = NAMES.len();
         let mut d = 0.0;
         for (j, s) in self.scale.iter().enumerate() {
@@ -336,13 +339,6 @@ fn scales(draws: &[Statistics]) -> Vec<f64> {
         .collect()
 }
 
-/// The seed of the refinement's draw r.
-fn draw_seed(seed: u64, r: usize) -> u64 {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
-    rng.set_stream(r as u64 + 1);
-    rng.next_u64()
-}
-
 /// Refine `start` on the energy table `energy` (read from `energy_path`) of campaign `c`
 /// (module docs). `progress(evaluations)` after each evaluation of D.
 pub fn refine(
@@ -364,19 +360,16 @@ pub fn refine(
     }
     let x0 = free.x0.clone();
     let sim = EnergySimulator::for_table(c, energy, energy_path, params.cull)?;
-    let ctx = context(energy);
-    let draw_ctx = StatContext {
-        mu: sim.noise().0,
-        ..ctx.clone()
-    };
     let seed = params.seed.unwrap_or(c.manifest.seed);
     let (evaluations, simulations) = (AtomicUsize::new(0), AtomicUsize::new(0));
     let mut obj = Objective {
         sim: &sim,
         energy,
-        draw_ctx,
-        measured: Statistics::of(&ctx, &energy.data),
-        seeds: (0..params.draws).map(|r| draw_seed(seed, r)).collect(),
+        draw_ctx: draw_context(energy, &sim),
+        measured: Statistics::of(&context(energy), &energy.data),
+        seeds: (0..params.draws)
+            .map(|r| keyed_seed(seed, STREAM, r))
+            .collect(),
         start: &start,
         free: &free,
         scale: vec![1.0; NAMES.len()],
@@ -384,10 +377,11 @@ pub fn refine(
         simulations: &simulations,
         progress,
     };
+    // the start's draws give the scale and the start's D (its ln values are x0)
     let first = obj.draws(&start)?;
     simulations.fetch_add(first.len(), Ordering::Relaxed);
     obj.scale = scales(&first);
-    let start_distance = obj.distance(&x0);
+    let start_distance = obj.distance_of(&first);
     // the initial simplex: x0 and a step along each quantity (back where forward is refused)
     let n = x0.len();
     let mut simplex = vec![x0.clone()];
