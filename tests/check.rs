@@ -615,7 +615,7 @@ fn holdout_fits_each_half_and_checks_the_other() {
     )
     .unwrap();
     println!("smm: {}", rs.lines().join("\n"));
-    assert_eq!(rs.estimator, "smm");
+    assert_eq!(rs.estimator, pradar::check::EstimatorKind::Smm);
     assert!(
         rs.verdict().starts_with("held-out check (estimator smm): "),
         "{}",

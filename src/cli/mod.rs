@@ -17,7 +17,7 @@ use choice::choice;
 use clap::{Args, Parser, Subcommand};
 use pradar::calibrate::{CalibrateParams, Distance, Ridge};
 use pradar::campaign::manifest::SweepFormat;
-use pradar::check::CheckParams;
+use pradar::check::{CheckParams, EstimatorKind};
 use pradar::cluster::{ClusterParams, Criterion};
 use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
@@ -282,8 +282,8 @@ pub struct CheckArgs {
     #[arg(long, conflicts_with = "holdout")]
     pub posterior: Option<PathBuf>,
     /// With --holdout: each half's model by chain (default), smm or calibrate (docs/cli.md).
-    #[arg(long, conflicts_with = "model", value_parser = pradar::check::Estimator::NAMES)]
-    pub estimator: Option<String>,
+    #[arg(long, conflicts_with = "model", value_parser = choice(&EstimatorKind::ALL, EstimatorKind::name))]
+    pub estimator: Option<EstimatorKind>,
 }
 
 // `pradar map`

@@ -134,10 +134,7 @@ impl CheckArgs {
                 energy: self.energy,
                 out: self.out,
                 params,
-                estimator: (pradar::check::Estimator::NAMES.iter())
-                    .find(|n| Some(**n) == self.estimator.as_deref())
-                    .copied()
-                    .unwrap_or("chain"),
+                estimator: self.estimator.unwrap_or_default(),
             }),
         }
     }

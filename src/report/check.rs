@@ -205,17 +205,18 @@ pub fn holdout_html(r: &HoldoutResult) -> String {
             })
         })
         .collect();
+    use crate::check::EstimatorKind;
     let by = match r.estimator {
-        "smm" => {
+        EstimatorKind::Smm => {
             "by the chain (CLEAN, K-means, fit, levels), then refined by simulated minimum \
                   distance (<code>--estimator smm</code>)"
         }
-        "calibrate" => &format!(
+        EstimatorKind::Calibrate => &format!(
             "by <code>calibrate</code> (ABC-SMC, {} simulations; its posterior medians, \
              <code>--estimator calibrate</code>)",
             crate::check::holdout::CALIBRATE_SIMULATIONS
         ),
-        _ => {
+        EstimatorKind::Chain => {
             "by the same chain (CLEAN, K-means, fit, levels); <code>--estimator smm</code> or \
               <code>calibrate</code> checks another estimator's model the same way (minutes \
               each; compared on the zoo in docs/zoo.md)"

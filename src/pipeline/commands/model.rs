@@ -340,9 +340,9 @@ pub struct Holdout {
     pub out: Option<PathBuf>,
     /// Draws, seed, cull (no posterior).
     pub params: crate::check::CheckParams,
-    /// The estimator of each half's model (`--estimator`: chain, smm or calibrate, each
-    /// with its default options).
-    pub estimator: &'static str,
+    /// The estimator of each half's model (`--estimator`), with the held-out check's
+    /// options ([`crate::check::Estimator::of`]).
+    pub estimator: crate::check::EstimatorKind,
 }
 
 /// What `check --holdout` found.
@@ -407,11 +407,7 @@ pub fn holdout(cmd: &Holdout, progress: StepProgress) -> Result<HoldoutSummary> 
     let c = Campaign::load(&cmd.campaign)?;
     let em = crate::energy::EnergyMatrix::read(&cmd.energy)?;
     let params = cmd.params.check()?;
-    let estimator = match cmd.estimator {
-        "smm" => crate::check::Estimator::Smm(crate::smm::SmmParams::default().check()?),
-        "calibrate" => crate::check::Estimator::calibrate()?,
-        _ => crate::check::Estimator::Chain,
-    };
+    let estimator = crate::check::Estimator::of(cmd.estimator)?;
     // the halves (and a campaign too small for them) known before the outputs are named
     crate::check::holdout::halves(&c)?;
     if let Some(o) = &cmd.out {

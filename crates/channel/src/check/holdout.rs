@@ -58,7 +58,7 @@ use crate::fit::channel::{fit_clustering, FitParams};
 use crate::model::file::ModelConfig;
 use crate::model::levels::fit_levels;
 use crate::params::ParamGuard;
-use crate::smm::{refine, SmmValid};
+use crate::smm::{refine, SmmParams, SmmValid};
 use std::path::Path;
 
 /// Fewest positions a half may have.
@@ -114,8 +114,8 @@ pub struct HoldoutResult {
     pub halves: [Half; 2],
     /// Fitted on A → checked on B, then fitted on B → checked on A.
     pub ways: [Way; 2],
-    /// The estimator of both ways' models ([`Estimator::name`]).
-    pub estimator: &'static str,
+    /// The estimator of both ways' models.
+    pub estimator: EstimatorKind,
     /// Wall time, s.
     pub wall_s: f64,
 }
@@ -157,8 +157,8 @@ impl HoldoutResult {
             .collect();
         // the default estimator's line as it always was; another names itself
         let by = match self.estimator {
-            "chain" => String::new(),
-            e => format!(" (estimator {e})"),
+            EstimatorKind::Chain => String::new(),
+            e => format!(" (estimator {})", e.name()),
         };
         format!(
             "held-out check{by}: {}: {} (passes only when both ways pass, each at α = {ALPHA})",
@@ -242,7 +242,7 @@ pub enum Estimator {
     Calibrate(CalibrateValid),
 }
 
-/// The simulation budget of the held-out check's `calibrate` ([`Estimator::calibrate`]):
+/// The simulation budget of the held-out check's `calibrate` ([`Estimator::of`]):
 /// it runs twice per check, so a fifth of `calibrate`'s default 3000 — the budget at which
 /// issue 54 measured it on the 70 m hall.
 pub const CALIBRATE_SIMULATIONS: usize = 600;
@@ -250,43 +250,91 @@ pub const CALIBRATE_SIMULATIONS: usize = 600;
 /// Its population (half the budget: two generations at least).
 pub const CALIBRATE_POPULATION: usize = 300;
 
-impl Estimator {
-    /// The names the CLI takes.
-    pub const NAMES: [&'static str; 3] = ["chain", "smm", "calibrate"];
+/// Which estimator, without its options: what `--estimator` names and a result records.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum EstimatorKind {
+    /// [`Estimator::Chain`].
+    #[default]
+    Chain,
+    /// [`Estimator::Smm`].
+    Smm,
+    /// [`Estimator::Calibrate`].
+    Calibrate,
+}
 
-    /// The `calibrate` estimator at the held-out check's budget ([`CALIBRATE_SIMULATIONS`],
-    /// [`CALIBRATE_POPULATION`]), `calibrate`'s defaults otherwise.
-    pub fn calibrate() -> Result<Estimator> {
-        Ok(Estimator::Calibrate(
-            CalibrateParams::default()
-                .simulations(CALIBRATE_SIMULATIONS)
-                .population(CALIBRATE_POPULATION)
-                .check()?,
-        ))
-    }
+impl EstimatorKind {
+    /// Every kind, in the CLI's order.
+    pub const ALL: [EstimatorKind; 3] = [
+        EstimatorKind::Chain,
+        EstimatorKind::Smm,
+        EstimatorKind::Calibrate,
+    ];
 
-    /// Its name.
+    /// Its name (`--estimator`).
     pub fn name(&self) -> &'static str {
         match self {
-            Estimator::Chain => "chain",
-            Estimator::Smm(_) => "smm",
-            Estimator::Calibrate(_) => "calibrate",
+            EstimatorKind::Chain => "chain",
+            EstimatorKind::Smm => "smm",
+            EstimatorKind::Calibrate => "calibrate",
         }
     }
 }
 
-/// The model of the chain on (`c`, `em`), as `pipeline::analyse` fits it (module docs),
-/// refined when the estimator says so, and why its levels failed, if so.
+impl Estimator {
+    /// The estimator of `kind` with the held-out check's options: smm's defaults, and
+    /// `calibrate` at [`CALIBRATE_SIMULATIONS`] and [`CALIBRATE_POPULATION`] (its defaults
+    /// otherwise).
+    pub fn of(kind: EstimatorKind) -> Result<Estimator> {
+        Ok(match kind {
+            EstimatorKind::Chain => Estimator::Chain,
+            EstimatorKind::Smm => Estimator::Smm(SmmParams::default().check()?),
+            EstimatorKind::Calibrate => Estimator::Calibrate(
+                CalibrateParams::default()
+                    .simulations(CALIBRATE_SIMULATIONS)
+                    .population(CALIBRATE_POPULATION)
+                    .check()?,
+            ),
+        })
+    }
+
+    /// Its kind.
+    pub fn kind(&self) -> EstimatorKind {
+        match self {
+            Estimator::Chain => EstimatorKind::Chain,
+            Estimator::Smm(_) => EstimatorKind::Smm,
+            Estimator::Calibrate(_) => EstimatorKind::Calibrate,
+        }
+    }
+}
+
+/// The model `estimator` writes on (`c`, `em`) (module docs), and why the chain's levels
+/// failed, if so.
 fn fit_model(
     c: &Campaign,
     em: &EnergyMatrix,
     path: &Path,
     estimator: &Estimator,
 ) -> Result<(ModelConfig, Option<String>)> {
-    if let Estimator::Calibrate(p) = estimator {
-        let cal = calibrate(c, em, path, &Prior::default_prior(), p, &|_, _| {})?;
-        return Ok((cal.model, None));
+    match estimator {
+        Estimator::Chain => chain_model(c, em, path),
+        Estimator::Smm(p) => {
+            let (model, levels_error) = chain_model(c, em, path)?;
+            Ok((refine(c, em, path, &model, p, &|_| {})?.model, levels_error))
+        }
+        Estimator::Calibrate(p) => Ok((
+            calibrate(c, em, path, &Prior::default_prior(), p, &|_, _| {})?.model,
+            None,
+        )),
     }
+}
+
+/// The model of the chain on (`c`, `em`), as `pipeline::analyse` fits it (module docs),
+/// and why its levels failed, if so.
+fn chain_model(
+    c: &Campaign,
+    em: &EnergyMatrix,
+    path: &Path,
+) -> Result<(ModelConfig, Option<String>)> {
     let chain = ChainParams::for_campaign(c)?;
     let (_, clustering) = extract_and_cluster(em, c, &chain)?;
     let fit = fit_clustering(path, &clustering, c, &FitParams::default().check()?)?;
@@ -294,12 +342,7 @@ fn fit_model(
         Ok((m, _)) => (m, None),
         Err(e) => (fit.model, Some(e.to_string())),
     };
-    let model = model.require_estimable(&Default::default())?;
-    match estimator {
-        Estimator::Chain => Ok((model, levels_error)),
-        Estimator::Smm(p) => Ok((refine(c, em, path, &model, p, &|_| {})?.model, levels_error)),
-        Estimator::Calibrate(_) => unreachable!("returned above"),
-    }
+    Ok((model.require_estimable(&Default::default())?, levels_error))
 }
 
 /// The held-out check of campaign `c` on its energy table `em` (read from `energy_path`,
@@ -357,7 +400,7 @@ pub fn holdout(
     Ok(HoldoutResult {
         halves,
         ways,
-        estimator: estimator.name(),
+        estimator: estimator.kind(),
         wall_s: t0.elapsed().as_secs_f64(),
     })
 }

@@ -89,7 +89,7 @@ mod result;
 mod rule;
 pub mod stats;
 
-pub use holdout::{holdout, Estimator, HoldoutResult};
+pub use holdout::{holdout, Estimator, EstimatorKind, HoldoutResult};
 pub use noise::{noise_floor, NoiseFloors, FLOOR_QUANTILE};
 pub use options::{
     draws_why, CheckParams, CheckValid, ALPHA, DEFAULT_DRAWS, DRAWS_RANGE, MAX_NOISE_DB, MIN_DRAWS,
