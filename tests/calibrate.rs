@@ -50,30 +50,7 @@ fn run(args: &[String], threads: Option<usize>) {
     }
 }
 
-/// `synth` of `model` on campaign `cpath` with `seed` into `dir`; the energy table.
-fn synth(dir: &Path, cpath: &Path, model: &ModelConfig, seed: u64) -> PathBuf {
-    std::fs::create_dir_all(dir).unwrap();
-    let mp = dir.join("model.toml");
-    model.save(&mp).unwrap();
-    let e = dir.join("e.parquet");
-    let args: Vec<String> = [
-        "synth",
-        "--model",
-        &s(&mp),
-        "--campaign",
-        &s(cpath),
-        "--out",
-        &s(&e),
-        "--truth",
-        &s(&dir.join("truth")),
-        "--seed",
-        &seed.to_string(),
-    ]
-    .map(String::from)
-    .into();
-    run(&args, None);
-    e
-}
+use common::synth;
 
 /// `calibrate --no-walls` of `energy` (budget `sims`, population `pop`, seed `seed`,
 /// `--distance distance` unless None: the default) into `out`. `--no-walls`: the tables

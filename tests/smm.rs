@@ -7,32 +7,6 @@ use pradar::energy::EnergyMatrix;
 use pradar::model::file::ModelConfig;
 use pradar::params::ParamGuard;
 use pradar::smm::{refine, SmmParams};
-use std::process::Command;
-
-/// `synth` of `model` on `cpath` (seed 11) into `dir/e.parquet`.
-fn synth(
-    dir: &std::path::Path,
-    cpath: &std::path::Path,
-    model: &ModelConfig,
-) -> std::path::PathBuf {
-    std::fs::create_dir_all(dir).unwrap();
-    let mp = dir.join("model.toml");
-    model.save(&mp).unwrap();
-    let e = dir.join("e.parquet");
-    let o = Command::new(env!("CARGO_BIN_EXE_pradar"))
-        .args(["synth", "--quiet", "--seed", "11", "--model"])
-        .arg(&mp)
-        .arg("--campaign")
-        .arg(cpath)
-        .arg("--out")
-        .arg(&e)
-        .arg("--truth")
-        .arg(dir.join("truth"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    e
-}
 
 /// On the corridor's table drawn from Table 1's defaults (clusters only), a start whose
 /// cluster RRCS σ is 10× the generating value and whose intra-cluster rate λ is half of it:
@@ -56,7 +30,7 @@ fn refinement_makes_a_wrong_start_pass_its_check() {
     let tmp = tempfile::tempdir().unwrap();
     let cpath = common::write_campaign(&tmp.path().join("in"), &common::corridor());
     let truth = ModelConfig::table1_defaults();
-    let e = synth(&tmp.path().join("s"), &cpath, &truth);
+    let e = common::synth(&tmp.path().join("s"), &cpath, &truth, 11);
     let c = Campaign::load(&cpath).unwrap();
     let em = EnergyMatrix::read(&e).unwrap();
     let mut start = truth.clone();

@@ -95,6 +95,40 @@ pub fn chain(
     (sc, pradar::energy::EnergyMatrix::read(&e).unwrap())
 }
 
+/// `pradar synth` of `model` (saved as `dir/model.toml`) on campaign `cpath` with `seed`
+/// into `dir/e.parquet`, its truth in `dir/truth`; the energy table.
+pub fn synth(
+    dir: &Path,
+    cpath: &Path,
+    model: &pradar::model::file::ModelConfig,
+    seed: u64,
+) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let mp = dir.join("model.toml");
+    model.save(&mp).unwrap();
+    let e = dir.join("e.parquet");
+    let seed = seed.to_string();
+    let o = pradar_quiet(&[
+        "synth",
+        "--model",
+        path_str(&mp),
+        "--campaign",
+        path_str(cpath),
+        "--out",
+        path_str(&e),
+        "--truth",
+        path_str(&dir.join("truth")),
+        "--seed",
+        &seed,
+    ]);
+    assert!(
+        o.status.success(),
+        "synth: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    e
+}
+
 /// A CLI failure: non-zero exit, no panic, exactly one `error: ` line naming `must_name`.
 pub fn assert_one_line_error(o: &std::process::Output, must_name: &str) {
     let err = String::from_utf8_lossy(&o.stderr);
