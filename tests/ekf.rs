@@ -550,6 +550,7 @@ fn scalable_against_dense(strict: bool, update: pradar::mapping::EkfUpdate) {
         building: pradar::mapping::score::building_region(&l.layout, &reference),
         objects: None,
         edge_band: Vec::new(),
+        detectable: None,
     };
     let dp = EkfParams {
         variant: EkfVariant::Dense,

@@ -543,6 +543,7 @@ fn two_trajectories_fused_beat_either_alone() {
         building: pradar::mapping::score::building_region(&loaded[0].layout, &reference),
         objects: None,
         edge_band: Vec::new(),
+        detectable: None,
     };
     let sc = score(&f, &reference, &region);
     assert!((sc.observable.psi - fused).abs() < 1e-12);

@@ -36,7 +36,7 @@ pub fn report_section(maps: &[(&str, MetricsPair)], sub: &str) -> Section {
     }
     let table = html_table(&metrics_table(&rows));
     let html = format!(
-        "<p>Occupancy grids (0.1 m cells; binary map: p &gt; 0.5) and the EKF map over RRCS (scalable filter; binary map: mean − 2·std &gt; μ0). Observable region: cells inside the −3 dB main lobe of some (pose, direction) within the usable bins, not outside the perimeter; whole map: every cell, outside cells counted as free. ψ in cells (lower is better).</p>\n<div>{imgs}</div>\n{table}"
+        "<p>Occupancy grids (0.1 m cells; binary map: p &gt; 0.5) and the EKF map over RRCS (scalable filter; binary map: mean − 2·std &gt; μ0). Observable region: cells inside the −3 dB main lobe of some (pose, direction) within the usable bins, not outside the perimeter; whole map: every cell, outside cells counted as free. Detectable walls (a simulated campaign): the wall cells whose own return reaches the detector's threshold in the main lobe of some (pose, direction) within the usable bins, from the simulator's paths — what the sweeps allowed; found within one cell, and their share of the observable wall cells. ψ in cells (lower is better).</p>\n<div>{imgs}</div>\n{table}"
     );
     Section {
         title: "Maps: occupancy grid (side-lobe aware vs boresight) and EKF".into(),

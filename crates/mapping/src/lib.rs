@@ -15,7 +15,7 @@
 //!   (exact and within one cell);
 //! * [`score`]: a map's figures against the reference map on the observable region, the
 //!   building and the whole map, and the report's metrics table; [`objects`]: the truth's
-//!   objects for the three-class figures;
+//!   objects for the three-class figures; [`detectable`]: the cells some beam could detect;
 //! * [`output`]: PNG, PGM + YAML (ROS map_server).
 //!
 //! * [`job`]: the map job (runs, fusion, the map files, `metrics.json`) that the `pradar map`
@@ -32,10 +32,11 @@ pub mod job;
 
 // the lower layers' modules under their old paths (`crate::campaign::…`)
 use pradar_channel::model;
-use pradar_formats::{campaign, error, export, io, params, progress, units};
+use pradar_formats::{campaign, error, export, io, params, progress, table, units};
 use pradar_radar::{energy, pattern};
 use pradar_simulate as simulate;
 
+pub mod detectable;
 pub mod ekf;
 pub mod experiment;
 pub mod grid;

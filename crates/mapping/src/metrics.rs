@@ -323,25 +323,10 @@ pub fn evaluate_three_class(
             object[c] = true;
         }
     }
-    let zone_of = |cells: &[usize]| -> Vec<usize> {
-        let mut z = Vec::new();
-        for &c in cells {
-            let (r, k) = ((c / cols) as isize, (c % cols) as isize);
-            for dr in -1..=1 {
-                for dc in -1..=1 {
-                    let (rr, cc) = (r + dr, k + dc);
-                    if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
-                        let j = rr as usize * cols + cc as usize;
-                        if !structure[j] && !z.contains(&j) {
-                            z.push(j);
-                        }
-                    }
-                }
-            }
-        }
-        z
-    };
-    let zones: Vec<Vec<usize>> = objects.iter().map(|o| zone_of(o)).collect();
+    let zones: Vec<Vec<usize>> = objects
+        .iter()
+        .map(|o| object_zone(o, &structure, rows, cols))
+        .collect();
     let mut zone = vec![false; n];
     for z in &zones {
         for &c in z {
@@ -418,6 +403,111 @@ pub fn evaluate_three_class(
         structure_cells: s_n,
         map_occupied: m_n,
         psi: psi3,
+    }
+}
+
+/// An object's zone: its cells and the 8-neighbours of them that are not structure.
+fn object_zone(cells: &[usize], structure: &[bool], rows: usize, cols: usize) -> Vec<usize> {
+    let mut z = Vec::new();
+    for &c in cells {
+        let (r, k) = ((c / cols) as isize, (c % cols) as isize);
+        for dr in -1..=1 {
+            for dc in -1..=1 {
+                let (rr, cc) = (r + dr, k + dc);
+                if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
+                    let j = rr as usize * cols + cc as usize;
+                    if !structure[j] && !z.contains(&j) {
+                        z.push(j);
+                    }
+                }
+            }
+        }
+    }
+    z
+}
+
+/// Figures of one map against the detectable reference ([`crate::detectable`]): the wall
+/// cells and objects some pose and direction could have detected, on the whole grid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DetectableMetrics {
+    /// Wall cells holding a detectable return.
+    pub wall_cells: usize,
+    /// Of those, the share with a map occupied cell within one cell (8-neighbourhood):
+    /// walls found against what the sweeps could detect.
+    pub walls_found_1: f64,
+    /// Wall cells in the observable region.
+    pub observable_wall_cells: usize,
+    /// Share of the observable region's wall cells that hold a detectable return.
+    pub detectable_share_of_observable: f64,
+    /// Objects with a cell holding a detectable return.
+    pub objects: usize,
+    /// Of those, objects with a map occupied cell in their zone (their cells and the
+    /// 8-neighbours that are not structure, as the three-class figures).
+    pub objects_found: usize,
+}
+
+impl DetectableMetrics {
+    /// The all-free map's figures (nothing found).
+    pub fn all_free(&self) -> DetectableMetrics {
+        DetectableMetrics {
+            walls_found_1: 0.0,
+            objects_found: 0,
+            ..*self
+        }
+    }
+}
+
+/// Figures of `map` against the detectable reference: `walls` the wall cells holding a
+/// detectable return, `object_returns` the cells holding a detectable object return,
+/// `objects` each object's cells, `reference` the layout's classes, `observable` the
+/// observable region.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_detectable(
+    map: &[bool],
+    reference: &[crate::reference::CellClass],
+    walls: &[bool],
+    object_returns: &[bool],
+    objects: &[Vec<usize>],
+    observable: &[bool],
+    rows: usize,
+    cols: usize,
+) -> DetectableMetrics {
+    use crate::reference::CellClass;
+    let structure: Vec<bool> = reference
+        .iter()
+        .map(|c| *c == CellClass::Occupied)
+        .collect();
+    let (mut n, mut found, mut obs, mut obs_det) = (0usize, 0usize, 0usize, 0usize);
+    for i in 0..map.len() {
+        if walls[i] {
+            n += 1;
+            found += any_in_3x3(map, rows, cols, i) as usize;
+        }
+        if structure[i] && observable[i] {
+            obs += 1;
+            obs_det += walls[i] as usize;
+        }
+    }
+    let (mut det_objects, mut det_found) = (0usize, 0usize);
+    for o in objects {
+        if o.iter().any(|&c| object_returns[c]) {
+            det_objects += 1;
+            if object_zone(o, &structure, rows, cols)
+                .iter()
+                .any(|&c| map[c])
+            {
+                det_found += 1;
+            }
+        }
+    }
+    let ratio = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { 0.0 };
+    DetectableMetrics {
+        wall_cells: n,
+        walls_found_1: ratio(found, n),
+        observable_wall_cells: obs,
+        detectable_share_of_observable: ratio(obs_det, obs),
+        objects: det_objects,
+        objects_found: det_found,
     }
 }
 

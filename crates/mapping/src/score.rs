@@ -24,12 +24,22 @@
 //! ([`evaluate_three_class`], definitions in [`crate::metrics`]), each beside the
 //! all-free map's, with the cells a wall touches only along an edge as an ignore band
 //! ([`LayoutRaster::edge_band`](crate::reference::LayoutRaster::edge_band)). A campaign without a truth has `three_class: null`.
+//!
+//! Detectable figures (`three_class.detectable`, `simulate`'s truth only): the wall cells
+//! and objects some pose and direction could have detected ([`crate::detectable`]), the
+//! share of them the map found within one cell, and the detectable share of the
+//! observable region's wall cells — the ceiling beside the observable and building
+//! figures.
 
 use crate::campaign::layout::Layout;
+use crate::detectable::DetectableReturns;
 use crate::export::{Cell, Column, Table};
 use crate::grid::ObservationModel;
 use crate::memo::Memo;
-use crate::metrics::{evaluate, evaluate_three_class, MapMetrics, ThreeClassMetrics};
+use crate::metrics::{
+    evaluate, evaluate_detectable, evaluate_three_class, DetectableMetrics, MapMetrics,
+    ThreeClassMetrics,
+};
 use crate::objects::Objects;
 use crate::og::LogOddsMap;
 use crate::reference::{CellClass, LayoutRaster, ReferenceMap};
@@ -77,6 +87,9 @@ pub struct ThreeClassFigures {
     pub whole: ThreeClassMetrics,
     /// The all-free map on the whole grid.
     pub whole_all_free: ThreeClassMetrics,
+    /// The map against the detectable reference (`simulate`'s truth only:
+    /// [`crate::detectable`]).
+    pub detectable: Option<DetectableMetrics>,
 }
 
 /// A map's errors per reference class (see the module docs).
@@ -109,6 +122,9 @@ pub struct Regions {
     /// The cells a wall touches only along an edge or at a corner, an ignore band of the
     /// three-class figures ([`LayoutRaster::edge_band`](crate::reference::LayoutRaster::edge_band); empty: none).
     pub edge_band: Vec<bool>,
+    /// The cells holding a return some pose and direction could detect (`simulate`'s truth
+    /// only, [`crate::detectable`]; `None`: no detectable reference).
+    pub detectable: Option<DetectableReturns>,
 }
 
 /// Score a log-odds map (binary at p > 0.5) against the reference.
@@ -158,6 +174,18 @@ pub fn score_binary(bin: &[bool], reference: &ReferenceMap, regions: &Regions) -
             building_all_free: e(&free, &regions.building),
             whole: e(bin, &all),
             whole_all_free: e(&free, &all),
+            detectable: regions.detectable.as_ref().map(|d| {
+                evaluate_detectable(
+                    bin,
+                    &reference.cells,
+                    &d.walls,
+                    &d.objects,
+                    &o.cells,
+                    &regions.observable,
+                    rows,
+                    cols,
+                )
+            }),
         }
     });
     MetricsPair {
@@ -247,7 +275,9 @@ fn observable_region_of(runs: &[&ObservationModel], layout: &Layout) -> Vec<bool
 /// the observable region, ψ and the wrong-cell rate on the building, the per-class errors,
 /// ψ, F1 and the wrong-cell rate on the whole map, and (with a truth) the three-class
 /// wrong cells on the building beside the all-free map's, ψ, F1 within one cell and free
-/// cells marked occupied on the building, and the objects found.
+/// cells marked occupied on the building, and the objects found; with `simulate`'s truth
+/// the detectable wall cells found within one cell and their share of the observable
+/// wall cells ([`crate::detectable`]).
 pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
     let mut t = Table::new(vec![
         Column::new("map", "map"),
@@ -275,6 +305,14 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
             "three_class_free_marked_building",
         ),
         Column::new("objects found", "objects_found"),
+        Column::new(
+            "detectable walls found (1 cell)",
+            "detectable_walls_found_1",
+        ),
+        Column::new(
+            "detectable share of obs. walls",
+            "detectable_share_of_observable",
+        ),
         Column::new("metrics", "metrics"),
     ]);
     for (name, m, link) in rows {
@@ -317,6 +355,14 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
                 Some(t) => Cell::text(format!("{} of {}", t.whole.objects_found, t.whole.objects)),
                 None => Cell::missing("—"),
             },
+            match m.three_class.and_then(|t| t.detectable) {
+                Some(d) => Cell::fixed(d.walls_found_1, 3),
+                None => Cell::missing("—"),
+            },
+            match m.three_class.and_then(|t| t.detectable) {
+                Some(d) => Cell::fixed(d.detectable_share_of_observable, 3),
+                None => Cell::missing("—"),
+            },
             match link {
                 Some(href) => Cell::Link {
                     text: "metrics.json".into(),
@@ -350,6 +396,7 @@ impl MetricsPair {
                 observable: t.observable_all_free,
                 building: t.building_all_free,
                 whole: t.whole_all_free,
+                detectable: t.detectable.map(|d| d.all_free()),
                 ..t
             }),
         }

@@ -278,6 +278,16 @@ impl ObservationModel {
         g * g
     }
 
+    /// Two-way weight of direction `d` towards relative bearing `theta_rel` (rad) against
+    /// the array's peak gain over all directions (the broadside gain G0 of `simulate`'s
+    /// truth powers): [`ObservationModel::weight`] times the direction's scan loss
+    /// (G_max,d / G0)², 1 for mechanical steering.
+    pub fn broadside_weight(&self, d: usize, theta_rel: f64) -> f64 {
+        let g0 = self.gain.gmax.iter().cloned().fold(0.0f64, f64::max);
+        let g = self.gain.gain(d, theta_rel) / g0;
+        g * g
+    }
+
     #[inline]
     fn bin_of_range(&self, r: f64) -> f64 {
         (2.0 * r / (C0 * self.bin_width_s)).round()

@@ -10,6 +10,7 @@
 use super::{MapRun, MapValid};
 use crate::campaign::layout::Layout;
 use crate::campaign::manifest::{Campaign, Pose};
+use crate::detectable::{detectable_returns, truth_rays};
 use crate::energy::{EnergyMatrix, EnergySource, EnergyTable};
 use crate::error::{Error, Result};
 use crate::grid::{GridValid, ObservationModel, Occlusion};
@@ -159,7 +160,8 @@ pub fn load_runs(opts: &MapValid) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
 
 /// The regions of loaded runs, from the poses their data were recorded at and the first
 /// run's layout, with the first run's truth objects when it has a truth
-/// ([`find_truth`]; an unreadable truth is an error).
+/// ([`find_truth`]; an unreadable truth is an error) and, for `simulate`'s truth, its
+/// detectable returns at the first run's detector threshold ([`detectable_returns`]).
 pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Regions> {
     let models: Vec<ObservationModel> = loaded
         .iter()
@@ -171,8 +173,19 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
         .collect();
     let refs: Vec<&ObservationModel> = models.iter().collect();
     let layout = &loaded[0].layout;
-    let objects = match find_truth(&loaded[0].campaign.path, &loaded[0].energy_path) {
-        Some(dir) => Some(load_objects(&dir, layout, reference.spec)?),
+    let truth = find_truth(&loaded[0].campaign.path, &loaded[0].energy_path);
+    let objects = match &truth {
+        Some(dir) => Some(load_objects(dir, layout, reference.spec)?),
+        None => None,
+    };
+    let detectable = match truth.as_deref().and_then(truth_rays) {
+        Some(rays) => Some(detectable_returns(
+            &rays,
+            &models[0],
+            loaded[0].detector.threshold,
+            window_kernel(&loaded[0].campaign)?[0],
+            reference,
+        )?),
         None => None,
     };
     Ok(Regions {
@@ -180,5 +193,6 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
         building: building_region(layout, reference),
         edge_band: layout.edge_band(reference),
         objects,
+        detectable,
     })
 }
