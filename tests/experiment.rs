@@ -219,6 +219,106 @@ fn fig5_puts_sweeps_and_model_data_side_by_side() {
     assert!(html.contains("fig5/fig5.png") && html.contains("maps/sweeps_n400_ekf/ekf_mean.png"));
 }
 
+/// The (seed, mapper) pairs of fig6's findings where N = 16 has more wrong cells than
+/// N = 100 on the region ("interior" or "whole map"), and how many pairs there are.
+fn more_wrong_pairs(v: &Value, data: &str, region: &str) -> (usize, usize) {
+    let (mut holds, mut pairs) = (0, 0);
+    for (k, val) in findings(v) {
+        if k.starts_with(&format!("{data} data,")) && k.ends_with(&format!("({region})")) {
+            for part in val.split(['(', ';', ')']).filter(|p| p.contains(" vs ")) {
+                let nums: Vec<usize> = part
+                    .split(|c: char| !c.is_ascii_digit())
+                    .filter_map(|t| t.parse().ok())
+                    .collect();
+                let (a, b) = (nums[nums.len() - 2], nums[nums.len() - 1]);
+                pairs += 1;
+                holds += (a > b) as usize;
+            }
+        }
+    }
+    (holds, pairs)
+}
+
+/// `--data physics` (issue 55, item 3): fig6 maps the campaign's scene simulated at each N
+/// and seed (manifest seed + seed) instead of model data: every case is a physics case, the
+/// two seeds are two realisations (different manifests' seeds, different maps), the
+/// findings name the data and count the three-class building wrong cells of the cases
+/// (objects are not wrong), and the page says which data it used.
+#[test]
+fn fig6_on_physics_sweeps_simulates_each_size_and_seed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("phys");
+    let v = run_with_inputs("fig6", &out, &["--data", "physics", "--seeds", "1,2"]);
+    let cs = cases(&v);
+    assert_eq!(cs.len(), 8, "2 sizes x 2 seeds x 2 mappers");
+    for c in cs {
+        let key = c["key"].as_str().unwrap();
+        assert!(key.starts_with("physics_s"), "{key}");
+        assert!(c["case"]["source"]["Physics"].as_u64().is_some(), "{c}");
+    }
+    let base: u64 = {
+        let t: toml::Table = std::fs::read_to_string(&inputs()[1])
+            .unwrap()
+            .parse()
+            .unwrap();
+        t["seed"].as_integer().unwrap() as u64
+    };
+    for s in [1u64, 2] {
+        let m: toml::Table =
+            std::fs::read_to_string(out.join(format!("work/physics_n16_s{s}/campaign.toml")))
+                .unwrap()
+                .parse()
+                .unwrap();
+        assert_eq!(m["seed"].as_integer().unwrap() as u64, base + s);
+    }
+    assert_ne!(
+        find(&v, "physics_s1_n16_og")["wrong_whole"],
+        find(&v, "physics_s2_n16_og")["wrong_whole"]
+    );
+    let f6 = findings(&v);
+    assert!(
+        f6.iter().all(|(k, _)| k.starts_with("physics data")),
+        "{f6:?}"
+    );
+    let og = f6
+        .iter()
+        .find(|(k, _)| k.starts_with("physics data, OG") && k.ends_with("(interior)"))
+        .unwrap();
+    let want = |s: u64, n: usize| {
+        find(&v, &format!("physics_s{s}_n{n}_og"))["three_class"]["building"]["wrong"]
+            .as_u64()
+            .unwrap()
+    };
+    assert!(
+        og.1.contains(&format!("seed 1: {} vs {}", want(1, 16), want(1, 100))),
+        "{og:?}"
+    );
+    let page = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(page.contains("OG (side-lobe aware) vs EKF on physics sweeps"));
+    let csv = std::fs::read_to_string(out.join("fig6/fig6.csv")).unwrap();
+    assert_eq!(csv.lines().filter(|l| l.contains(",physics,")).count(), 8);
+    assert_one_line_error(
+        &pradar(&["experiment", "fig6", "--out", s(&out), "--data", "measured"]),
+        "data",
+    );
+}
+
+/// Issue 55's must-show for fig6 on physics sweeps: on the corridor (three seeds), N = 16
+/// has more wrong cells than N = 100 (three-class, building) for each mapper in at least 5
+/// of the 6 (seed, mapper) pairs. About 1 min; run with `--ignored`.
+#[test]
+#[ignore = "unmet: 4 of 6 on the building (OG 3 of 3: 245 vs 225, 268 vs 267, 267 vs 258; EKF 1 of 3: 274 vs 292, 338 vs 336, 297 vs 300); 5 of 6 on the whole map"]
+fn fig6_on_physics_sweeps_n16_has_more_wrong_cells_than_n100() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("phys3");
+    let v = run_with_inputs("fig6", &out, &["--data", "physics", "--seeds", "1,2,3"]);
+    let (building, n) = more_wrong_pairs(&v, "physics", "interior");
+    let (whole, _) = more_wrong_pairs(&v, "physics", "whole map");
+    println!("building: {building} of {n}; whole map: {whole} of {n}");
+    assert_eq!(n, 6);
+    assert!(building >= 5, "building: {building} of {n}");
+}
+
 #[test]
 fn bad_experiment_input_gives_one_clear_error() {
     let tmp = tempfile::tempdir().unwrap();

@@ -27,7 +27,7 @@ use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
 };
 use pradar::mpc::{DiffuseParams, ExtractParams, Method as ExtractMethod};
-use pradar::pipeline::experiment::ExperimentParams;
+use pradar::pipeline::experiment::{ExperimentParams, Fig6Data};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -519,6 +519,15 @@ pub struct ExperimentArgs {
     /// Model file for model data (default: fitted from the campaign's energy table).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// fig6's data per seed: model (synth of the model file) or physics (the campaign's
+    /// [scene] simulated at each N and seed).
+    #[arg(
+        long,
+        default_value_t = ExperimentParams::default().fig6_data,
+        value_parser = choice(&Fig6Data::ALL, Fig6Data::name),
+        hide_possible_values = true
+    )]
+    pub data: Fig6Data,
     #[command(flatten)]
     pub seeds: SeedsArg,
 }

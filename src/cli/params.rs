@@ -286,7 +286,9 @@ impl ExperimentArgs {
                 energy: self.energy,
                 model: self.model,
             },
-            params: ExperimentParams::default().seeds(self.seeds.seeds),
+            params: ExperimentParams::default()
+                .seeds(self.seeds.seeds)
+                .fig6_data(self.data),
             out: self.out,
         }
     }

@@ -21,6 +21,9 @@ pub enum DataSource {
     Sweeps,
     /// `synth` with the model file, this seed.
     Model(u64),
+    /// The campaign's `[scene]` simulated at the case's N with the manifest's seed plus
+    /// this seed (a new realisation of its clutter and noise, as `explore`'s seeds).
+    Physics(u64),
 }
 
 /// One map of an experiment.

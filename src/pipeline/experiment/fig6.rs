@@ -1,11 +1,15 @@
-//! fig6: OG and EKF on model data at N = 16 and N = 100, every seed (and on the campaign's
-//! sweeps simulated at both N, when the campaign has a `[scene]`).
+//! fig6: OG and EKF at N = 16 and N = 100, every seed, on model data (`synth` of the model
+//! file, the default; with the campaign's sweeps simulated once at both N beside, when the
+//! campaign has a `[scene]`) or on physics sweeps (`--data physics`: the campaign's
+//! `[scene]` simulated at each N and seed, the manifest's seed plus the seed, as the paper
+//! mapped its measured sweeps).
 //!
 //! The paper's statement "N = 16 has more wrong cells than N = 100" is checked per mapper
 //! and seed, on the interior and on the whole map; the means over seeds are listed beside.
+//! The page's description names the data.
 
 use super::lab::{join_u, mean, result, CaseFigures, DataSource, Lab, Mapped, Panel};
-use super::ExperimentResult;
+use super::{ExperimentResult, Fig6Data};
 use crate::error::Result;
 
 type Findings = Vec<(String, String)>;
@@ -21,18 +25,28 @@ impl Lab<'_> {
         let mut findings = Vec::new();
         for interior in [true, false] {
             findings.extend(self.more_wrong_findings(&cases, (small, large), interior));
-            findings.extend(sweeps_findings(
-                &cases,
-                (small, large),
-                interior,
-                sweeps_note.as_deref(),
-            ));
+            if self.params.fig6_data == Fig6Data::Model {
+                findings.extend(sweeps_findings(
+                    &cases,
+                    (small, large),
+                    interior,
+                    sweeps_note.as_deref(),
+                ));
+            }
         }
-        findings.extend(mean_findings(&cases, &sizes));
+        findings.extend(mean_findings(&cases, &sizes, self.params.fig6_data));
         let first = self.params.seeds[0];
+        let data = match self.params.fig6_data {
+            Fig6Data::Model => "model data (synth of the model file; `--data physics` maps the campaign's scene simulated per seed)".to_string(),
+            Fig6Data::Physics => "physics sweeps (the campaign's scene simulated at each N with its seed plus the seed: a new realisation of its clutter and noise per seed; the findings count wrong cells against the three-class reference, so the simulator's objects are not wrong cells)".to_string(),
+        };
+        let beside = match self.params.fig6_data {
+            Fig6Data::Model => " The same comparison on the campaign's sweeps simulated at both N is listed beside it.",
+            Fig6Data::Physics => "",
+        };
         Ok(result(
             "fig6",
-            &format!("OG (side-lobe aware) vs EKF on model data at N = {small} and N = {large}, seeds {}; the panel shows seed {first} (colours as fig5). Wrong cells and ψ on the interior (the reference's known cells) and on the whole map (the same cells for both N in each). The same comparison on the campaign's sweeps simulated at both N is listed beside it.", join_u(&self.params.seeds)),
+            &format!("OG (side-lobe aware) vs EKF on {data} at N = {small} and N = {large}, seeds {}; the panel shows seed {first} (colours as fig5). Wrong cells and ψ on the interior (the reference's known cells) and on the whole map (the same cells for both N in each).{beside}", join_u(&self.params.seeds)),
             cases,
             findings,
             panel,
@@ -48,9 +62,12 @@ impl Lab<'_> {
         for &n in sizes {
             for s in self.seeds() {
                 for m in ["og", "ekf"] {
-                    cases.push(self.base_case(DataSource::Model(s), n, m));
+                    cases.push(self.base_case(self.fig6_source(s), n, m));
                 }
             }
+        }
+        if self.params.fig6_data == Fig6Data::Physics {
+            return (cases, Some("the physics sweeps are the seeds' data".into()));
         }
         let mut sweeps_note = None;
         for &n in sizes {
@@ -68,12 +85,20 @@ impl Lab<'_> {
         (cases, sweeps_note)
     }
 
+    /// fig6's data at seed `s` ([`Fig6Data`]).
+    fn fig6_source(&self, s: u64) -> DataSource {
+        match self.params.fig6_data {
+            Fig6Data::Model => DataSource::Model(s),
+            Fig6Data::Physics => DataSource::Physics(s),
+        }
+    }
+
     /// The panel: per data source (first seed, sweeps) and size, the reference then OG and
     /// EKF, titled with the interior / whole wrong cells.
     fn fig6_panel(&self, done: &[Mapped], sizes: &[usize]) -> Panel {
         let first = self.params.seeds[0];
         let mut tiles = Vec::new();
-        for src in [DataSource::Model(first), DataSource::Sweeps] {
+        for src in [self.fig6_source(first), DataSource::Sweeps] {
             for &n in sizes {
                 let row: Vec<&Mapped> = ["og", "ekf"]
                     .iter()
@@ -92,6 +117,7 @@ impl Lab<'_> {
                 for d in row {
                     let what = match src {
                         DataSource::Model(s) => format!("model s{s}"),
+                        DataSource::Physics(s) => format!("physics s{s}"),
                         DataSource::Sweeps => "sweeps".into(),
                     };
                     tiles.push(self.tile(
@@ -109,7 +135,7 @@ impl Lab<'_> {
         self.panel(tiles, 3)
     }
 
-    /// Per mapper on model data: in how many seeds N = small has more wrong cells than
+    /// Per mapper on the seeds' data: in how many seeds N = small has more wrong cells than
     /// N = large on the region.
     fn more_wrong_findings(
         &self,
@@ -123,7 +149,7 @@ impl Lab<'_> {
             let mut holds = 0;
             let mut pairs = Vec::new();
             for s in self.seeds() {
-                let src = DataSource::Model(s);
+                let src = self.fig6_source(s);
                 let (a, b) = (
                     wrong_cells(cases, src, small, m, interior).unwrap_or(0),
                     wrong_cells(cases, src, large, m, interior).unwrap_or(0),
@@ -133,7 +159,8 @@ impl Lab<'_> {
             }
             findings.push((
                 format!(
-                    "model data, {}: N = {small} more wrong cells than N = {large} ({region})",
+                    "{} data, {}: N = {small} more wrong cells than N = {large} ({region})",
+                    self.params.fig6_data.name(),
                     m.to_uppercase()
                 ),
                 format!(
@@ -155,7 +182,9 @@ fn region_name(interior: bool) -> &'static str {
     }
 }
 
-/// Wrong cells of the case with these data, N and mapper on the region, if it was mapped.
+/// Wrong cells of the case with these data, N and mapper on the region, if it was mapped:
+/// on physics sweeps against the three-class reference (the simulator's objects are not
+/// wrong cells; the building for the interior), else against the layout.
 fn wrong_cells(
     cases: &[CaseFigures],
     src: DataSource,
@@ -166,12 +195,11 @@ fn wrong_cells(
     cases
         .iter()
         .find(|c| c.case.elements == n && c.case.method == m && c.case.source == src)
-        .map(|c| {
-            if interior {
-                c.wrong_interior
-            } else {
-                c.wrong_whole
-            }
+        .map(|c| match (src, c.three_class) {
+            (DataSource::Physics(_), Some(t)) if interior => t.building.wrong,
+            (DataSource::Physics(_), Some(t)) => t.whole.wrong,
+            _ if interior => c.wrong_interior,
+            _ => c.wrong_whole,
         })
 }
 
@@ -206,8 +234,8 @@ fn sweeps_findings(
     findings
 }
 
-/// Per size and mapper on model data: mean wrong cells, ψ and F1 over seeds.
-fn mean_findings(cases: &[CaseFigures], sizes: &[usize]) -> Findings {
+/// Per size and mapper on the seeds' data: mean wrong cells, ψ and F1 over seeds.
+fn mean_findings(cases: &[CaseFigures], sizes: &[usize], data: Fig6Data) -> Findings {
     let mut findings = Vec::new();
     for &n in sizes {
         for m in ["og", "ekf"] {
@@ -216,7 +244,10 @@ fn mean_findings(cases: &[CaseFigures], sizes: &[usize]) -> Findings {
                 .filter(|c| {
                     c.case.elements == n
                         && c.case.method == m
-                        && matches!(c.case.source, DataSource::Model(_))
+                        && match data {
+                            Fig6Data::Model => matches!(c.case.source, DataSource::Model(_)),
+                            Fig6Data::Physics => matches!(c.case.source, DataSource::Physics(_)),
+                        }
                 })
                 .collect();
             let w: Vec<f64> = sel.iter().map(|c| c.wrong_interior as f64).collect();
@@ -225,7 +256,11 @@ fn mean_findings(cases: &[CaseFigures], sizes: &[usize]) -> Findings {
             let ww: Vec<f64> = sel.iter().map(|c| c.wrong_whole as f64).collect();
             let pw: Vec<f64> = sel.iter().map(|c| c.psi_whole).collect();
             findings.push((
-                format!("model data, N = {n}, {} (mean over seeds)", m.to_uppercase()),
+                format!(
+                    "{} data, N = {n}, {} (mean over seeds)",
+                    data.name(),
+                    m.to_uppercase()
+                ),
                 format!(
                     "interior: wrong cells {:.1}, ψ {:.3}, F1 {:.3}; whole map: wrong cells {:.1}, ψ {:.3}",
                     mean(&w),

@@ -39,6 +39,7 @@ pub fn case_key(case: &Case, base: &ExperimentValid) -> String {
     let mut k = match case.source {
         DataSource::Sweeps => format!("sweeps_n{}_{}", case.elements, case.method),
         DataSource::Model(s) => format!("model_s{s}_n{}_{}", case.elements, case.method),
+        DataSource::Physics(s) => format!("physics_s{s}_n{}_{}", case.elements, case.method),
     };
     if case.method == "og" && case.og_prior != base.og.prior {
         k.push_str(&format!("_prior{:.3}", case.og_prior));
@@ -102,6 +103,8 @@ pub struct Lab<'a> {
     reference: ReferenceMap,
     synth_cache: HashMap<(usize, u64), PathBuf>,
     sweeps_cache: HashMap<usize, (PathBuf, PathBuf)>,
+    /// The campaign simulated at (N, seed) for [`DataSource::Physics`].
+    physics_cache: HashMap<(usize, u64), (PathBuf, PathBuf)>,
     /// Why the sweeps at N could not be made ([`Lab::sweeps_failure`]): not tried again.
     sweeps_failed: HashMap<usize, String>,
     map_cache: HashMap<String, MapReport>,
@@ -134,6 +137,7 @@ impl<'a> Lab<'a> {
             reference,
             synth_cache: HashMap::new(),
             sweeps_cache: HashMap::new(),
+            physics_cache: HashMap::new(),
             sweeps_failed: HashMap::new(),
             map_cache: HashMap::new(),
             progress,
@@ -233,6 +237,17 @@ impl<'a> Lab<'a> {
         Some(why)
     }
 
+    /// The campaign simulated at N elements with the manifest's seed plus `seed`, and its
+    /// energy table (made once per process, [`simulate_physics`]).
+    fn physics_data(&mut self, elements: usize, seed: u64) -> Result<(PathBuf, PathBuf)> {
+        if let Some(p) = self.physics_cache.get(&(elements, seed)) {
+            return Ok(p.clone());
+        }
+        let r = simulate_physics(&self.inputs.campaign, &self.out, elements, seed)?;
+        self.physics_cache.insert((elements, seed), r.clone());
+        Ok(r)
+    }
+
     /// Take sweeps at N elements made beforehand by [`simulate_sweeps`] (same campaign,
     /// same folder): the lab then does not simulate them again.
     pub fn preset_sweeps(&mut self, elements: usize, made: (PathBuf, PathBuf)) {
@@ -244,6 +259,10 @@ impl<'a> Lab<'a> {
         let (campaign, energy, elements) = match case.source {
             DataSource::Sweeps => {
                 let (c, e) = self.sweeps_data(case.elements)?;
+                (c, e, None)
+            }
+            DataSource::Physics(s) => {
+                let (c, e) = self.physics_data(case.elements, s)?;
                 (c, e, None)
             }
             DataSource::Model(s) => (
@@ -285,7 +304,7 @@ impl<'a> Lab<'a> {
             .filter(|c| !self.map_cache.contains_key(&case_key(c, &self.params)))
             .filter_map(|c| match c.source {
                 DataSource::Model(s) => Some((c.elements, s)),
-                DataSource::Sweeps => None,
+                DataSource::Sweeps | DataSource::Physics(_) => None,
             })
             .collect();
         self.make_model_data(&wanted)?;
@@ -434,6 +453,28 @@ pub fn simulate_sweeps(campaign: &Path, out: &Path, elements: usize) -> Result<(
     Ok((sim.manifest, e))
 }
 
+/// The campaign `campaign` simulated at N elements with its manifest's seed plus `seed`
+/// (a new realisation of its `[scene]`: clutter and noise), with its energy table, into
+/// `out/work/physics_nN_sS`: (manifest, energy table).
+pub fn simulate_physics(
+    campaign: &Path,
+    out: &Path,
+    elements: usize,
+    seed: u64,
+) -> Result<(PathBuf, PathBuf)> {
+    let mut c = Campaign::load(campaign)?;
+    c.set_elements(elements)?;
+    c.manifest.seed = c.manifest.seed.wrapping_add(seed);
+    let dir = out
+        .join("work")
+        .join(format!("physics_n{elements}_s{seed}"));
+    let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
+    let sc = Campaign::load(&sim.manifest)?;
+    let e = dir.join("energy.parquet");
+    energy::run(&sc, &e, &|_, _| {})?;
+    Ok((sim.manifest, e))
+}
+
 /// The mean of `v` (NaN when empty).
 pub(super) fn mean(v: &[f64]) -> f64 {
     if v.is_empty() {
@@ -485,6 +526,7 @@ pub fn case_table(cases: &[CaseFigures]) -> Table {
         let (data, seed) = match k.source {
             DataSource::Sweeps => ("sweeps", Cell::missing("")),
             DataSource::Model(s) => ("model", Cell::text(s.to_string())),
+            DataSource::Physics(s) => ("physics", Cell::text(s.to_string())),
         };
         let mut row = vec![
             Cell::text(&c.key),

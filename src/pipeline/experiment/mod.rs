@@ -69,7 +69,7 @@ pub use inputs::{prepare_inputs, ExperimentInputs, InputOptions};
 pub use lab::{
     case_table, Case, CaseFigures, DataSource, ExperimentResult, Figure, Lab, Panel, PanelTile,
 };
-pub use params::{ExperimentParams, ExperimentValid};
+pub use params::{ExperimentParams, ExperimentValid, Fig6Data};
 
 /// The experiments.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -14,10 +14,12 @@ use crate::params::{ParamGuard, Valid};
 /// [`ParamGuard::check`] into an [`ExperimentValid`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExperimentParams {
-    /// Model-data seeds (1, 2, 3).
+    /// Seeds of the model data (and of fig6's physics sweeps) (1, 2, 3).
     pub seeds: Vec<u64>,
     /// Array sizes compared by fig6 (16, 100).
     pub compare_elements: Vec<usize>,
+    /// fig6's data per seed: model data (`synth`, the default) or physics sweeps.
+    pub fig6_data: Fig6Data,
     /// Array size of prior-sensitivity (16).
     pub sensitivity_elements: usize,
     /// Relative change of the priors (0.4).
@@ -44,6 +46,7 @@ impl Default for ExperimentParams {
         ExperimentParams {
             seeds: vec![1, 2, 3],
             compare_elements: vec![16, 100],
+            fig6_data: Fig6Data::Model,
             sensitivity_elements: 16,
             prior_change: 0.4,
             pose_elements: 100,
@@ -56,7 +59,53 @@ impl Default for ExperimentParams {
     }
 }
 
+/// Where fig6's maps come from at each seed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fig6Data {
+    /// `synth` of the model file (the default: the corridor's three seeds at two N cost
+    /// 12 model draws, about a second each; physics costs a simulation per N and seed).
+    Model,
+    /// The campaign's `[scene]` simulated at each N and seed (as the paper mapped its
+    /// measured sweeps); needs a campaign with a `[scene]`.
+    Physics,
+}
+
+impl Fig6Data {
+    /// Every value, in `--help` order.
+    pub const ALL: [Fig6Data; 2] = [Fig6Data::Model, Fig6Data::Physics];
+
+    /// Its name on the command line and the page.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Fig6Data::Model => "model",
+            Fig6Data::Physics => "physics",
+        }
+    }
+}
+
+impl std::str::FromStr for Fig6Data {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Fig6Data::ALL
+            .into_iter()
+            .find(|d| d.name() == s)
+            .ok_or_else(|| Error::param("data", format!("`{s}` is not model or physics")))
+    }
+}
+
+impl std::fmt::Display for Fig6Data {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl ExperimentParams {
+    /// Set fig6's data.
+    pub fn fig6_data(mut self, data: Fig6Data) -> Self {
+        self.fig6_data = data;
+        self
+    }
+
     /// Set the model-data seeds.
     pub fn seeds(mut self, seeds: Vec<u64>) -> Self {
         self.seeds = seeds;
