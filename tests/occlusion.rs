@@ -682,7 +682,8 @@ fn main_lobe_evidence(run: &pradar::mapping::job::LoadedRun) -> Vec<bool> {
 /// off by the kernel's K(0), or the pattern's gain) or without the main-lobe rule would
 /// not hold them. The detectable share of the observable walls is between 0.5 and 1 (a
 /// reference of every observable wall, the old ceiling, reads 1), and each mapper's
-/// detectable walls found is printed beside its observable walls found.
+/// detectable walls found is printed beside its observable walls found. Each map's false
+/// cells by cause (issue 55, item 2) add up to the free cells it marks (printed).
 #[test]
 fn the_detectable_walls_hold_the_walls_the_echoes_show() {
     use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
@@ -758,6 +759,31 @@ fn the_detectable_walls_hold_the_walls_the_echoes_show() {
             g("ekf", &["metrics", "three_class", "detectable", "objects_found"]),
             g("og", &["metrics", "three_class", "detectable", "objects"]),
         );
+        for method in ["og", "ekf"] {
+            // false cells by cause: they add up to the free cells the three-class figures
+            // count as marked (room and beyond the walls, whole grid)
+            let fc = |k: &str| g(method, &["metrics", "three_class", "false_cells", k]);
+            let w = |k: &str| g(method, &["metrics", "three_class", "whole", k]);
+            let marked = (w("free_marked_occupied") * w("free_cells")
+                + w("beyond_marked_occupied") * w("beyond_cells"))
+            .round();
+            let parts = ["main_lobe_arc", "side_lobe", "folded", "image", "noise"];
+            eprintln!(
+                "{name} N={n} {method}: false cells {:.0} = arc {:.0} + side lobe {:.0} + folded {:.0} + image {:.0} + noise {:.0}",
+                fc("total"),
+                fc(parts[0]),
+                fc(parts[1]),
+                fc(parts[2]),
+                fc(parts[3]),
+                fc(parts[4])
+            );
+            if fc("total") != marked || parts.iter().map(|k| fc(k)).sum::<f64>() != fc("total") {
+                failures.push(format!(
+                    "{name} N={n} {method}: false cells {} do not add up (marked free cells {marked})",
+                    fc("total")
+                ));
+            }
+        }
         if (held as f64) < 0.9 * shown as f64 {
             failures.push(format!(
                 "{name} N={n}: {held} of {shown} shown wall cells near a detectable one (< 0.9)"

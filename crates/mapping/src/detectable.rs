@@ -52,6 +52,19 @@
 //! `target`) count for the objects of [`crate::objects`] (an image target beyond a wall is
 //! no object and marks nothing).
 //!
+//! **False cells** (issue 55, item 2): what would explain a free cell (room or beyond
+//! the walls, not a wall) that a map marks occupied. Over every (pose, direction) whose
+//! main lobe holds the cell within the usable bins, the strongest path of that pose whose
+//! apparent delay lies within one bin of the cell's and whose energy in that direction
+//! reaches η_E by itself; its kind is the cause ([`FalseCause`]), in this order: *folded*
+//! (true delay beyond the unambiguous 1/Δf, apparent delay its remainder), *side lobe*
+//! (the path's bearing outside the direction's main lobe), *image* (its reflection point
+//! beyond the walls: a multi-bounce path seen through one), *main-lobe arc* (a path in the
+//! main lobe at the cell's range, elsewhere on the arc the lobe spans: the detection is
+//! the path's, its place along the arc unknown to the mapper); none: *noise* (or weak paths
+//! that only add up). A map's false cells are counted per cause
+//! ([`crate::metrics::false_cells_by_cause`]).
+//!
 //! Only `simulate`'s truth has a detectable reference: `synth`'s rays are drawn per pose
 //! around each cluster's centroid, not points in the room ([`crate::objects`]), and a
 //! measured campaign has no truth.
@@ -61,6 +74,22 @@ use crate::grid::ObservationModel;
 use crate::reference::{CellClass, ReferenceMap};
 use geo::Coord;
 use std::path::Path;
+
+/// What explains a free cell marked occupied (module docs, "False cells"), in the order the
+/// page lists them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FalseCause {
+    /// A path in the cell's main lobe at the cell's range, elsewhere on the arc.
+    MainLobeArc,
+    /// A path at the cell's range seen through the direction's side lobe.
+    SideLobe,
+    /// A path from beyond the unambiguous range, folded to the cell's range.
+    Folded,
+    /// A path whose reflection point lies beyond the walls (an image seen through a wall).
+    Image,
+    /// No path alone reaches the threshold there: noise (or weak paths adding up).
+    Noise,
+}
 
 /// Rows read from `rays.parquet` per slice.
 const SLICE_ROWS: usize = 1 << 20;
@@ -76,6 +105,9 @@ pub struct DetectableReturns {
     pub walls: Vec<bool>,
     /// Cells holding a detectable object return (clutter scatterers, targets).
     pub objects: Vec<bool>,
+    /// Per cell, what would explain it if a map marked it occupied where the reference has
+    /// free space (module docs, "False cells").
+    pub cause: Vec<FalseCause>,
     /// Paths read.
     pub paths: usize,
 }
@@ -97,15 +129,17 @@ pub fn truth_rays(truth_dir: &Path) -> Option<std::path::PathBuf> {
     (truth_dir.join("scatterers.csv").is_file() && rays.is_file()).then_some(rays)
 }
 
-/// The detectable returns of the paths in `rays` (module docs): `model` the run's
-/// observation model at the poses the data were recorded at, `threshold` the detector's
-/// η_E, `k0` the energy of a unit point echo centred in its bin, `reference` the layout's
-/// raster on the model's grid.
+/// The detectable returns of the paths in `rays` and the cause each free cell would have if
+/// a map marked it (module docs): `model` the run's observation model at the poses the data
+/// were recorded at, `threshold` the detector's η_E, `k0` the energy of a unit point echo
+/// centred in its bin, `period_ns` the sweep's unambiguous delay 1/Δf, `reference` the
+/// layout's raster on the model's grid.
 pub fn detectable_returns(
     rays: &Path,
     model: &ObservationModel,
     threshold: f64,
     k0: f64,
+    period_ns: f64,
     reference: &ReferenceMap,
 ) -> Result<DetectableReturns> {
     if !(threshold.is_finite() && threshold > 0.0 && k0.is_finite() && k0 > 0.0) {
@@ -119,6 +153,7 @@ pub fn detectable_returns(
     let bin_ns = model.bin_width_s * 1e9;
     let skip = threshold * SKIP_BELOW;
     let mut kept: Vec<Kept> = Vec::new();
+    let mut strong: Vec<Strong> = Vec::new();
     let mut offset = 0;
     while offset < rows {
         let len = SLICE_ROWS.min(rows - offset);
@@ -146,6 +181,32 @@ pub fn detectable_returns(
             let energy = 10f64.powf(power[i] / 10.0) * k0;
             if energy < skip {
                 continue;
+            }
+            if energy >= threshold {
+                // a path that alone reaches η_E at boresight: a candidate cause of false
+                // cells, at its apparent (folded) delay
+                let folded = period_ns.is_finite() && delay[i] >= period_ns;
+                let apparent = if folded {
+                    delay[i].rem_euclid(period_ns)
+                } else {
+                    delay[i]
+                };
+                let b = (apparent / bin_ns).round();
+                if b >= model.min_bin as f64 && b <= (model.bins - 1) as f64 {
+                    let outside = spec
+                        .cell_of(Coord { x: x[i], y: y[i] })
+                        .is_none_or(|(r, c)| {
+                            reference.cells[r * spec.cols + c] == CellClass::Outside
+                        });
+                    strong.push(Strong {
+                        pose: p as u32,
+                        bin: b as u32,
+                        theta: angle[i].to_radians(),
+                        energy,
+                        folded,
+                        outside,
+                    });
+                }
             }
             let bin = (delay[i] / bin_ns).round();
             if bin < model.min_bin as f64 || bin > (model.bins - 1) as f64 {
@@ -196,11 +257,104 @@ pub fn detectable_returns(
             }
         }
     }
+    let cause = false_causes(&mut strong, model, threshold, reference);
     Ok(DetectableReturns {
         walls,
         objects,
+        cause,
         paths: rows,
     })
+}
+
+/// A path that alone reaches η_E at boresight, at its apparent bin.
+struct Strong {
+    pose: u32,
+    bin: u32,
+    theta: f64,
+    energy: f64,
+    folded: bool,
+    outside: bool,
+}
+
+/// Per cell, the cause a free cell marked occupied would have (module docs): over every
+/// (pose, direction) whose main lobe holds the cell within the usable bins, the strongest
+/// path of that pose within one bin of the cell's whose energy in that direction reaches
+/// η_E; its kind is the cause.
+fn false_causes(
+    strong: &mut [Strong],
+    model: &ObservationModel,
+    threshold: f64,
+    reference: &ReferenceMap,
+) -> Vec<FalseCause> {
+    use rayon::prelude::*;
+    strong.sort_by_key(|k| (k.pose, k.bin));
+    let main = model.params.main_weight() as f32;
+    let n = model.spec.len();
+    let groups: Vec<&[Strong]> = strong.chunk_by(|a, b| a.pose == b.pose).collect();
+    let per_pose: Vec<Vec<(u32, f64, FalseCause)>> = groups
+        .par_iter()
+        .map(|g| {
+            let p = g[0].pose as usize;
+            let geom = model.pose_geometry(p);
+            let mut by_bin: Vec<Vec<&Strong>> = vec![Vec::new(); model.bins];
+            for k in g.iter() {
+                by_bin[k.bin as usize].push(k);
+            }
+            let mut out = Vec::new();
+            for d in 0..model.directions() {
+                let beam = model.beam(&geom, d);
+                let bins = model.bins.min(beam.ptr.len().saturating_sub(1));
+                for k in 0..bins {
+                    let lo = k.saturating_sub(1);
+                    let hi = (k + 1).min(model.bins - 1);
+                    if (lo..=hi).all(|b| by_bin[b].is_empty()) {
+                        continue;
+                    }
+                    for j in beam.bin_range(k) {
+                        let cell = beam.cell[j];
+                        if beam.weight[j] < main
+                            || reference.cells[cell as usize] == CellClass::Occupied
+                        {
+                            continue;
+                        }
+                        let mut best: Option<(f64, FalseCause)> = None;
+                        for s in (lo..=hi).flat_map(|b| by_bin[b].iter()) {
+                            let e = s.energy * model.broadside_weight(d, s.theta);
+                            if e < threshold || best.is_some_and(|b| b.0 >= e) {
+                                continue;
+                            }
+                            let cause = if s.folded {
+                                FalseCause::Folded
+                            } else if model.weight(d, s.theta) < main as f64 {
+                                FalseCause::SideLobe
+                            } else if s.outside {
+                                FalseCause::Image
+                            } else {
+                                FalseCause::MainLobeArc
+                            };
+                            best = Some((e, cause));
+                        }
+                        if let Some((e, cause)) = best {
+                            out.push((cell, e, cause));
+                        }
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    let mut energy = vec![0.0f64; n];
+    let mut cause = vec![FalseCause::Noise; n];
+    for v in per_pose {
+        for (cell, e, c) in v {
+            let i = cell as usize;
+            if e > energy[i] {
+                energy[i] = e;
+                cause[i] = c;
+            }
+        }
+    }
+    cause
 }
 
 /// Mark the wall cell `cell`, or (not a wall cell: a wall on a grid line rounded to the
@@ -339,7 +493,7 @@ mod tests {
                 ("clutter", 3.05, -0.3, 0.0, 2.0, None),
             ],
         );
-        let d = detectable_returns(&rays, &model, ETA, 1.0, &reference).unwrap();
+        let d = detectable_returns(&rays, &model, ETA, 1.0, f64::INFINITY, &reference).unwrap();
         let wall = |x: f64| -> bool {
             // the wall cell at x on the north wall: the one the rasteriser gave the wall
             let (a, b) = (cell(&model, x, north - 0.05), cell(&model, x, north + 0.05));
@@ -362,9 +516,54 @@ mod tests {
         assert_eq!(d.walls.iter().filter(|&&w| w).count(), 3);
         assert_eq!(d.objects.iter().filter(|&&o| o).count(), 1);
         assert_eq!(d.paths, 7);
+        // every cell left without a strong path in reach is noise
+        assert_eq!(d.cause[cell(&model, -0.5, 0.5)], FalseCause::Noise);
         let mut m = model.clone();
         m.poses.clear();
-        let e = detectable_returns(&rays, &m, ETA, 1.0, &reference).unwrap_err();
+        let e = detectable_returns(&rays, &m, ETA, 1.0, f64::INFINITY, &reference).unwrap_err();
         assert!(e.to_string().contains("rays.parquet") && e.to_string().contains("position"));
+    }
+
+    /// A false cell's cause: a 10⁴η path 2.5 m straight ahead explains the free cell on its
+    /// arc in direction 0's main lobe (main-lobe arc) and, through side lobes, cells at its
+    /// range that other directions' main lobes hold (side lobe); the same path with its delay
+    /// one period later (from beyond the unambiguous range) explains them as folded; a
+    /// path whose reflection point lies beyond the walls as an image; no path: noise.
+    #[test]
+    fn a_free_cell_is_explained_by_the_strongest_path_at_its_range() {
+        let dir = tempfile::tempdir().unwrap();
+        let rays = dir.path().join("rays.parquet");
+        let (model, reference) = corridor_model();
+        let ahead = 16.0 / 0.299_792_458 * 2.5 / 8.0; // 2.5 m round trip, ns
+        let causes = |rows: &[Path6], period: f64| {
+            write_rays(&rays, rows);
+            detectable_returns(&rays, &model, ETA, 1.0, period, &reference)
+                .unwrap()
+                .cause
+        };
+        let c = causes(&[("clutter", 3.0, -0.3, 0.0, 1e4, Some(ahead))], 100.0);
+        let here = cell(&model, 3.05, -0.25);
+        assert_eq!(c[here], FalseCause::MainLobeArc);
+        let side: Vec<usize> = (0..c.len())
+            .filter(|&i| c[i] == FalseCause::SideLobe)
+            .collect();
+        assert!(!side.is_empty(), "side-lobe cells at the path's range");
+        for &i in &side {
+            let p = model.spec.center(i / model.spec.cols, i % model.spec.cols);
+            let r = (p.x - 0.5).hypot(p.y + 0.3);
+            assert!((r - 2.5).abs() < 0.15, "a side-lobe cell at {r:.2} m");
+        }
+        assert_eq!(c[cell(&model, -0.5, 0.5)], FalseCause::Noise);
+        let c = causes(
+            &[("clutter", 3.0, -0.3, 0.0, 1e4, Some(ahead + 100.0))],
+            100.0,
+        );
+        assert_eq!(c[here], FalseCause::Folded);
+        let c = causes(&[("target", 3.0, -1.3, 0.0, 1e4, Some(ahead))], 100.0);
+        assert_eq!(
+            c[here],
+            FalseCause::Image,
+            "reflection point beyond the south wall"
+        );
     }
 }

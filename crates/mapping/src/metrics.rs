@@ -511,6 +511,72 @@ pub fn evaluate_detectable(
     }
 }
 
+/// A map's false cells by cause ([`crate::detectable::FalseCause`]): the free cells (room
+/// or beyond the walls, outside the object zones and the boundary band, as the wrong
+/// cells) marked occupied, on the whole grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct FalseCells {
+    /// Free cells marked occupied.
+    pub total: usize,
+    /// Explained by a path in the main lobe at the cell's range, elsewhere on the arc.
+    pub main_lobe_arc: usize,
+    /// Explained by a path seen through a side lobe.
+    pub side_lobe: usize,
+    /// Explained by a path from beyond the unambiguous range, folded.
+    pub folded: usize,
+    /// Explained by a path whose reflection point lies beyond the walls.
+    pub image: usize,
+    /// Explained by no single path: noise (or weak paths adding up).
+    pub noise: usize,
+}
+
+/// The false cells of `map` by cause: `reference` the layout's classes, `band` the
+/// boundary band, `objects` each object's cells, `cause` each cell's cause.
+pub fn false_cells_by_cause(
+    map: &[bool],
+    reference: &[crate::reference::CellClass],
+    band: &[bool],
+    objects: &[Vec<usize>],
+    cause: &[crate::detectable::FalseCause],
+    rows: usize,
+    cols: usize,
+) -> FalseCells {
+    use crate::detectable::FalseCause;
+    use crate::reference::CellClass;
+    let structure: Vec<bool> = reference
+        .iter()
+        .map(|c| *c == CellClass::Occupied)
+        .collect();
+    let mut zone = vec![false; map.len()];
+    for o in objects {
+        for c in object_zone(o, &structure, rows, cols) {
+            zone[c] = true;
+        }
+    }
+    let mut f = FalseCells {
+        total: 0,
+        main_lobe_arc: 0,
+        side_lobe: 0,
+        folded: 0,
+        image: 0,
+        noise: 0,
+    };
+    for i in 0..map.len() {
+        if !map[i] || structure[i] || zone[i] || band[i] {
+            continue;
+        }
+        f.total += 1;
+        match cause[i] {
+            FalseCause::MainLobeArc => f.main_lobe_arc += 1,
+            FalseCause::SideLobe => f.side_lobe += 1,
+            FalseCause::Folded => f.folded += 1,
+            FalseCause::Image => f.image += 1,
+            FalseCause::Noise => f.noise += 1,
+        }
+    }
+    f
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

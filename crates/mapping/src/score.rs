@@ -29,7 +29,8 @@
 //! and objects some pose and direction could have detected ([`crate::detectable`]), the
 //! share of them the map found within one cell, and the detectable share of the
 //! observable region's wall cells — the ceiling beside the observable and building
-//! figures.
+//! figures; and the map's false cells by cause (`three_class.false_cells`: main-lobe arc,
+//! side lobe, folded, image, noise).
 
 use crate::campaign::layout::Layout;
 use crate::detectable::DetectableReturns;
@@ -37,8 +38,8 @@ use crate::export::{Cell, Column, Table};
 use crate::grid::ObservationModel;
 use crate::memo::Memo;
 use crate::metrics::{
-    evaluate, evaluate_detectable, evaluate_three_class, DetectableMetrics, MapMetrics,
-    ThreeClassMetrics,
+    evaluate, evaluate_detectable, evaluate_three_class, false_cells_by_cause, DetectableMetrics,
+    FalseCells, MapMetrics, ThreeClassMetrics,
 };
 use crate::objects::Objects;
 use crate::og::LogOddsMap;
@@ -90,6 +91,8 @@ pub struct ThreeClassFigures {
     /// The map against the detectable reference (`simulate`'s truth only:
     /// [`crate::detectable`]).
     pub detectable: Option<DetectableMetrics>,
+    /// The map's false cells by cause on the whole grid (`simulate`'s truth only).
+    pub false_cells: Option<FalseCells>,
 }
 
 /// A map's errors per reference class (see the module docs).
@@ -185,6 +188,9 @@ pub fn score_binary(bin: &[bool], reference: &ReferenceMap, regions: &Regions) -
                     rows,
                     cols,
                 )
+            }),
+            false_cells: regions.detectable.as_ref().map(|d| {
+                false_cells_by_cause(bin, &reference.cells, band, &o.cells, &d.cause, rows, cols)
             }),
         }
     });
@@ -313,6 +319,10 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
             "detectable share of obs. walls",
             "detectable_share_of_observable",
         ),
+        Column::new(
+            "false cells: arc / side lobe / folded / image / noise",
+            "false_cells_by_cause",
+        ),
         Column::new("metrics", "metrics"),
     ]);
     for (name, m, link) in rows {
@@ -363,6 +373,16 @@ pub fn metrics_table(rows: &[(String, MetricsPair, Option<String>)]) -> Table {
                 Some(d) => Cell::fixed(d.detectable_share_of_observable, 3),
                 None => Cell::missing("—"),
             },
+            match m.three_class.and_then(|t| t.false_cells) {
+                Some(f) => Cell::num(
+                    f.total as f64,
+                    format!(
+                        "{} / {} / {} / {} / {}",
+                        f.main_lobe_arc, f.side_lobe, f.folded, f.image, f.noise
+                    ),
+                ),
+                None => Cell::missing("—"),
+            },
             match link {
                 Some(href) => Cell::Link {
                     text: "metrics.json".into(),
@@ -397,6 +417,14 @@ impl MetricsPair {
                 building: t.building_all_free,
                 whole: t.whole_all_free,
                 detectable: t.detectable.map(|d| d.all_free()),
+                false_cells: t.false_cells.map(|_| FalseCells {
+                    total: 0,
+                    main_lobe_arc: 0,
+                    side_lobe: 0,
+                    folded: 0,
+                    image: 0,
+                    noise: 0,
+                }),
                 ..t
             }),
         }

@@ -184,6 +184,7 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
             &models[0],
             loaded[0].detector.threshold,
             window_kernel(&loaded[0].campaign)?[0],
+            1e9 / loaded[0].campaign.manifest.band.step_hz(),
             reference,
         )?),
         None => None,
