@@ -603,7 +603,7 @@ pub enum ExploreData {
 /// `--seeds`, shared by `report`, `reproduce` and `experiment`.
 #[derive(Args)]
 pub struct SeedsArg {
-    /// Model-data seeds of the experiments (comma-separated).
+    /// Seeds of the experiments' model data and of fig6's physics sweeps (comma-separated).
     #[arg(
         long = "seeds",
         allow_negative_numbers = true,

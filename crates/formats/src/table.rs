@@ -514,26 +514,8 @@ pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
 }
 
 /// A power column in dB: finite values or −∞ (a path of zero power, as `simulate`'s truth
-/// writes a scatterer of zero σ); NaN, +∞ and nulls are errors.
+/// writes a scatterer of zero σ); NaN, +∞ and nulls are errors (rows counted in `df`).
 pub fn db_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
-    let v = f64_column_or_nan_inf(path, df, name)?;
-    v.into_iter()
-        .enumerate()
-        .map(|(i, x)| {
-            if x.is_finite() || x == f64::NEG_INFINITY {
-                Ok(x)
-            } else {
-                Err(Error::input(
-                    path,
-                    format!("column `{name}` row {i}: {x} is not a power in dB"),
-                ))
-            }
-        })
-        .collect()
-}
-
-/// Every value of a column cast to f64 (nulls as NaN, infinities kept).
-fn f64_column_or_nan_inf(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
     let c = df
         .column(name)
         .map_err(|_| Error::input(path, format!("missing column `{name}`")))?;
@@ -541,7 +523,17 @@ fn f64_column_or_nan_inf(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<
         .cast(&DataType::Float64)
         .map_err(|_| Error::input(path, format!("column `{name}` is not numeric")))?;
     let ca = c.f64().map_err(|e| Error::table(path, e))?;
-    Ok(ca.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
+    ca.iter()
+        .enumerate()
+        .map(|(i, v)| match v {
+            Some(x) if x.is_finite() || x == f64::NEG_INFINITY => Ok(x),
+            Some(x) => Err(Error::input(
+                path,
+                format!("column `{name}` row {i}: {x} is not a power in dB"),
+            )),
+            None => Err(Error::input(path, format!("column `{name}` row {i}: null"))),
+        })
+        .collect()
 }
 
 /// An f64 column whose NaN (or null) cells mean "no value" (a sweep a campaign does not

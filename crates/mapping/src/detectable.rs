@@ -149,6 +149,22 @@ pub fn detectable_returns(
         ));
     }
     let spec = model.spec;
+    if reference.spec != spec {
+        return Err(Error::param(
+            "cell_m",
+            "the reference map is not on the observation model's grid",
+        ));
+    }
+    let n = spec.len();
+    let Some(last) = model.bins.checked_sub(1) else {
+        return Ok(DetectableReturns {
+            walls: vec![false; n],
+            objects: vec![false; n],
+            cause: vec![FalseCause::Noise; n],
+            paths: 0,
+        });
+    };
+    let last_bin = last as f64;
     let rows = crate::table::parquet_rows(rays)?;
     let bin_ns = model.bin_width_s * 1e9;
     let skip = threshold * SKIP_BELOW;
@@ -179,6 +195,16 @@ pub fn detectable_returns(
                 ));
             }
             let energy = 10f64.powf(power[i] / 10.0) * k0;
+            if !energy.is_finite() {
+                return Err(Error::input(
+                    rays,
+                    format!(
+                        "column `power_db` row {}: {} dB is not a received power",
+                        offset + i,
+                        power[i]
+                    ),
+                ));
+            }
             if energy < skip {
                 continue;
             }
@@ -192,12 +218,17 @@ pub fn detectable_returns(
                     delay[i]
                 };
                 let b = (apparent / bin_ns).round();
-                if b >= model.min_bin as f64 && b <= (model.bins - 1) as f64 {
-                    let outside = spec
-                        .cell_of(Coord { x: x[i], y: y[i] })
-                        .is_none_or(|(r, c)| {
-                            reference.cells[r * spec.cols + c] == CellClass::Outside
-                        });
+                if b >= model.min_bin as f64 && b <= last_bin {
+                    // a wall's own return is never an image (a point on a wall lying on a
+                    // grid line can round into the cell beyond it)
+                    let wall_kind =
+                        matches!(kind[i].as_str(), "diffuse" | "specular" | "corner" | "edge");
+                    let outside = !wall_kind
+                        && spec
+                            .cell_of(Coord { x: x[i], y: y[i] })
+                            .is_none_or(|(r, c)| {
+                                reference.cells[r * spec.cols + c] == CellClass::Outside
+                            });
                     strong.push(Strong {
                         pose: p as u32,
                         bin: b as u32,
@@ -209,7 +240,7 @@ pub fn detectable_returns(
                 }
             }
             let bin = (delay[i] / bin_ns).round();
-            if bin < model.min_bin as f64 || bin > (model.bins - 1) as f64 {
+            if bin < model.min_bin as f64 || bin > last_bin {
                 continue;
             }
             let Some((r, c)) = spec.cell_of(Coord { x: x[i], y: y[i] }) else {
@@ -232,7 +263,6 @@ pub fn detectable_returns(
         offset += len;
     }
     kept.sort_by_key(|k| (k.pose, k.bin, k.cell));
-    let n = spec.len();
     let mut walls = vec![false; n];
     let mut objects = vec![false; n];
     let main = model.params.main_weight();
@@ -288,7 +318,7 @@ fn false_causes(
 ) -> Vec<FalseCause> {
     use rayon::prelude::*;
     strong.sort_by_key(|k| (k.pose, k.bin));
-    let main = model.params.main_weight() as f32;
+    let main = model.params.main_weight();
     let n = model.spec.len();
     let groups: Vec<&[Strong]> = strong.chunk_by(|a, b| a.pose == b.pose).collect();
     let per_pose: Vec<Vec<(u32, f64, FalseCause)>> = groups
@@ -307,36 +337,34 @@ fn false_causes(
                 for k in 0..bins {
                     let lo = k.saturating_sub(1);
                     let hi = (k + 1).min(model.bins - 1);
-                    if (lo..=hi).all(|b| by_bin[b].is_empty()) {
-                        continue;
+                    // the strongest path within one bin reaching η_E in direction d (the
+                    // same for every cell of the bin)
+                    let mut best: Option<(f64, FalseCause)> = None;
+                    for s in (lo..=hi).flat_map(|b| by_bin[b].iter()) {
+                        let e = s.energy * model.broadside_weight(d, s.theta);
+                        if e < threshold || best.is_some_and(|b| b.0 >= e) {
+                            continue;
+                        }
+                        let cause = if s.folded {
+                            FalseCause::Folded
+                        } else if model.weight(d, s.theta) < main {
+                            FalseCause::SideLobe
+                        } else if s.outside {
+                            FalseCause::Image
+                        } else {
+                            FalseCause::MainLobeArc
+                        };
+                        best = Some((e, cause));
                     }
+                    let Some((e, cause)) = best else { continue };
                     for j in beam.bin_range(k) {
                         let cell = beam.cell[j];
-                        if beam.weight[j] < main
+                        if (beam.weight[j] as f64) < main
                             || reference.cells[cell as usize] == CellClass::Occupied
                         {
                             continue;
                         }
-                        let mut best: Option<(f64, FalseCause)> = None;
-                        for s in (lo..=hi).flat_map(|b| by_bin[b].iter()) {
-                            let e = s.energy * model.broadside_weight(d, s.theta);
-                            if e < threshold || best.is_some_and(|b| b.0 >= e) {
-                                continue;
-                            }
-                            let cause = if s.folded {
-                                FalseCause::Folded
-                            } else if model.weight(d, s.theta) < main as f64 {
-                                FalseCause::SideLobe
-                            } else if s.outside {
-                                FalseCause::Image
-                            } else {
-                                FalseCause::MainLobeArc
-                            };
-                            best = Some((e, cause));
-                        }
-                        if let Some((e, cause)) = best {
-                            out.push((cell, e, cause));
-                        }
+                        out.push((cell, e, cause));
                     }
                 }
             }
@@ -455,7 +483,7 @@ mod tests {
 
     /// A wall return at 2η is detectable and one at 0.6η is not; two at 0.6η in one bin
     /// add to 1.2η and are, in two cells; a strong path inside the coupling gate or beyond
-    /// the last bin (folded) is not; a clutter path marks the objects, not the walls; a foot
+    /// the last bin is not; a clutter path marks the objects, not the walls; a foot
     /// point on the north wall (a grid line) marks the wall cell beside it; a position the
     /// campaign does not have is one error naming the file.
     #[test]
@@ -507,7 +535,10 @@ mod tests {
             "two 0.6η returns in one bin add up, each cell seen"
         );
         assert!(!wall(at30), "a single 0.6η return is not detectable");
-        assert!(!d.walls[cell(&model, 0.55, -1.0)], "a folded return is not");
+        assert!(
+            !d.walls[cell(&model, 0.55, -1.0)],
+            "a return beyond the last bin is not"
+        );
         assert!(
             !d.objects[cell(&model, 0.55, 0.05)],
             "a gated return is not"
@@ -524,8 +555,10 @@ mod tests {
         assert!(e.to_string().contains("rays.parquet") && e.to_string().contains("position"));
     }
 
-    /// A false cell's cause: a 10⁴η path 2.5 m straight ahead explains the free cell on its
-    /// arc in direction 0's main lobe (main-lobe arc) and, through side lobes, cells at its
+    /// A false cell's cause: a 10⁴η path 2.5 m straight ahead explains the free cells at its
+    /// range in direction 0's main lobe (main-lobe arc; at N = 400 the lobe at 2.5 m is about
+    /// one cell wide, so the cell tested is the path's own, which the scoring leaves out as
+    /// an object's zone) and, through side lobes, cells at its
     /// range that other directions' main lobes hold (side lobe); the same path with its delay
     /// one period later (from beyond the unambiguous range) explains them as folded; a
     /// path whose reflection point lies beyond the walls as an image; no path: noise.

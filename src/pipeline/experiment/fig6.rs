@@ -55,8 +55,9 @@ impl Lab<'_> {
         ))
     }
 
-    /// Model data at every size, seed and mapper; then the sweeps at every size and mapper
-    /// when every size could be simulated (else why not, as the note).
+    /// The seeds' data ([`Fig6Data`]: model data or physics sweeps) at every size, seed and
+    /// mapper; with model data, then the campaign's sweeps at every size and mapper when
+    /// every size could be simulated (else why not, as the note).
     pub(super) fn fig6_cases(&mut self, sizes: &[usize]) -> (Vec<super::Case>, Option<String>) {
         let mut cases = Vec::new();
         for &n in sizes {
@@ -67,7 +68,7 @@ impl Lab<'_> {
             }
         }
         if self.params.fig6_data == Fig6Data::Physics {
-            return (cases, Some("the physics sweeps are the seeds' data".into()));
+            return (cases, None);
         }
         let mut sweeps_note = None;
         for &n in sizes {
@@ -120,12 +121,14 @@ impl Lab<'_> {
                         DataSource::Physics(s) => format!("physics s{s}"),
                         DataSource::Sweeps => "sweeps".into(),
                     };
+                    let cases = std::slice::from_ref(&d.0);
+                    let w = |interior| wrong_cells(cases, src, n, d.0.case.method, interior);
                     tiles.push(self.tile(
                         format!(
                             "{what}, N = {n}, {}: {} / {} wrong",
                             d.0.case.method.to_uppercase(),
-                            d.0.wrong_interior,
-                            d.0.wrong_whole
+                            w(true).unwrap_or(d.0.wrong_interior),
+                            w(false).unwrap_or(d.0.wrong_whole)
                         ),
                         &d.1,
                     ));
@@ -250,10 +253,15 @@ fn mean_findings(cases: &[CaseFigures], sizes: &[usize], data: Fig6Data) -> Find
                         }
                 })
                 .collect();
-            let w: Vec<f64> = sel.iter().map(|c| c.wrong_interior as f64).collect();
+            // the wrong cells on the findings' basis ([`wrong_cells`]); ψ and F1 on the layout
+            let wrong = |c: &CaseFigures, interior| {
+                wrong_cells(std::slice::from_ref(c), c.case.source, n, m, interior).unwrap_or(0)
+                    as f64
+            };
+            let w: Vec<f64> = sel.iter().map(|c| wrong(c, true)).collect();
             let p: Vec<f64> = sel.iter().map(|c| c.psi_interior).collect();
             let f: Vec<f64> = sel.iter().map(|c| c.f1_interior).collect();
-            let ww: Vec<f64> = sel.iter().map(|c| c.wrong_whole as f64).collect();
+            let ww: Vec<f64> = sel.iter().map(|c| wrong(c, false)).collect();
             let pw: Vec<f64> = sel.iter().map(|c| c.psi_whole).collect();
             findings.push((
                 format!(

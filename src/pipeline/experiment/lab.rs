@@ -428,7 +428,7 @@ impl<'a> Lab<'a> {
         Ok(r)
     }
 
-    /// The model-data seeds.
+    /// The seeds (of the model data, and of fig6's physics sweeps).
     pub(super) fn seeds(&self) -> Vec<u64> {
         self.params.seeds.clone()
     }

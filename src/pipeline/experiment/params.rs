@@ -106,7 +106,7 @@ impl ExperimentParams {
         self
     }
 
-    /// Set the model-data seeds.
+    /// Set the seeds (model data; fig6's physics sweeps).
     pub fn seeds(mut self, seeds: Vec<u64>) -> Self {
         self.seeds = seeds;
         self

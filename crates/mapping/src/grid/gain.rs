@@ -24,6 +24,8 @@ pub(super) struct GainModel {
     pub(super) theta_s: Vec<f64>,
     /// Peak gain per direction.
     pub(super) gmax: Vec<f64>,
+    /// The largest of them (the broadside gain when a direction points at 0°).
+    pub(super) g0: f64,
     /// Per direction: device-frame angle intervals (rad, within (−π, π]) where w ≥ floor.
     pub(super) intervals: Vec<Vec<(f64, f64)>>,
     /// The inputs the tables were made from (array, band, directions, floor) as text:
@@ -121,6 +123,7 @@ impl GainModel {
             tables,
             mechanical,
             theta_s: angles,
+            g0: gmax.iter().cloned().fold(0.0f64, f64::max),
             gmax,
             intervals,
             source,

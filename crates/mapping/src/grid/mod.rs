@@ -281,10 +281,11 @@ impl ObservationModel {
     /// Two-way weight of direction `d` towards relative bearing `theta_rel` (rad) against
     /// the array's peak gain over all directions (the broadside gain G0 of `simulate`'s
     /// truth powers): [`ObservationModel::weight`] times the direction's scan loss
-    /// (G_max,d / G0)², 1 for mechanical steering.
+    /// (G_max,d / G0)², 1 for mechanical steering. With electronic steering and no
+    /// direction at 0° the peak is below the broadside gain, and the weight reads high by
+    /// their ratio.
     pub fn broadside_weight(&self, d: usize, theta_rel: f64) -> f64 {
-        let g0 = self.gain.gmax.iter().cloned().fold(0.0f64, f64::max);
-        let g = self.gain.gain(d, theta_rel) / g0;
+        let g = self.gain.gain(d, theta_rel) / self.gain.g0;
         g * g
     }
 
