@@ -571,30 +571,11 @@ fn read_binary_pgm(path: &Path) -> Vec<bool> {
 /// baseline, which credits echoes beyond the walls, finds 0.604 / 0.673 / 0.894 / 0.908).
 #[test]
 fn walls_the_echoes_can_show() {
-    use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
     use pradar::mapping::score::score_binary;
-    use pradar::mapping::{EkfParams, GridParams, Method, OgParams};
-    use pradar::params::ParamGuard;
     let figs = figures();
     let mut failures = Vec::new();
     for (name, n, c, e) in scenes() {
-        let opts = MapOptions {
-            method: Method::Og,
-            runs: vec![MapRun {
-                campaign: c.clone(),
-                energy: e.clone(),
-            }],
-            out: PathBuf::from("unused"),
-            elements: None,
-            grid: GridParams::default(),
-            og: OgParams::default(),
-            ekf: EkfParams::default(),
-            pose_noise: Default::default(),
-        }
-        .check()
-        .unwrap();
-        let (runs, reference) = load_runs(&opts).unwrap();
-        let regions = runs_regions(&runs, &reference).unwrap();
+        let (runs, reference, regions) = loaded_og_run(c, e);
         let evidenced = main_lobe_evidence(&runs[0]);
         // the evidence scored as a map by the maps' own scorer: its walls found is the ceiling
         let shown = score_binary(&evidenced, &reference, &regions)
@@ -632,6 +613,39 @@ fn walls_the_echoes_can_show() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// One run loaded as `pradar map --method og` loads it (defaults): the runs, the reference
+/// and the scoring regions.
+fn loaded_og_run(
+    c: &Path,
+    e: &Path,
+) -> (
+    Vec<pradar::mapping::job::LoadedRun>,
+    pradar::mapping::reference::ReferenceMap,
+    pradar::mapping::score::Regions,
+) {
+    use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
+    use pradar::mapping::{EkfParams, GridParams, Method, OgParams};
+    use pradar::params::ParamGuard;
+    let opts = MapOptions {
+        method: Method::Og,
+        runs: vec![MapRun {
+            campaign: c.to_path_buf(),
+            energy: e.to_path_buf(),
+        }],
+        out: PathBuf::from("unused"),
+        elements: None,
+        grid: GridParams::default(),
+        og: OgParams::default(),
+        ekf: EkfParams::default(),
+        pose_noise: Default::default(),
+    }
+    .check()
+    .unwrap();
+    let (runs, reference) = load_runs(&opts).unwrap();
+    let regions = runs_regions(&runs, &reference).unwrap();
+    (runs, reference, regions)
 }
 
 /// The cells a main-lobe detection of `run` shows: for every detection (the OG's own
@@ -686,29 +700,10 @@ fn main_lobe_evidence(run: &pradar::mapping::job::LoadedRun) -> Vec<bool> {
 /// cells by cause (issue 55, item 2) add up to the free cells it marks (printed).
 #[test]
 fn the_detectable_walls_hold_the_walls_the_echoes_show() {
-    use pradar::mapping::job::{load_runs, runs_regions, MapOptions, MapRun};
-    use pradar::mapping::{EkfParams, GridParams, Method, OgParams};
-    use pradar::params::ParamGuard;
     let figs = figures();
     let mut failures = Vec::new();
     for (name, n, c, e) in scenes() {
-        let opts = MapOptions {
-            method: Method::Og,
-            runs: vec![MapRun {
-                campaign: c.clone(),
-                energy: e.clone(),
-            }],
-            out: PathBuf::from("unused"),
-            elements: None,
-            grid: GridParams::default(),
-            og: OgParams::default(),
-            ekf: EkfParams::default(),
-            pose_noise: Default::default(),
-        }
-        .check()
-        .unwrap();
-        let (runs, reference) = load_runs(&opts).unwrap();
-        let regions = runs_regions(&runs, &reference).unwrap();
+        let (runs, reference, regions) = loaded_og_run(c, e);
         let det = regions
             .detectable
             .as_ref()

@@ -514,7 +514,7 @@ pub fn evaluate_detectable(
 /// A map's false cells by cause ([`crate::detectable::FalseCause`]): the free cells (room
 /// or beyond the walls, outside the object zones and the boundary band, as the wrong
 /// cells) marked occupied, on the whole grid.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 pub struct FalseCells {
     /// Free cells marked occupied.
     pub total: usize,
@@ -553,14 +553,7 @@ pub fn false_cells_by_cause(
             zone[c] = true;
         }
     }
-    let mut f = FalseCells {
-        total: 0,
-        main_lobe_arc: 0,
-        side_lobe: 0,
-        folded: 0,
-        image: 0,
-        noise: 0,
-    };
+    let mut f = FalseCells::default();
     for i in 0..map.len() {
         if !map[i] || structure[i] || zone[i] || band[i] {
             continue;

@@ -417,14 +417,7 @@ impl MetricsPair {
                 building: t.building_all_free,
                 whole: t.whole_all_free,
                 detectable: t.detectable.map(|d| d.all_free()),
-                false_cells: t.false_cells.map(|_| FalseCells {
-                    total: 0,
-                    main_lobe_arc: 0,
-                    side_lobe: 0,
-                    folded: 0,
-                    image: 0,
-                    noise: 0,
-                }),
+                false_cells: t.false_cells.map(|_| FalseCells::default()),
                 ..t
             }),
         }
