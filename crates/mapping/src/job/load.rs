@@ -90,6 +90,10 @@ fn window_kernel_of(c: &Campaign) -> Result<Vec<f64>> {
         .collect())
 }
 
+/// Detectable references already made in this process ([`crate::memo`]): the experiments
+/// map the same simulated sweeps many times.
+static DETECTABLE_MEMO: Memo<crate::detectable::DetectableReturns> = Memo::new();
+
 /// Load and check one run on the grid `spec` (None: the run's own reference grid).
 pub fn load_run(
     run: &MapRun,
@@ -179,14 +183,24 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
         None => None,
     };
     let detectable = match truth.as_deref().and_then(truth_rays) {
-        Some(rays) => Some(detectable_returns(
-            &rays,
-            &models[0],
-            loaded[0].detector.threshold,
-            window_kernel(&loaded[0].campaign)?[0],
-            1e9 / loaded[0].campaign.manifest.band.step_hz(),
-            reference,
-        )?),
+        Some(rays) => {
+            let (threshold, k0) = (
+                loaded[0].detector.threshold,
+                window_kernel(&loaded[0].campaign)?[0],
+            );
+            let period_ns = 1e9 / loaded[0].campaign.manifest.band.step_hz();
+            // the file's identity (path, length, modification time) and every input
+            let stamp = std::fs::metadata(&rays)
+                .ok()
+                .map(|m| (m.len(), m.modified().ok()));
+            let key = format!(
+                "{rays:?} {stamp:?} {} {threshold:?} {k0:?} {period_ns:?} {layout:?}",
+                models[0].memo_key()
+            );
+            Some(DETECTABLE_MEMO.get_or(key, || {
+                detectable_returns(&rays, &models[0], threshold, k0, period_ns, reference)
+            })?)
+        }
         None => None,
     };
     Ok(Regions {
