@@ -490,32 +490,27 @@ pub fn parquet_metadata(path: &Path) -> Result<Vec<(String, String)>> {
 
 /// A required f64 column without nulls or non-finite values.
 pub fn f64_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
-    let c = df
-        .column(name)
-        .map_err(|_| Error::input(path, format!("missing column `{name}`")))?;
-    let c = c
-        .cast(&DataType::Float64)
-        .map_err(|_| Error::input(path, format!("column `{name}` is not numeric")))?;
-    let ca = c.f64().map_err(|e| Error::table(path, e))?;
-    let mut out = Vec::with_capacity(ca.len());
-    for (i, v) in ca.iter().enumerate() {
-        match v {
-            Some(x) if x.is_finite() => out.push(x),
-            Some(x) => {
-                return Err(Error::input(
-                    path,
-                    format!("column `{name}` row {i}: non-finite value {x}"),
-                ))
-            }
-            None => return Err(Error::input(path, format!("column `{name}` row {i}: null"))),
-        }
-    }
-    Ok(out)
+    f64_values(path, df, name, |x| {
+        (!x.is_finite()).then(|| format!("non-finite value {x}"))
+    })
 }
 
 /// A power column in dB: finite values or −∞ (a path of zero power, as `simulate`'s truth
 /// writes a scatterer of zero σ); NaN, +∞ and nulls are errors (rows counted in `df`).
 pub fn db_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
+    f64_values(path, df, name, |x| {
+        (!(x.is_finite() || x == f64::NEG_INFINITY)).then(|| format!("{x} is not a power in dB"))
+    })
+}
+
+/// A required column cast to f64, without nulls; `reject` says why a value is refused
+/// (`None`: kept), each error naming the file, column and row.
+fn f64_values(
+    path: &Path,
+    df: &DataFrame,
+    name: &str,
+    reject: impl Fn(f64) -> Option<String>,
+) -> Result<Vec<f64>> {
     let c = df
         .column(name)
         .map_err(|_| Error::input(path, format!("missing column `{name}`")))?;
@@ -526,11 +521,13 @@ pub fn db_column(path: &Path, df: &DataFrame, name: &str) -> Result<Vec<f64>> {
     ca.iter()
         .enumerate()
         .map(|(i, v)| match v {
-            Some(x) if x.is_finite() || x == f64::NEG_INFINITY => Ok(x),
-            Some(x) => Err(Error::input(
-                path,
-                format!("column `{name}` row {i}: {x} is not a power in dB"),
-            )),
+            Some(x) => match reject(x) {
+                None => Ok(x),
+                Some(why) => Err(Error::input(
+                    path,
+                    format!("column `{name}` row {i}: {why}"),
+                )),
+            },
             None => Err(Error::input(path, format!("column `{name}` row {i}: null"))),
         })
         .collect()

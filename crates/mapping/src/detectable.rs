@@ -123,6 +123,16 @@ struct Kept {
     wall: bool,
 }
 
+/// A path kind's return: `Some(true)` a wall's (`diffuse`, `specular`, `corner`, `edge`),
+/// `Some(false)` an object's (`clutter`, `target`), `None` another kind.
+fn wall_return(kind: &str) -> Option<bool> {
+    match kind {
+        "diffuse" | "specular" | "corner" | "edge" => Some(true),
+        "clutter" | "target" => Some(false),
+        _ => None,
+    }
+}
+
 /// The truth's `rays.parquet` in a truth folder, when it is `simulate`'s (module docs).
 pub fn truth_rays(truth_dir: &Path) -> Option<std::path::PathBuf> {
     let rays = truth_dir.join("rays.parquet");
@@ -221,9 +231,7 @@ pub fn detectable_returns(
                 if b >= model.min_bin as f64 && b <= last_bin {
                     // a wall's own return is never an image (a point on a wall lying on a
                     // grid line can round into the cell beyond it)
-                    let wall_kind =
-                        matches!(kind[i].as_str(), "diffuse" | "specular" | "corner" | "edge");
-                    let outside = !wall_kind
+                    let outside = wall_return(&kind[i]) != Some(true)
                         && spec
                             .cell_of(Coord { x: x[i], y: y[i] })
                             .is_none_or(|(r, c)| {
@@ -246,10 +254,8 @@ pub fn detectable_returns(
             let Some((r, c)) = spec.cell_of(Coord { x: x[i], y: y[i] }) else {
                 continue;
             };
-            let wall = match kind[i].as_str() {
-                "diffuse" | "specular" | "corner" | "edge" => true,
-                "clutter" | "target" => false,
-                _ => continue,
+            let Some(wall) = wall_return(&kind[i]) else {
+                continue;
             };
             kept.push(Kept {
                 pose: p as u32,

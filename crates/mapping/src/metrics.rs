@@ -313,10 +313,7 @@ pub fn evaluate_three_class(
     use crate::reference::CellClass;
     let n = map.len();
     debug_assert_eq!(band.len(), n, "the boundary band is on the map's grid");
-    let structure: Vec<bool> = reference
-        .iter()
-        .map(|c| *c == CellClass::Occupied)
-        .collect();
+    let structure = structure_cells(reference);
     let mut object = vec![false; n];
     for o in objects {
         for &c in o {
@@ -406,6 +403,14 @@ pub fn evaluate_three_class(
     }
 }
 
+/// The structure of a reference: true where a wall or obstacle occupies the cell.
+pub fn structure_cells(reference: &[crate::reference::CellClass]) -> Vec<bool> {
+    reference
+        .iter()
+        .map(|c| *c == crate::reference::CellClass::Occupied)
+        .collect()
+}
+
 /// An object's zone: its cells and the 8-neighbours of them that are not structure.
 fn object_zone(cells: &[usize], structure: &[bool], rows: usize, cols: usize) -> Vec<usize> {
     let mut z = Vec::new();
@@ -472,11 +477,7 @@ pub fn evaluate_detectable(
     rows: usize,
     cols: usize,
 ) -> DetectableMetrics {
-    use crate::reference::CellClass;
-    let structure: Vec<bool> = reference
-        .iter()
-        .map(|c| *c == CellClass::Occupied)
-        .collect();
+    let structure = structure_cells(reference);
     let (mut n, mut found, mut obs, mut obs_det) = (0usize, 0usize, 0usize, 0usize);
     for i in 0..map.len() {
         if walls[i] {
@@ -542,11 +543,7 @@ pub fn false_cells_by_cause(
     cols: usize,
 ) -> FalseCells {
     use crate::detectable::FalseCause;
-    use crate::reference::CellClass;
-    let structure: Vec<bool> = reference
-        .iter()
-        .map(|c| *c == CellClass::Occupied)
-        .collect();
+    let structure = structure_cells(reference);
     let mut zone = vec![false; map.len()];
     for o in objects {
         for c in object_zone(o, &structure, rows, cols) {
@@ -648,10 +645,7 @@ mod tests {
         assert_eq!(t.wrong, 3);
         // ψ: the walls marked exactly plus the object — zero with the object's zone left
         // out (three-class), not zero when the object counts as a false occupied cell
-        let structure: Vec<bool> = reference
-            .iter()
-            .map(|c| *c == CellClass::Occupied)
-            .collect();
+        let structure = structure_cells(&reference);
         let mut exact = structure.clone();
         exact[at(3, 4)] = true;
         let e = evaluate_three_class(&exact, &reference, &none, &objects, &all, rows, cols);

@@ -38,8 +38,8 @@ use crate::export::{Cell, Column, Table};
 use crate::grid::ObservationModel;
 use crate::memo::Memo;
 use crate::metrics::{
-    evaluate, evaluate_detectable, evaluate_three_class, false_cells_by_cause, DetectableMetrics,
-    FalseCells, MapMetrics, ThreeClassMetrics,
+    evaluate, evaluate_detectable, evaluate_three_class, false_cells_by_cause, structure_cells,
+    DetectableMetrics, FalseCells, MapMetrics, ThreeClassMetrics,
 };
 use crate::objects::Objects;
 use crate::og::LogOddsMap;
@@ -138,11 +138,7 @@ pub fn score(map: &LogOddsMap, reference: &ReferenceMap, regions: &Regions) -> M
 /// Score a binary map (true = occupied) against the reference.
 pub fn score_binary(bin: &[bool], reference: &ReferenceMap, regions: &Regions) -> MetricsPair {
     let (rows, cols) = (reference.spec.rows, reference.spec.cols);
-    let refo: Vec<bool> = reference
-        .cells
-        .iter()
-        .map(|c| *c == CellClass::Occupied)
-        .collect();
+    let refo = structure_cells(&reference.cells);
     let free = vec![false; bin.len()];
     let all = vec![true; bin.len()];
     let observable = evaluate(bin, &refo, &regions.observable, rows, cols);

@@ -37,8 +37,8 @@ impl Lab<'_> {
         findings.extend(mean_findings(&cases, &sizes, self.params.fig6_data));
         let first = self.params.seeds[0];
         let data = match self.params.fig6_data {
-            Fig6Data::Model => "model data (synth of the model file; `--data physics` maps the campaign's scene simulated per seed)".to_string(),
-            Fig6Data::Physics => "physics sweeps (the campaign's scene simulated at each N with its seed plus the seed: a new realisation of its clutter and noise per seed; the findings count wrong cells against the three-class reference, so the simulator's objects are not wrong cells)".to_string(),
+            Fig6Data::Model => "model data (synth of the model file; `--data physics` maps the campaign's scene simulated per seed)",
+            Fig6Data::Physics => "physics sweeps (the campaign's scene simulated at each N with its seed plus the seed: a new realisation of its clutter and noise per seed; the findings count wrong cells against the three-class reference, so the simulator's objects are not wrong cells)",
         };
         let beside = match self.params.fig6_data {
             Fig6Data::Model => " The same comparison on the campaign's sweeps simulated at both N is listed beside it.",
@@ -121,14 +121,12 @@ impl Lab<'_> {
                         DataSource::Physics(s) => format!("physics s{s}"),
                         DataSource::Sweeps => "sweeps".into(),
                     };
-                    let cases = std::slice::from_ref(&d.0);
-                    let w = |interior| wrong_cells(cases, src, n, d.0.case.method, interior);
                     tiles.push(self.tile(
                         format!(
                             "{what}, N = {n}, {}: {} / {} wrong",
                             d.0.case.method.to_uppercase(),
-                            w(true).unwrap_or(d.0.wrong_interior),
-                            w(false).unwrap_or(d.0.wrong_whole)
+                            wrong_of(&d.0, true),
+                            wrong_of(&d.0, false)
                         ),
                         &d.1,
                     ));
@@ -185,9 +183,8 @@ fn region_name(interior: bool) -> &'static str {
     }
 }
 
-/// Wrong cells of the case with these data, N and mapper on the region, if it was mapped:
-/// on physics sweeps against the three-class reference (the simulator's objects are not
-/// wrong cells; the building for the interior), else against the layout.
+/// Wrong cells of the case with these data, N and mapper on the region, if it was mapped
+/// ([`wrong_of`]).
 fn wrong_cells(
     cases: &[CaseFigures],
     src: DataSource,
@@ -198,12 +195,19 @@ fn wrong_cells(
     cases
         .iter()
         .find(|c| c.case.elements == n && c.case.method == m && c.case.source == src)
-        .map(|c| match (src, c.three_class) {
-            (DataSource::Physics(_), Some(t)) if interior => t.building.wrong,
-            (DataSource::Physics(_), Some(t)) => t.whole.wrong,
-            _ if interior => c.wrong_interior,
-            _ => c.wrong_whole,
-        })
+        .map(|c| wrong_of(c, interior))
+}
+
+/// A case's wrong cells on the region: on physics sweeps against the three-class reference
+/// (the simulator's objects are not wrong cells; the building for the interior), else
+/// against the layout.
+fn wrong_of(c: &CaseFigures, interior: bool) -> usize {
+    match (c.case.source, c.three_class) {
+        (DataSource::Physics(_), Some(t)) if interior => t.building.wrong,
+        (DataSource::Physics(_), Some(t)) => t.whole.wrong,
+        _ if interior => c.wrong_interior,
+        _ => c.wrong_whole,
+    }
 }
 
 /// Per mapper on the simulated sweeps: whether N = small has more wrong cells than N = large
@@ -253,11 +257,8 @@ fn mean_findings(cases: &[CaseFigures], sizes: &[usize], data: Fig6Data) -> Find
                         }
                 })
                 .collect();
-            // the wrong cells on the findings' basis ([`wrong_cells`]); ψ and F1 on the layout
-            let wrong = |c: &CaseFigures, interior| {
-                wrong_cells(std::slice::from_ref(c), c.case.source, n, m, interior).unwrap_or(0)
-                    as f64
-            };
+            // the wrong cells on the findings' basis ([`wrong_of`]); ψ and F1 on the layout
+            let wrong = |c: &&CaseFigures, interior| wrong_of(c, interior) as f64;
             let w: Vec<f64> = sel.iter().map(|c| wrong(c, true)).collect();
             let p: Vec<f64> = sel.iter().map(|c| c.psi_interior).collect();
             let f: Vec<f64> = sel.iter().map(|c| c.f1_interior).collect();

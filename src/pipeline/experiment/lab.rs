@@ -443,14 +443,7 @@ pub fn sweeps_dir(out: &Path, elements: usize) -> PathBuf {
 /// its energy table: (manifest, energy table). What [`Lab`] does for sweeps at another N;
 /// `reproduce` runs it early, beside the fit.
 pub fn simulate_sweeps(campaign: &Path, out: &Path, elements: usize) -> Result<(PathBuf, PathBuf)> {
-    let mut c = Campaign::load(campaign)?;
-    c.set_elements(elements)?;
-    let dir = sweeps_dir(out, elements);
-    let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
-    let sc = Campaign::load(&sim.manifest)?;
-    let e = dir.join("energy.parquet");
-    energy::run(&sc, &e, &|_, _| {})?;
-    Ok((sim.manifest, e))
+    simulate_into(campaign, &sweeps_dir(out, elements), elements, 0)
 }
 
 /// The campaign `campaign` simulated at N elements with its manifest's seed plus `seed`
@@ -462,13 +455,24 @@ pub fn simulate_physics(
     elements: usize,
     seed: u64,
 ) -> Result<(PathBuf, PathBuf)> {
-    let mut c = Campaign::load(campaign)?;
-    c.set_elements(elements)?;
-    c.manifest.seed = c.manifest.seed.wrapping_add(seed);
     let dir = out
         .join("work")
         .join(format!("physics_n{elements}_s{seed}"));
-    let sim = simulate(&c, &dir, SweepFormat::Parquet, &|_, _| {})?;
+    simulate_into(campaign, &dir, elements, seed)
+}
+
+/// The campaign simulated at N elements with its manifest's seed plus `seed` (0: its own)
+/// into `dir` (Parquet sweeps), and its energy table there: (manifest, energy table).
+fn simulate_into(
+    campaign: &Path,
+    dir: &Path,
+    elements: usize,
+    seed: u64,
+) -> Result<(PathBuf, PathBuf)> {
+    let mut c = Campaign::load(campaign)?;
+    c.set_elements(elements)?;
+    c.manifest.seed = c.manifest.seed.wrapping_add(seed);
+    let sim = simulate(&c, dir, SweepFormat::Parquet, &|_, _| {})?;
     let sc = Campaign::load(&sim.manifest)?;
     let e = dir.join("energy.parquet");
     energy::run(&sc, &e, &|_, _| {})?;
