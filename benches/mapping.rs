@@ -231,6 +231,13 @@ fn corridor(dir: &Path, crit: &mut Criterion) {
             b.iter(|| run(&l.model, &l.energy, &l.detector, method))
         });
     }
+    let echo = OgParams {
+        credit: pradar::mapping::og::OgCredit::Echo,
+        ..Default::default()
+    };
+    crit.bench_function("map corridor og --og-credit echo", |b| {
+        b.iter(|| run_with(&l.model, &l.energy, &l.detector, Method::Og, &echo))
+    });
     crit.bench_function("map corridor og (rules before 5 Dec 2026)", |b| {
         b.iter(|| run_with(&l.model, &l.energy, &l.detector, Method::Og, &before()))
     });

@@ -515,6 +515,7 @@ fn out_of_range_flags_give_one_clear_line() {
         (&map, &["--og-credit-depth", "-1"], "--og-credit-depth"),
         (&map, &["--og-credit-depth", "nan"], "--og-credit-depth"),
         (&map, &["--og-bound-silent", "maybe"], "--og-bound-silent"),
+        (&map, &["--og-credit", "arc"], "--og-credit"),
         (&calibrate, &["--ridge", "lasso"], "--ridge"),
         (
             &calibrate,

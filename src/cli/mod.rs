@@ -23,6 +23,7 @@ use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
 use pradar::mapping::grid::SilentBound;
 use pradar::mapping::job::PoseNoise;
+use pradar::mapping::og::OgCredit;
 use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
 };
@@ -328,6 +329,10 @@ pub struct MapArgs {
     /// Deepest behind the visibility polygon a cell gets occupancy credit, m, or `guard`.
     #[arg(long, default_value_t = credit_depth_default(), value_parser = ranges::credit_depth, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub og_credit_depth: f64,
+    /// Occupancy credit of a detection: its range ring, or only its echo's bearing (fewer
+    /// false cells, fewer walls found).
+    #[arg(long, default_value_t = OgParams::default().credit, value_parser = choice(&OgCredit::ALL, OgCredit::name), hide_possible_values = true, help_heading = "Occupancy grid (og, og-boresight)")]
+    pub og_credit: OgCredit,
     /// EKF implementation: dense (exact) or scalable (tiled).
     #[arg(long, default_value_t = EkfParams::default().variant, value_parser = choice(&EkfVariant::ALL, EkfVariant::name), hide_possible_values = true, help_heading = "EKF (ekf)")]
     pub ekf: EkfVariant,

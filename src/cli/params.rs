@@ -165,6 +165,7 @@ impl MapArgs {
                         .og_credit_depth
                         .is_finite()
                         .then_some(self.og_credit_depth),
+                    credit: self.og_credit,
                     ..Default::default()
                 },
                 ekf: EkfParams {
@@ -395,6 +396,9 @@ mod tests {
         );
         let guard = options(&["--og-credit-depth", "guard"]);
         assert_eq!(guard.og.credit_depth_m, None);
+        let echo = options(&["--og-credit", "echo"]);
+        assert_eq!(echo.og.credit, pradar::mapping::og::OgCredit::Echo);
+        assert_eq!(o.og.credit, pradar::mapping::og::OgCredit::Ring);
     }
 
     /// Every other subcommand's defaults are the library's: each parsed with only its

@@ -585,6 +585,7 @@ mod tests {
         same(&EkfVariant::ALL);
         same(&EkfUpdate::ALL);
         same(&SilentBound::ALL);
+        same(&crate::og::OgCredit::ALL);
         assert_eq!(
             SilentBound::ALL.map(|b| b.to_string()),
             ["off", "leak", "nearer"]

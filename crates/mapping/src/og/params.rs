@@ -41,6 +41,48 @@ pub struct OgParams {
     /// behind the surface visible, and a wall found where it was missed comes with a rim of
     /// credited cells beyond it.
     pub credit_depth_m: Option<f64>,
+    /// Which cells of a detection's range ring get its occupancy credit ([`OgCredit`];
+    /// `ring` by default).
+    pub credit: OgCredit,
+}
+
+/// Which cells of a detection's range ring get its occupancy credit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OgCredit {
+    /// Every visible cell of the ring, by responsibility (pattern × share × belief).
+    #[default]
+    Ring,
+    /// The cells at the bearings of the echoes the scan's energies resolve at that bin
+    /// ([`super::angular`]); a detection that resolved no echo credits nothing.
+    Echo,
+}
+
+impl OgCredit {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [OgCredit; 2] = [OgCredit::Ring, OgCredit::Echo];
+
+    /// Name (`ring`, `echo`): the command-line value and the `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            OgCredit::Ring => "ring",
+            OgCredit::Echo => "echo",
+        }
+    }
+}
+
+impl std::fmt::Display for OgCredit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for OgCredit {
+    type Err = Error;
+    /// Parse an [`OgCredit::name`].
+    fn from_str(s: &str) -> Result<OgCredit> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "credit", "credit")
+    }
 }
 
 impl Default for OgParams {
@@ -56,6 +98,7 @@ impl Default for OgParams {
             free_db: -10.0,
             bound_silent: SilentBound::Nearer,
             credit_depth_m: Some(0.05),
+            credit: OgCredit::Ring,
         }
     }
 }

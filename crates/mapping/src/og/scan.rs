@@ -2,6 +2,7 @@
 //! (`og-boresight`), see [`crate::og`] for the equations; [`og_map`] and
 //! [`og_map_stats`] map a run scan by scan.
 
+use super::angular::{AngularModel, Components};
 use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
@@ -28,6 +29,7 @@ fn scan_og(
     vis: &Visibility,
     belief: &[f32],
     k: &IncrementConstants,
+    credit: Option<&CreditFn<'_>>,
     out: &mut Vec<(u32, f32)>,
 ) -> (u64, u64) {
     let bins = det.len().min(beam.ptr.len() - 1);
@@ -61,26 +63,41 @@ fn scan_og(
         // the ring's cells that may hold the echo (at most `credit_depth` behind the
         // polygon; every visible one with `guard`, +∞)
         let holds = |c: u32| vis.depth[c as usize] <= k.credit_depth;
+        // the echo's bearings (none: leakage of an echo another direction explains)
+        let aff = match credit {
+            Some(f) => match f(b, &beam.theta[rg.clone()]) {
+                Some(a) => Some(a),
+                None => {
+                    withheld += 1;
+                    continue;
+                }
+            },
+            None => None,
+        };
+        let mut resp: Vec<(u32, f32)> = Vec::new();
         let mut denom = 0.0f32;
-        for j in rg.clone() {
-            if holds(beam.cell[j]) {
-                denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize];
+        let start = rg.start;
+        for j in rg.filter(|&j| holds(beam.cell[j])) {
+            let c = beam.cell[j];
+            let a = aff.as_ref().map_or(1.0, |a| a[j - start]);
+            let r = beam.weight[j] * beam.share[j] * belief[c as usize] * a;
+            if r > 0.0 {
+                denom += r;
+                resp.push((c, r));
             }
         }
         if denom <= 0.0 {
             continue;
         }
         let scale = k.l_occ as f32 / denom;
-        for j in rg.filter(|&j| holds(beam.cell[j])) {
-            let c = beam.cell[j];
-            out.push((
-                c,
-                scale * beam.weight[j] * beam.share[j] * belief[c as usize],
-            ));
-        }
+        out.extend(resp.into_iter().map(|(c, r)| (c, scale * r)));
     }
     (dets, withheld)
 }
+
+/// Per detected bin and the bearings of its ring's entries: the entries' affinities with
+/// the echo, or None when no echo in the direction's main lobe explains the detection.
+type CreditFn<'a> = dyn Fn(usize, &[f32]) -> Option<Vec<f32>> + Sync + 'a;
 
 /// The inverse sensor model's constants.
 struct IncrementConstants {
@@ -91,6 +108,10 @@ struct IncrementConstants {
     bound_silent: SilentBound,
     /// Deepest behind the polygon a cell gets occupancy credit, m (+∞: every visible cell).
     credit_depth: f32,
+    /// Cell side, m.
+    cell_m: f64,
+    /// Range of one bin, m.
+    bin_m: f64,
 }
 
 /// Boresight-only increments of one scan into `out`.
@@ -206,6 +227,8 @@ struct ScanContext<'a> {
     surface_p: f32,
     inc: IncrementConstants,
     occlusion: Occlusion,
+    /// The echo-bearing model when detections credit their echoes' bearings.
+    angular: Option<AngularModel>,
 }
 
 impl<'a> ScanContext<'a> {
@@ -230,8 +253,11 @@ impl<'a> ScanContext<'a> {
                 min_bin,
                 bound_silent: params.bound_silent,
                 credit_depth: params.credit_depth_m.map_or(f32::INFINITY, |x| x as f32),
+                cell_m: model.spec.cell_m,
+                bin_m: crate::units::C0 * model.bin_width_s / 2.0,
             },
             occlusion,
+            angular: (params.credit == super::OgCredit::Echo).then(|| AngularModel::new(model)),
         }
     }
 
@@ -248,6 +274,10 @@ impl<'a> ScanContext<'a> {
         let dets = self.detector.detect_pose(em, p);
         match (geom, self.method) {
             (Some(g), Method::Og) => {
+                let comps = self
+                    .angular
+                    .as_ref()
+                    .map(|a| a.components(self.model, em, p, &dets, self.detector.threshold));
                 // mapped surfaces: more likely occupied than free and above the prior (a
                 // prior above 0.5 does not make unobserved cells surfaces)
                 let t = self.surface_p;
@@ -269,7 +299,7 @@ impl<'a> ScanContext<'a> {
                         if !em.has(p, d) {
                             return (Vec::new(), 0, 0, 0); // no sweep: no evidence
                         }
-                        self.scan_direction_og(d, g, &echoes, &vis, bel)
+                        self.scan_direction_og(d, g, &echoes, &vis, bel, comps.as_ref())
                     })
                     .collect()
             }
@@ -303,8 +333,23 @@ impl<'a> ScanContext<'a> {
         echoes: &ScanEchoes,
         vis: &Visibility,
         bel: &[f32],
+        comps: Option<&Components>,
     ) -> ScanResult {
         let bins = echoes.det[d].len();
+        let explain = |k: usize, thetas: &[f32]| -> Option<Vec<f32>> {
+            let ex = comps?.of_direction(d, k);
+            if ex.is_empty() {
+                return None;
+            }
+            let half = self.inc.cell_m / (2.0 * (k as f64 * self.inc.bin_m).max(self.inc.cell_m));
+            Some(
+                thetas
+                    .iter()
+                    .map(|&th| Components::affinity(&ex, th as f64, half) as f32)
+                    .collect(),
+            )
+        };
+        let credit: Option<&CreditFn<'_>> = comps.is_some().then_some(&explain as &CreditFn<'_>);
         let first = echoes.occluder[d].unwrap_or(bins);
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
@@ -317,6 +362,7 @@ impl<'a> ScanContext<'a> {
             vis,
             bel,
             &self.inc,
+            credit,
             &mut out,
         );
         (out, dets, withheld, beam.len() as u64)
