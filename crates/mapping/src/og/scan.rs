@@ -74,23 +74,26 @@ fn scan_og(
             },
             None => None,
         };
-        let mut resp: Vec<(u32, f32)> = Vec::new();
-        let mut denom = 0.0f32;
         let start = rg.start;
-        for j in rg.filter(|&j| holds(beam.cell[j])) {
-            let c = beam.cell[j];
-            let a = aff.as_ref().map_or(1.0, |a| a[j - start]);
-            let r = beam.weight[j] * beam.share[j] * belief[c as usize] * a;
-            if r > 0.0 {
-                denom += r;
-                resp.push((c, r));
+        let a = |j: usize| aff.as_ref().map_or(1.0, |a| a[j - start]);
+        // (ring: a = 1 exactly, the products in the order they always had)
+        let mut denom = 0.0f32;
+        for j in rg.clone() {
+            if holds(beam.cell[j]) {
+                denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize] * a(j);
             }
         }
         if denom <= 0.0 {
             continue;
         }
         let scale = k.l_occ as f32 / denom;
-        out.extend(resp.into_iter().map(|(c, r)| (c, scale * r)));
+        for j in rg.filter(|&j| holds(beam.cell[j]) && a(j) > 0.0) {
+            let c = beam.cell[j];
+            out.push((
+                c,
+                scale * beam.weight[j] * beam.share[j] * belief[c as usize] * a(j),
+            ));
+        }
     }
     (dets, withheld)
 }
