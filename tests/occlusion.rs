@@ -927,9 +927,9 @@ fn og_without_the_free_evidence_of_beams_without_an_occluder_finds_more_walls() 
 /// `--og-credit echo` (issue 55 item 2): each detection credits only the bearing of the
 /// echo its direction resolved. On the four scenes the false cells (three-class room and
 /// beyond the walls, by cause) fall to at most 0.7 of the default ring credit's on each and
-/// 0.55 over the four (measured 64 → 35, 75 → 33, 62 → 41, 100 → 38), the side lobe's to at
-/// most half over the four, and the detectable walls found stay ≥ 0.75 (0.897, 0.831, 0.781,
-/// 0.879 against 0.915, 0.869, 0.869, 0.922: the recall it costs).
+/// 0.55 over the four (measured 64 → 35, 75 → 23, 62 → 41, 100 → 29), the side lobe's to at
+/// most half over the four (162 → 58), and the detectable walls found stay ≥ 0.75 (0.897,
+/// 0.809, 0.781, 0.874 against 0.915, 0.869, 0.869, 0.922: the recall it costs).
 #[test]
 fn og_echo_credit_halves_the_false_cells() {
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("og_echo_credit");

@@ -329,8 +329,8 @@ pub struct MapArgs {
     /// Deepest behind the visibility polygon a cell gets occupancy credit, m, or `guard`.
     #[arg(long, default_value_t = credit_depth_default(), value_parser = ranges::credit_depth, allow_negative_numbers = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub og_credit_depth: f64,
-    /// Occupancy credit of a detection: its range ring, or only its echo's bearing (fewer
-    /// false cells, fewer walls found).
+    /// Occupancy credit of a detection: ring (its range ring) or echo (only its echo's
+    /// bearing: fewer false cells, fewer walls found).
     #[arg(long, default_value_t = OgParams::default().credit, value_parser = choice(&OgCredit::ALL, OgCredit::name), hide_possible_values = true, help_heading = "Occupancy grid (og, og-boresight)")]
     pub og_credit: OgCredit,
     /// EKF implementation: dense (exact) or scalable (tiled).

@@ -161,7 +161,7 @@ pub struct Beam {
     pub share: Vec<f32>,
     /// Radar-equation coefficient c_{k,i} = G²λ²/((4π)³d⁴)·share.
     pub coef: Vec<f32>,
-    /// Bearing of the cell's centre in the array frame, rad.
+    /// Bearing of the cell's centre in the device frame (relative to the heading), rad.
     pub theta: Vec<f32>,
 }
 

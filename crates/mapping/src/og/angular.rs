@@ -3,23 +3,29 @@
 //! cells at its echo's bearing instead of its whole range ring.
 //!
 //! Takes a pose's energy profiles, its detections, the mapper's two-way pattern
-//! ([`ObservationModel::weight`]) and the detector's threshold η_E; gives per bin the
-//! components (bearing θ_c, power P_c, bearing spread σ_c).
+//! ([`ObservationModel::broadside_weight`]) and the detector's threshold η_E; gives per bin
+//! the components (bearing θ_c, power P_c, bearing spread σ_c). Bearings are in the device
+//! frame (relative to the pose's heading), as [`crate::Beam::theta`].
 //!
 //! Equations and choices:
 //! * at bin k the energies across directions are modelled as incoherent point echoes,
-//!   E_d = Σ_c P_c·w_d(θ_c) (+ noise), w_d the two-way pattern of direction d normalised to
-//!   its peak;
+//!   E_d = Σ_c P_c·w_d(θ_c) (+ noise), w_d the two-way pattern of direction d referred to
+//!   the broadside gain (electronic steering's scan loss included; the direction's own
+//!   normalised pattern for mechanical steering);
 //! * greedy deconvolution (Högbom's CLEAN over the directions): among the directions that
 //!   detect at k and are not used yet, take the one with the largest residual r_d1; stop when
 //!   it is ≤ η_E (what is left is not an echo the detector would report). Its bearing is the
 //!   least-squares fit of P·w_d(θ) to the residuals of d1 and its two neighbours over θ within
 //!   half a direction step of θ_d1 on a 0.05° grid (amplitude comparison between adjacent
-//!   beams, as sequential lobing does), P = Σ r_d w_d(θ)/Σ w_d(θ)²; the component's
-//!   P·w_d(θ_c) is then subtracted from every direction's residual (floored at 0);
+//!   beams, as sequential lobing does), P = Σ r_d w_d(θ)/Σ w_d(θ)², a tie going to the
+//!   bearing nearer θ_d1; neighbours without a sweep are left out, and with fewer than two
+//!   directions the bearing is θ_d1 and P = r_d1 (nothing to compare). Neighbours are
+//!   adjacent in the direction list: a full turn's first and last directions are not. The
+//!   component's P·w_d(θ_c) is then subtracted from every direction's residual (floored at
+//!   0);
 //! * bearing spread: the amplitude-comparison standard error σ_c = θ_3dB/(k_m·√(2·SNR)),
 //!   k_m = 1.6 (the monopulse slope, Skolnik, *Radar Handbook* ch. 9), θ_3dB the direction's
-//!   two-way −3 dB width, SNR = P_c/η_E (the threshold stands for the noise: a lower bound
+//!   two-way main-lobe width (at `main_lobe_db`, −3 dB by default), SNR = P_c/η_E (the threshold stands for the noise: a lower bound
 //!   on the SNR, so a wider spread), at least the 0.05° grid step;
 //! * a detection of direction d at bin k is explained by the components fitted from d
 //!   (whose residual peaked in d): each echo is credited once per scan, by the direction
@@ -27,7 +33,10 @@
 //!   fitted none (leakage of an echo another direction fitted, or a residual below η_E once
 //!   the stronger echoes are subtracted) credits nothing. The credit of its range ring goes
 //!   to the cells near its components' bearings, weighted by exp(−½(Δθ/σ_c)²), Δθ the gap
-//!   between the cell's angular extent and θ_c ([`Components::affinity`]).
+//!   between the cell's angular extent and θ_c ([`Components::affinity`]); when no cell
+//!   the ring may credit (visible, within the credit depth) lies within 2σ_c of a
+//!   component (its echo is behind the visibility polygon), the detection is withheld
+//!   rather than its credit moved to a cell far from the bearing.
 
 use crate::energy::EnergyMatrix;
 use crate::grid::ObservationModel;
@@ -38,10 +47,14 @@ const K_M: f64 = 1.6;
 /// Bearing grid of the fit, rad (0.05°, the gain tables' step).
 const STEP_RAD: f64 = 0.05 * std::f64::consts::PI / 180.0;
 
+/// The affinity of a cell 2σ_c from a component's bearing, e^−2: below it on every cell
+/// the ring may credit, the detection is withheld (module docs).
+pub const MIN_AFFINITY: f64 = 0.135_335_283_236_612_7;
+
 /// One point echo of a bin.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Component {
-    /// Bearing in the array frame, rad.
+    /// Bearing in the device frame (relative to the heading), rad.
     pub theta: f64,
     /// Power P_c (energy at the peak of its pattern).
     pub power: f64,
@@ -131,6 +144,7 @@ impl AngularModel {
         let profiles: Vec<Option<&[f64]>> = (0..nd)
             .map(|d| em.has(p, d).then(|| em.profile(p, d)))
             .collect();
+        let has: Vec<bool> = profiles.iter().map(Option::is_some).collect();
         let mut resid = vec![0.0f64; nd];
         let mut used = vec![false; nd];
         for (k, out) in by_bin.iter_mut().enumerate() {
@@ -150,10 +164,10 @@ impl AngularModel {
                 if resid[d1] <= eta {
                     break;
                 }
-                let c = self.fit_one(model, &resid, d1, eta);
+                let c = self.fit_one(model, &resid, &has, d1, eta);
                 for (d, r) in resid.iter_mut().enumerate() {
-                    if profiles[d].is_some() {
-                        *r = (*r - c.power * model.weight(d, c.theta)).max(0.0);
+                    if has[d] {
+                        *r = (*r - c.power * model.broadside_weight(d, c.theta)).max(0.0);
                     }
                 }
                 out.push(c);
@@ -162,31 +176,45 @@ impl AngularModel {
         Components { by_bin }
     }
 
-    /// The bearing and power of one echo peaking in direction `d1` (module docs).
-    fn fit_one(&self, model: &ObservationModel, resid: &[f64], d1: usize, eta: f64) -> Component {
+    /// The bearing and power of one echo peaking in direction `d1` (module docs); `has[d]`:
+    /// direction d has a sweep.
+    fn fit_one(
+        &self,
+        model: &ObservationModel,
+        resid: &[f64],
+        has: &[bool],
+        d1: usize,
+        eta: f64,
+    ) -> Component {
         let nd = resid.len();
-        let near: Vec<usize> = (d1.saturating_sub(1)..(d1 + 2).min(nd)).collect();
+        let near: Vec<usize> = (d1.saturating_sub(1)..(d1 + 2).min(nd))
+            .filter(|&d| has[d])
+            .collect();
         let span = self.half_step[d1];
-        let steps = (span / STEP_RAD).floor() as i64;
+        let steps = (span / STEP_RAD + 1e-9).floor() as i64;
+        // with one direction the bearing is not identifiable: its boresight, its energy
         let mut best = (f64::INFINITY, self.theta_d[d1], resid[d1]);
-        for j in -steps..=steps {
-            let th = self.theta_d[d1] + j as f64 * STEP_RAD;
-            let (mut num, mut den) = (0.0, 0.0);
-            for &d in &near {
-                let w = model.weight(d, th);
-                num += resid[d] * w;
-                den += w * w;
-            }
-            if den <= 0.0 {
-                continue;
-            }
-            let pw = num / den;
-            let cost: f64 = near
-                .iter()
-                .map(|&d| (resid[d] - pw * model.weight(d, th)).powi(2))
-                .sum();
-            if cost < best.0 {
-                best = (cost, th, pw);
+        if near.len() >= 2 {
+            // 0, +1, −1, +2, …: a tie goes to the bearing nearer the boresight
+            for j in (0..=2 * steps).map(|i| if i % 2 == 1 { (i + 1) / 2 } else { -(i / 2) }) {
+                let th = self.theta_d[d1] + j as f64 * STEP_RAD;
+                let (mut num, mut den) = (0.0, 0.0);
+                for &d in &near {
+                    let w = model.broadside_weight(d, th);
+                    num += resid[d] * w;
+                    den += w * w;
+                }
+                if den <= 0.0 {
+                    continue;
+                }
+                let pw = num / den;
+                let cost: f64 = near
+                    .iter()
+                    .map(|&d| (resid[d] - pw * model.broadside_weight(d, th)).powi(2))
+                    .sum();
+                if cost < best.0 {
+                    best = (cost, th, pw);
+                }
             }
         }
         let (_, theta, power) = best;
@@ -210,7 +238,7 @@ impl Components {
             .unwrap_or_default()
     }
 
-    /// Affinity in (0, 1] of a cell of bearing `theta` and angular half-extent `half` (rad)
+    /// Affinity in [0, 1] of a cell of bearing `theta` and angular half-extent `half` (rad)
     /// with the components `cs`: exp(−½(Δθ/σ_c)²) of the nearest, Δθ the gap between the
     /// cell's extent and θ_c (0 when the cell spans it).
     pub fn affinity(cs: &[&Component], theta: f64, half: f64) -> f64 {
@@ -255,7 +283,7 @@ mod tests {
         let mut data = vec![floor; nd * bins];
         for d in 0..nd {
             for &(th, pw) in echoes {
-                data[d * bins + k] += pw * model.weight(d, th);
+                data[d * bins + k] += pw * model.broadside_weight(d, th);
             }
         }
         EnergyMatrix {
@@ -298,7 +326,7 @@ mod tests {
         let m = model();
         let am = AngularModel::new(&m);
         let (k, eta) = (200, 1.0);
-        // a strong echo 1.3° off a boresight, a weaker one 30° away: both within
+        // a strong echo 2.3° off a boresight, a weaker one 30° away: both within
         // ~0.1° at their powers (±5 %); their side lobes detect in other directions too
         let (t1, t2) = (7.3f64.to_radians(), (-23.0f64).to_radians());
         let em = pose(&m, k, &[(t1, 1e4), (t2, 300.0)], 0.01);
@@ -325,6 +353,17 @@ mod tests {
                 .sigma
         };
         assert!(s(t1) < s(t2));
+        // the weak echo's spread is the amplitude-comparison error at its SNR
+        let weak = got
+            .iter()
+            .min_by(|a, b| (a.theta - t2).abs().total_cmp(&(b.theta - t2).abs()))
+            .unwrap();
+        let want = am.width[weak.owner] / (K_M * (2.0 * weak.power / eta).sqrt());
+        assert!(
+            want > STEP_RAD && (weak.sigma - want).abs() < 1e-12,
+            "{weak:?} {want}"
+        );
+        assert!((MIN_AFFINITY - (-2.0f64).exp()).abs() < 1e-15);
         // each echo is credited by one direction, the one it peaks in; its neighbour, which
         // detects its skirt, explains nothing
         let nearest = |th: f64| {
@@ -343,6 +382,35 @@ mod tests {
         assert!(cs.of_direction(skirt, k).is_empty());
         // bins without a detection have no components
         assert!(cs.by_bin[k - 1].is_empty() && cs.by_bin[k + 1].is_empty());
+    }
+
+    #[test]
+    fn a_neighbour_without_a_sweep_is_left_out_of_the_fit() {
+        let m = model();
+        let am = AngularModel::new(&m);
+        let (k, eta) = (200, 1.0);
+        let t1 = 7.3f64.to_radians();
+        let mut em = pose(&m, k, &[(t1, 1e4)], 0.01);
+        let d = (0..m.directions())
+            .min_by(|&a, &b| {
+                (m.direction_rad(a) - t1)
+                    .abs()
+                    .total_cmp(&(m.direction_rad(b) - t1).abs())
+            })
+            .unwrap();
+        // the neighbour on the echo's side has no sweep (NaN profile, listed missing)
+        em.meta.missing.push((0, d + 1));
+        for v in &mut em.data[(d + 1) * em.bins..(d + 2) * em.bins] {
+            *v = f64::NAN;
+        }
+        let mut det = detections(&em, k, eta);
+        det[d + 1][k] = false;
+        let cs = am.components(&m, &em, 0, &det, eta);
+        let c = cs.of_direction(d, k);
+        assert_eq!(c.len(), 1, "{:?}", cs.by_bin[k]);
+        // d and d − 1 still compare: the bearing within 0.1°, the power within 5 %
+        assert!((c[0].theta - t1).abs() < 0.1f64.to_radians(), "{:?}", c[0]);
+        assert!((c[0].power / 1e4 - 1.0).abs() < 0.05, "{:?}", c[0]);
     }
 
     #[test]

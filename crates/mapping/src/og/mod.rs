@@ -35,7 +35,7 @@
 //!   once, at its bearing, by the direction that looks at it, instead of marking the arc
 //!   each direction points at (the largest causes of false cells, `docs/mapping.md`);
 //!   `ring` (the default: fewer wrong cells at N = 16 on the built-in scenes, more walls
-//!   found everywhere measured) sets a_i = 1. Detections before the occluder (weaker, or explained by a side lobe:
+//!   found on most scenes measured) sets a_i = 1. Detections before the occluder (weaker, or explained by a side lobe:
 //!   leakage of an echo another direction credits, or a surface the main lobe just cleared)
 //!   and detections more than g beyond it (shadowed: multipath or echoes from behind the
 //!   surface) are withheld, counted in [`OgStats::withheld`]; bins after the occluder

@@ -2,7 +2,7 @@
 //! (`og-boresight`), see [`crate::og`] for the equations; [`og_map`] and
 //! [`og_map_stats`] map a run scan by scan.
 
-use super::angular::{AngularModel, Components};
+use super::angular::{AngularModel, Components, MIN_AFFINITY};
 use super::{sigmoid, Detector, LogOddsMap, Method, OgStats, OgValid};
 use crate::energy::{EnergyMatrix, EnergySource};
 use crate::error::{Error, Result};
@@ -76,6 +76,16 @@ fn scan_og(
         };
         let start = rg.start;
         let a = |j: usize| aff.as_ref().map_or(1.0, |a| a[j - start]);
+        // an echo on no cell the ring may credit (behind the polygon) is not moved to one
+        // far from its bearing
+        if aff.is_some()
+            && !rg
+                .clone()
+                .any(|j| holds(beam.cell[j]) && a(j) as f64 >= MIN_AFFINITY)
+        {
+            withheld += 1;
+            continue;
+        }
         // (ring: a = 1 exactly, the products in the order they always had)
         let mut denom = 0.0f32;
         for j in rg.clone() {
@@ -99,7 +109,7 @@ fn scan_og(
 }
 
 /// Per detected bin and the bearings of its ring's entries: the entries' affinities with
-/// the echo, or None when no echo in the direction's main lobe explains the detection.
+/// the echoes fitted from this direction, or None when it fitted none.
 type CreditFn<'a> = dyn Fn(usize, &[f32]) -> Option<Vec<f32>> + Sync + 'a;
 
 /// The inverse sensor model's constants.
