@@ -161,8 +161,6 @@ pub struct Beam {
     pub share: Vec<f32>,
     /// Radar-equation coefficient c_{k,i} = G²λ²/((4π)³d⁴)·share.
     pub coef: Vec<f32>,
-    /// Bearing of the cell's centre in the device frame (relative to the heading), rad.
-    pub theta: Vec<f32>,
 }
 
 impl Beam {
@@ -372,9 +370,9 @@ impl ObservationModel {
         let floor = self.params.floor_weight();
         let gmax = self.gain.gmax[d];
         let k_rad = self.lambda_m * self.lambda_m / (4.0 * PI).powi(3);
-        // (bin, cell, w, share, coef, theta)
+        // (bin, cell, w, share, coef)
         let mut counts = vec![0u32; self.bins + 1];
-        let mut tmp: Vec<(u32, u32, f32, f32, f32, f32)> = Vec::new();
+        let mut tmp: Vec<(u32, u32, f32, f32, f32)> = Vec::new();
         for &(lo, hi) in &self.gain.intervals[d] {
             let a = geom.bucket[bucket_of(lo)] as usize;
             let b = geom.bucket[bucket_of(hi) + 1] as usize;
@@ -398,14 +396,7 @@ impl ObservationModel {
                     }
                     let sh = geom.share[j];
                     counts[k as usize + 1] += 1;
-                    tmp.push((
-                        k,
-                        geom.cell[i],
-                        w as f32,
-                        sh,
-                        (c0 * sh as f64) as f32,
-                        geom.theta[i] as f32,
-                    ));
+                    tmp.push((k, geom.cell[i], w as f32, sh, (c0 * sh as f64) as f32));
                 }
             }
         }
@@ -419,17 +410,15 @@ impl ObservationModel {
             weight: vec![0.0; n],
             share: vec![0.0; n],
             coef: vec![0.0; n],
-            theta: vec![0.0; n],
         };
         let mut next = counts;
-        for (k, c, w, s, co, th) in tmp {
+        for (k, c, w, s, co) in tmp {
             let at = next[k as usize] as usize;
             next[k as usize] += 1;
             beam.cell[at] = c;
             beam.weight[at] = w;
             beam.share[at] = s;
             beam.coef[at] = co;
-            beam.theta[at] = th;
         }
         beam
     }

@@ -5,7 +5,7 @@
 //! Takes a pose's energy profiles, its detections, the mapper's two-way pattern
 //! ([`ObservationModel::broadside_weight`]) and the detector's threshold η_E; gives per bin
 //! the components (bearing θ_c, power P_c, bearing spread σ_c). Bearings are in the device
-//! frame (relative to the pose's heading), as [`crate::Beam::theta`].
+//! frame (relative to the pose's heading), as [`crate::grid::PoseGeometry::theta`].
 //!
 //! Equations and choices:
 //! * at bin k the energies across directions are modelled as incoherent point echoes,

@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::grid::{
     Beam, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, SilentBound, Visibility,
 };
+use crate::units::wrap_rad;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -65,7 +66,7 @@ fn scan_og(
         let holds = |c: u32| vis.depth[c as usize] <= k.credit_depth;
         // the echo's bearings (none: leakage of an echo another direction explains)
         let aff = match credit {
-            Some(f) => match f(b, &beam.theta[rg.clone()]) {
+            Some(f) => match f(b, &beam.cell[rg.clone()]) {
                 Some(a) => Some(a),
                 None => {
                     withheld += 1;
@@ -108,9 +109,9 @@ fn scan_og(
     (dets, withheld)
 }
 
-/// Per detected bin and the bearings of its ring's entries: the entries' affinities with
-/// the echoes fitted from this direction, or None when it fitted none.
-type CreditFn<'a> = dyn Fn(usize, &[f32]) -> Option<Vec<f32>> + Sync + 'a;
+/// Per detected bin and the cells of its ring's entries: the entries' affinities with the
+/// echoes fitted from this direction, or None when it fitted none.
+type CreditFn<'a> = dyn Fn(usize, &[u32]) -> Option<Vec<f32>> + Sync + 'a;
 
 /// The inverse sensor model's constants.
 struct IncrementConstants {
@@ -312,7 +313,14 @@ impl<'a> ScanContext<'a> {
                         if !em.has(p, d) {
                             return (Vec::new(), 0, 0, 0); // no sweep: no evidence
                         }
-                        self.scan_direction_og(d, g, &echoes, &vis, bel, comps.as_ref())
+                        self.scan_direction_og(
+                            d,
+                            g,
+                            &echoes,
+                            &vis,
+                            bel,
+                            comps.as_ref().map(|c| (c, p)),
+                        )
                     })
                     .collect()
             }
@@ -338,7 +346,8 @@ impl<'a> ScanContext<'a> {
         }
     }
 
-    /// The side-lobe-aware increments of direction `d` of a pose's scan.
+    /// The side-lobe-aware increments of direction `d` of a pose's scan (`echo`: the pose's
+    /// echo components and its index, with `--og-credit echo`).
     fn scan_direction_og(
         &self,
         d: usize,
@@ -346,19 +355,29 @@ impl<'a> ScanContext<'a> {
         echoes: &ScanEchoes,
         vis: &Visibility,
         bel: &[f32],
-        comps: Option<&Components>,
+        echo: Option<(&Components, usize)>,
     ) -> ScanResult {
+        let (comps, p) = (echo.map(|e| e.0), echo.map_or(0, |e| e.1));
         let bins = echoes.det[d].len();
-        let explain = |k: usize, thetas: &[f32]| -> Option<Vec<f32>> {
+        let explain = |k: usize, cells: &[u32]| -> Option<Vec<f32>> {
             let ex = comps?.of_direction(d, k);
             if ex.is_empty() {
                 return None;
             }
             let half = self.inc.cell_m / (2.0 * (k as f64 * self.inc.bin_m).max(self.inc.cell_m));
+            // each cell's bearing from the pose, device frame (as the pose geometry's)
+            let pose = self.model.poses[p];
+            let heading = pose.heading_deg.to_radians();
+            let spec = &self.model.spec;
             Some(
-                thetas
+                cells
                     .iter()
-                    .map(|&th| Components::affinity(&ex, th as f64, half) as f32)
+                    .map(|&c| {
+                        let c = c as usize;
+                        let at = spec.center(c / spec.cols, c % spec.cols);
+                        let th = wrap_rad((at.y - pose.y_m).atan2(at.x - pose.x_m) - heading);
+                        Components::affinity(&ex, th, half) as f32
+                    })
                     .collect(),
             )
         };
