@@ -120,6 +120,12 @@ impl GridParams {
     }
 }
 
+/// Bearing of the offset (`dx`, `dy`) from a pose of heading `heading` (rad) in the device
+/// frame, rad in (−π, π].
+fn device_bearing(dx: f64, dy: f64, heading: f64) -> f64 {
+    wrap_rad(dy.atan2(dx) - heading)
+}
+
 /// Bearing buckets of [`PoseGeometry`] (0.05° each).
 const BUCKETS: usize = 7200;
 
@@ -272,6 +278,19 @@ impl ObservationModel {
         )
     }
 
+    /// Bearing of cell `cell`'s centre from pose `p` in the device frame (relative to the
+    /// heading), rad: the bearing [`PoseGeometry::theta`] holds.
+    pub fn cell_bearing_rad(&self, p: usize, cell: u32) -> f64 {
+        let pose = self.poses[p];
+        let c = cell as usize;
+        let at = self.spec.center(c / self.spec.cols, c % self.spec.cols);
+        device_bearing(
+            at.x - pose.x_m,
+            at.y - pose.y_m,
+            pose.heading_deg.to_radians(),
+        )
+    }
+
     /// Two-way weight of direction `d` towards relative bearing `theta_rel` (rad).
     pub fn weight(&self, d: usize, theta_rel: f64) -> f64 {
         let g = self.gain.gain(d, theta_rel) / self.gain.gmax[d];
@@ -339,7 +358,7 @@ impl ObservationModel {
                     continue;
                 }
                 sub.hist.sort_by_key(|e| e.0);
-                let th = wrap_rad(dy.atan2(dx) - heading);
+                let th = device_bearing(dx, dy, heading);
                 items.push((
                     th,
                     (row * spec.cols + col) as u32,

@@ -198,11 +198,14 @@ impl AngularModel {
             // 0, +1, −1, +2, …: a tie goes to the bearing nearer the boresight
             for j in (0..=2 * steps).map(|i| if i % 2 == 1 { (i + 1) / 2 } else { -(i / 2) }) {
                 let th = self.theta_d[d1] + j as f64 * STEP_RAD;
+                let w: Vec<f64> = near
+                    .iter()
+                    .map(|&d| model.broadside_weight(d, th))
+                    .collect();
                 let (mut num, mut den) = (0.0, 0.0);
-                for &d in &near {
-                    let w = model.broadside_weight(d, th);
-                    num += resid[d] * w;
-                    den += w * w;
+                for (&d, &wd) in near.iter().zip(&w) {
+                    num += resid[d] * wd;
+                    den += wd * wd;
                 }
                 if den <= 0.0 {
                     continue;
@@ -210,7 +213,8 @@ impl AngularModel {
                 let pw = num / den;
                 let cost: f64 = near
                     .iter()
-                    .map(|&d| (resid[d] - pw * model.broadside_weight(d, th)).powi(2))
+                    .zip(&w)
+                    .map(|(&d, &wd)| (resid[d] - pw * wd).powi(2))
                     .sum();
                 if cost < best.0 {
                     best = (cost, th, pw);

@@ -9,7 +9,6 @@ use crate::error::{Error, Result};
 use crate::grid::{
     Beam, ObservationModel, Occlusion, PoseGeometry, ScanEchoes, SilentBound, Visibility,
 };
-use crate::units::wrap_rad;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -77,22 +76,20 @@ fn scan_og(
         };
         let start = rg.start;
         let a = |j: usize| aff.as_ref().map_or(1.0, |a| a[j - start]);
-        // an echo on no cell the ring may credit (behind the polygon) is not moved to one
-        // far from its bearing
-        if aff.is_some()
-            && !rg
-                .clone()
-                .any(|j| holds(beam.cell[j]) && a(j) as f64 >= MIN_AFFINITY)
-        {
-            withheld += 1;
-            continue;
-        }
         // (ring: a = 1 exactly, the products in the order they always had)
         let mut denom = 0.0f32;
+        let mut near_echo = false;
         for j in rg.clone() {
             if holds(beam.cell[j]) {
                 denom += beam.weight[j] * beam.share[j] * belief[beam.cell[j] as usize] * a(j);
+                near_echo |= a(j) as f64 >= MIN_AFFINITY;
             }
+        }
+        // an echo on no cell the ring may credit (behind the polygon) is not moved to one
+        // far from its bearing
+        if aff.is_some() && !near_echo {
+            withheld += 1;
+            continue;
         }
         if denom <= 0.0 {
             continue;
@@ -357,31 +354,25 @@ impl<'a> ScanContext<'a> {
         bel: &[f32],
         echo: Option<(&Components, usize)>,
     ) -> ScanResult {
-        let (comps, p) = (echo.map(|e| e.0), echo.map_or(0, |e| e.1));
         let bins = echoes.det[d].len();
         let explain = |k: usize, cells: &[u32]| -> Option<Vec<f32>> {
-            let ex = comps?.of_direction(d, k);
+            let (comps, p) = echo?;
+            let ex = comps.of_direction(d, k);
             if ex.is_empty() {
                 return None;
             }
             let half = self.inc.cell_m / (2.0 * (k as f64 * self.inc.bin_m).max(self.inc.cell_m));
-            // each cell's bearing from the pose, device frame (as the pose geometry's)
-            let pose = self.model.poses[p];
-            let heading = pose.heading_deg.to_radians();
-            let spec = &self.model.spec;
             Some(
                 cells
                     .iter()
                     .map(|&c| {
-                        let c = c as usize;
-                        let at = spec.center(c / spec.cols, c % spec.cols);
-                        let th = wrap_rad((at.y - pose.y_m).atan2(at.x - pose.x_m) - heading);
+                        let th = self.model.cell_bearing_rad(p, c);
                         Components::affinity(&ex, th, half) as f32
                     })
                     .collect(),
             )
         };
-        let credit: Option<&CreditFn<'_>> = comps.is_some().then_some(&explain as &CreditFn<'_>);
+        let credit: Option<&CreditFn<'_>> = echo.is_some().then_some(&explain as &CreditFn<'_>);
         let first = echoes.occluder[d].unwrap_or(bins);
         let last = echoes.last_observed(d, self.occlusion.guard_bins(), bins);
         let beam = self.model.beam_seen(g, d, Some((vis, last)));
