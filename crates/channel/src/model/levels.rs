@@ -51,10 +51,19 @@
 //!    mean. (The profiles' signal energy was tried first: the geometry sets its median, so
 //!    it pinned σ at its lower end and left the clusters' delay spread out; docs/model.md.)
 //!    The draws carry the table's recorded N0 (as `check`'s draws do) and are
-//!    ⌈384 / poses⌉ `synth` draws (4 to 8) at fixed seeds (common random
-//!    numbers, so the mean moves monotonically with σ), σ found by regula falsi (Illinois) in ln σ on
-//!    [1e-6, 10] m², stopped within 0.1 % of the table's mean or after
-//!    16 steps; at either end the end is kept and the report says so.
+//!    ⌈384 / poses⌉ `synth` draws (4 to 8) at fixed seeds (common random numbers: only
+//!    the clusters' level changes with σ). σ is the smallest value in [1e-6, 10] m² at
+//!    which the draws' mean reaches the table's; at either end the end is kept and the
+//!    report says so. It is found in one pass: the clusters' rays, the layout's and the
+//!    noise add in the CIR and the clusters' amplitudes scale with √σ, so with
+//!    s = √(σ/σ_ref) every bin's energy is a quadratic A + 2B·s + C·s²
+//!    ([`EnergySimulator::energy_quadratics`], the clusters drawn at σ_ref = 10 m², the
+//!    bracket's top, where synth's cull keeps the most of their rays). A bin is above
+//!    the threshold t outside the roots s₁ ≤ s₂ of C·s² + 2B·s + (A − t), so the count at
+//!    every σ is the count at s = 0 plus the crossings (σ_ref·s², ±1) at or below σ; the
+//!    crossings of every draw, sorted, give the mean at every σ and the first σ where it
+//!    reaches the table's exactly. (A regula falsi over full `synth` draws, 7 of them on
+//!    the corridor, did this before; docs/model.md has both's figures.)
 //!
 //! Choices: |Γ| per layout material where the table sees the material's walls, one |Γ|
 //! for the rest (module [`super::walls`]; a ratio above 1 is clamped to the passive bound
@@ -66,7 +75,6 @@
 
 use super::channel::SeenRay;
 use super::diffuse::DiffuseWalls;
-use super::synth::LayoutRays;
 use super::walls::{specular_ray, vertex_ray, vertex_seen, vertices, VertexKind, WallModel};
 use super::{EnergySimulator, SynthParams};
 use crate::campaign::layout::{Foot, Layout};
@@ -556,89 +564,212 @@ fn cluster_sigma(
     };
     // enough draws for LEVEL_POSES pose-draws (at least 4, at most the seeds)
     let draws = LEVEL_POSES.div_ceil(np.max(1)).clamp(4, LEVEL_SEEDS.len());
-    // the layout's rays of each draw do not depend on σ: made once per seed (only when
-    // the search runs), and the draws of one σ made in parallel (each its own energies,
-    // so the bytes do not depend on the thread count)
-    let fixed: std::sync::OnceLock<Vec<LayoutRays>> = std::sync::OnceLock::new();
-    let level = |sigma: f64| -> Result<f64> {
-        let mut m = base.clone();
-        m.cluster_rrcs.value = sigma;
-        let fixed = match fixed.get() {
-            Some(f) => f,
-            None => {
-                let made = (LEVEL_SEEDS[..draws].par_iter())
-                    .map(|&s| sim.layout_rays(&m, s))
-                    .collect::<Result<Vec<_>>>()?;
-                fixed.get_or_init(|| made)
-            }
-        };
-        let counts = (LEVEL_SEEDS[..draws].par_iter().zip(fixed))
-            .map(|(&s, f)| -> Result<(usize, usize)> {
-                let mut d = sim.energies_with(&m, s, f)?;
-                // the measured campaign's missing sweeps are missing from the draws too
-                em.meta.mask_missing(nd, nb, &mut d);
-                Ok(signal_bins(&d, nb, first_bin, mu))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        // the mean over every draw's profiles at once, as `mean_signal_bins` of them all
-        let (n, profiles) = counts.iter().fold((0, 0), |(n, k), &(a, b)| (n + a, k + b));
-        Ok(n as f64 / profiles.max(1) as f64)
-    };
-    let (lo, hi) = (1e-6f64.ln(), 10f64.ln());
+    let (lo, hi) = (1e-6f64, 10f64);
     if !usable || !measured.is_finite() || !out.cluster_rrcs.value.is_finite() {
         return Ok((out.cluster_rrcs.value, true, f64::NAN));
     }
-    regula_falsi(level, measured, lo, hi)
+    // every draw's energies as quadratics in the clusters' amplitude, the clusters at the
+    // bracket's top (their cull at its largest), so one pass reads the signal bins at
+    // every σ of the bracket; draws in parallel, each its own crossings (the bytes do not
+    // depend on the thread count)
+    let mut m = base.clone();
+    m.cluster_rrcs.value = hi;
+    let threshold = 10.0 * mu;
+    let per_draw = (LEVEL_SEEDS[..draws].par_iter())
+        .map(|&s| -> Result<Crossings> {
+            let fixed = sim.layout_rays(&m, s)?;
+            let q = sim.energy_quadratics(&m, s, &fixed)?;
+            Ok(Crossings::of(&q, nb, first_bin, threshold, hi, |i| {
+                em.meta.is_missing(i / nd, i % nd)
+            }))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Crossings::merge(per_draw).solve(measured, lo, hi))
 }
 
-/// Takes the model's mean signal bins as a function of σ (`level`), the table's
-/// (`measured`) and the bracket [lo, hi] in ln σ; gives (σ, whether it stopped at an end
-/// of the bracket, the model's mean at the last σ tried): g(x) = level(e^x) − measured,
-/// increasing in x, by regula falsi (Illinois) on the bracket, stopped within 0.1 % of
-/// the table's mean or after 16 steps.
-fn regula_falsi(
-    level: impl Fn(f64) -> Result<f64>,
-    measured: f64,
-    lo: f64,
-    hi: f64,
-) -> Result<(f64, bool, f64)> {
-    let mut at_bound = false;
-    let mut model_bins = f64::NAN;
-    let (mut a, mut b) = (lo, hi);
-    let (mut ga, mut gb) = (level(a.exp())? - measured, level(b.exp())? - measured);
-    let sigma = if ga >= 0.0 {
-        at_bound = true;
-        model_bins = ga + measured;
-        a.exp()
-    } else if gb <= 0.0 {
-        at_bound = true;
-        model_bins = gb + measured;
-        b.exp()
-    } else {
-        let mut side = 0i8;
-        let mut x = 0.5 * (a + b);
-        for _ in 0..16 {
-            x = (a * gb - b * ga) / (gb - ga);
-            let gx = level(x.exp())? - measured;
-            model_bins = gx + measured;
-            if gx.abs() < 1e-3 * measured.max(1.0) || (b - a) < 1e-3 {
-                break;
+/// The signal bins of a set of draws at every σ: each bin's energy is a quadratic in
+/// s = √(σ/σ_ref) ([`EnergySimulator::energy_quadratics`]), so whether it is above the
+/// threshold changes at most at its two roots; the count is the bins above at σ → 0 plus
+/// the changes (σ, ±1) at or below σ.
+#[derive(Debug, Default)]
+struct Crossings {
+    /// Bins above the threshold as σ → 0 (s = 0).
+    above: i64,
+    /// Profiles counted (those with a sweep).
+    profiles: usize,
+    /// (σ, +1 or −1): where a bin crosses the threshold upwards or downwards.
+    changes: Vec<(f64, i8)>,
+}
+
+impl Crossings {
+    /// The crossings of the quadratics `q` (profiles of `nb` bins; `missing(i)` for
+    /// profile i with no sweep, which is not counted), bins from `first_bin`, threshold
+    /// `t`, the quadratics' σ_ref `sigma_ref`. A bin A + 2Bs + Cs² > t with C > 0 holds
+    /// outside the roots s₁ ≤ s₂ of Cs² + 2Bs + (A − t) (everywhere when they are not
+    /// real): above at s = 0 when A > t, down at s₁ > 0, up at s₂ > 0.
+    fn of(
+        q: &[[f64; 3]],
+        nb: usize,
+        first_bin: usize,
+        t: f64,
+        sigma_ref: f64,
+        missing: impl Fn(usize) -> bool,
+    ) -> Crossings {
+        let mut out = Crossings::default();
+        for (i, prof) in q.chunks(nb.max(1)).enumerate() {
+            if missing(i) {
+                continue;
             }
-            if gx < 0.0 {
-                (a, ga) = (x, gx);
-                if side == -1 {
-                    gb *= 0.5;
+            out.profiles += 1;
+            for &[a, b, c] in &prof[first_bin.min(nb)..] {
+                let a0 = a - t;
+                if a0 > 0.0 {
+                    out.above += 1;
                 }
-                side = -1;
-            } else {
-                (b, gb) = (x, gx);
-                if side == 1 {
-                    ga *= 0.5;
+                if c <= 0.0 {
+                    continue;
                 }
-                side = 1;
+                let disc = b * b - c * a0;
+                if disc <= 0.0 {
+                    continue;
+                }
+                // the roots without cancellation: s₁s₂ = (A − t)/C
+                let qq = -(b + b.signum() * disc.sqrt());
+                let (r1, r2) = if qq == 0.0 {
+                    (0.0, 0.0)
+                } else {
+                    let (x, y) = (qq / c, a0 / qq);
+                    (x.min(y), x.max(y))
+                };
+                if r1 > 0.0 {
+                    out.changes.push((sigma_ref * r1 * r1, -1));
+                }
+                if r2 > 0.0 {
+                    out.changes.push((sigma_ref * r2 * r2, 1));
+                }
             }
         }
-        x.exp()
-    };
-    Ok((sigma, at_bound, model_bins))
+        out
+    }
+
+    /// The crossings of several sets of draws together, sorted by σ.
+    fn merge(parts: Vec<Crossings>) -> Crossings {
+        let mut out = Crossings::default();
+        for p in parts {
+            out.above += p.above;
+            out.profiles += p.profiles;
+            out.changes.extend(p.changes);
+        }
+        out.changes
+            .sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        out
+    }
+
+    /// (σ, whether it is an end of [lo, hi], the mean signal bins there): the smallest σ in
+    /// [lo, hi] at which the mean signal bins per profile reaches `measured`; `lo` when it
+    /// is already reached there, `hi` when it is not reached below `hi`.
+    fn solve(&self, measured: f64, lo: f64, hi: f64) -> (f64, bool, f64) {
+        let per = 1.0 / self.profiles.max(1) as f64;
+        let mut n = self.above;
+        let mut k = 0;
+        while k < self.changes.len() && self.changes[k].0 <= lo {
+            n += self.changes[k].1 as i64;
+            k += 1;
+        }
+        if n as f64 * per >= measured {
+            return (lo, true, n as f64 * per);
+        }
+        for &(sigma, dn) in &self.changes[k..] {
+            if sigma > hi {
+                break;
+            }
+            n += dn as i64;
+            if n as f64 * per >= measured {
+                return (sigma, false, n as f64 * per);
+            }
+        }
+        (hi, true, n as f64 * per)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Crossings read the signal bins of quadratic energies at every σ as counting them
+    /// there does, and `solve` gives the smallest σ at which the mean reaches the target.
+    #[test]
+    fn crossings_count_the_bins_above_at_every_sigma() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let (nb, first, t, sigma_ref) = (40, 3, 1.0, 10.0);
+        let q: Vec<[f64; 3]> = (0..6 * nb)
+            .map(|i| {
+                let a: f64 = rng.gen_range(0.0..3.0);
+                let b: f64 = rng.gen_range(-1.0..1.0);
+                // some bins without any cluster energy
+                let c: f64 = if i % 7 == 0 {
+                    0.0
+                } else {
+                    rng.gen_range(0.0..4.0)
+                };
+                [
+                    a,
+                    if c == 0.0 {
+                        0.0
+                    } else {
+                        b * c.sqrt() * a.sqrt()
+                    },
+                    c,
+                ]
+            })
+            .collect();
+        // profile 2 has no sweep
+        let missing = |i: usize| i == 2;
+        let x = Crossings::merge(vec![Crossings::of(&q, nb, first, t, sigma_ref, missing)]);
+        assert_eq!(x.profiles, 5);
+        let direct = |sigma: f64| -> f64 {
+            let s = (sigma / sigma_ref).sqrt();
+            let n = (q.chunks(nb).enumerate())
+                .filter(|(i, _)| !missing(*i))
+                .flat_map(|(_, p)| &p[first..])
+                .filter(|[a, b, c]| a + 2.0 * b * s + c * s * s > t)
+                .count();
+            n as f64 / 5.0
+        };
+        let mut downs = 0;
+        for k in 0..60 {
+            let sigma = 1e-6 * 10f64.powf(k as f64 / 8.3);
+            let (mut n, mut seen) = (x.above, 0);
+            for &(sg, dn) in &x.changes {
+                if sg <= sigma {
+                    n += dn as i64;
+                    seen += usize::from(dn < 0);
+                }
+            }
+            downs = downs.max(seen);
+            assert_eq!(n as f64 / 5.0, direct(sigma), "σ = {sigma:e}");
+        }
+        // bins that dip below and come back (B < 0) are among them
+        assert!(downs > 0);
+        // solve: the smallest σ at which the mean reaches the target
+        let (bottom, top) = (direct(1e-6), direct(10.0));
+        assert!(top > bottom + 1.0, "{bottom} {top}");
+        for target in [bottom + 0.1, 0.5 * (bottom + top), top - 0.1] {
+            let (sigma, at_end, mean) = x.solve(target, 1e-6, 10.0);
+            assert!(!at_end);
+            // at σ the bin that crosses sits on the threshold: read just above it
+            assert!((mean - direct(sigma * (1.0 + 1e-9))).abs() < 1e-9, "{mean}");
+            assert!(mean >= target);
+            assert!(
+                direct(sigma * (1.0 - 1e-9)) < target,
+                "{target}: σ {sigma:e}"
+            );
+        }
+        let (sigma, at_end, mean) = x.solve(0.0, 1e-6, 10.0);
+        assert!(sigma == 1e-6 && at_end && (mean - bottom).abs() < 1e-9);
+        let (sigma, at_end, mean) = x.solve(1e9, 1e-6, 10.0);
+        assert!(sigma == 10.0 && at_end && (mean - top).abs() < 1e-9);
+    }
 }

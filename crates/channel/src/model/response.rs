@@ -28,6 +28,7 @@ use crate::campaign::manifest::WindowKind;
 use crate::energy::{self, EnergyProcessor};
 use crate::pattern::PatternTable;
 use crate::units::C0;
+use num_complex::Complex64;
 use std::f64::consts::PI;
 
 /// Kernel table: samples per bin and half-width in bins.
@@ -223,6 +224,52 @@ impl Kernel {
         let i = x as usize;
         let f = x - i as f64;
         self.r[i] * (1.0 - f) + self.r[i + 1] * f
+    }
+
+    /// h[n + half] += a·r̃(n·dt − τ) for n = `n_lo`..=`n_hi`, the samples with
+    /// |n·dt| < `gate` left out: [`Kernel::at`] sample by sample (the same operations in the
+    /// same order, so the same sums bit for bit), in blocks whose positions x on the table
+    /// are computed first, where the divisions vectorise.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(super) fn accumulate(
+        &self,
+        h: &mut [Complex64],
+        a: Complex64,
+        tau: f64,
+        n_lo: i64,
+        n_hi: i64,
+        dt: f64,
+        half: i64,
+        gate: f64,
+    ) {
+        const BLOCK: usize = 32;
+        let (step, off) = (self.step_s, self.half as f64);
+        let last = (self.r.len() - 1) as f64;
+        let r = &self.r[..];
+        let mut n = n_lo;
+        while n <= n_hi {
+            let m = ((n_hi - n + 1) as usize).min(BLOCK);
+            let n0 = n as f64;
+            let mut ts = [0.0f64; BLOCK];
+            let mut xs = [0.0f64; BLOCK];
+            for j in 0..m {
+                // (n + j) as f64, exactly (|n| < 2⁵³)
+                ts[j] = (n0 + j as f64) * dt;
+                xs[j] = (ts[j] - tau) / step + off;
+            }
+            let base = (n + half) as usize;
+            let hs = &mut h[base..base + m];
+            for ((hv, &t), &x) in hs.iter_mut().zip(&ts[..m]).zip(&xs[..m]) {
+                if t.abs() < gate || x < 0.0 || x >= last {
+                    continue;
+                }
+                let i = x as usize;
+                let f = x - i as f64;
+                *hv += a * (r[i] * (1.0 - f) + r[i + 1] * f);
+            }
+            n += m as i64;
+        }
     }
 
     /// The images of an echo at delay `tau` that reach a sample in [`lo`, `hi`] (s) within

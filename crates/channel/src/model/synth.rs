@@ -317,6 +317,45 @@ impl EnergySimulator {
     }
 }
 
+impl EnergySimulator {
+    /// The energies of draws of `model` with `seed` as quadratics in the clusters'
+    /// amplitude: with σ_ref the model's `cluster_rrcs` and σ = s²·σ_ref, the energy of
+    /// (position, direction, bin) is A + 2B·s + C·s² for `[A, B, C]` (position-major, as
+    /// [`EnergySimulator::energies`]), since the clusters' rays, the layout's and the noise
+    /// add in the CIR and the clusters' amplitudes scale with √σ. Every stage is
+    /// [`EnergySimulator::energies_with`]'s (the same noise streams, mean removal and
+    /// gate); the clusters' rays are culled at σ_ref, so for σ < σ_ref these are its
+    /// energies at σ plus the cluster rays its cull would leave out there (each below
+    /// `cull` of the mean noise-bin energy). `fixed` as there. It lets `model::levels`
+    /// read the draws' signal bins at every σ from one pass.
+    pub fn energy_quadratics(
+        &self,
+        model: &ModelConfig,
+        seed: u64,
+        fixed: &LayoutRays,
+    ) -> Result<Vec<[f64; 3]>> {
+        let channel = ChannelModel::draw(&self.layout, model, seed)?;
+        if fixed.seed != seed
+            || fixed.parts != layout_parts(&channel.config)
+            || fixed.per_pose.len() != self.poses.len()
+        {
+            return Err(Error::param(
+                "layout_rays",
+                "made for another seed, [diffuse] or [walls]",
+            ));
+        }
+        let (np, nd, nb) = self.shape();
+        let mut out = vec![[0.0; 3]; np * nd * nb];
+        for (p, profiles) in out.chunks_mut(nd * nb).enumerate() {
+            let heading = self.headings_deg[p];
+            let clusters = channel.rays_from(&self.layout, self.poses[p], heading);
+            let h = heading.to_radians();
+            (self.resp).position_quadratic(p, h, &clusters, &fixed.per_pose[p], seed, profiles);
+        }
+        Ok(out)
+    }
+}
+
 /// The rays of the layout's own parts per pose for one seed and one `[diffuse]` and
 /// `[walls]` ([`EnergySimulator::layout_rays`]).
 pub struct LayoutRays {
@@ -561,6 +600,62 @@ impl Response {
         );
     }
 
+    /// [`Response::position`] as quadratics in a scale s of the `clusters`' amplitudes
+    /// ([`EnergySimulator::energy_quadratics`]): per direction the layout's CIR and the
+    /// receiver noise make u, the clusters' CIR v, and each bin's energy at s is that of
+    /// u + s·v ([`EnergyProcessor::bin_quadratics_into`]), averaged over the pulses.
+    fn position_quadratic(
+        &self,
+        p: usize,
+        heading: f64,
+        clusters: &[SeenRay],
+        layout: &[SeenRay],
+        seed: u64,
+        out: &mut [[f64; 3]],
+    ) {
+        let nb = self.proc.nbins();
+        let kept = |rays: &[SeenRay]| -> Vec<SeenRay> {
+            (rays.iter())
+                .filter(|r| r.amp2 >= self.min_amp2)
+                .copied()
+                .collect()
+        };
+        let (clusters, layout) = (kept(clusters), kept(layout));
+        let mut parts: Vec<(Vec<Complex64>, Vec<Complex64>, Vec<Complex64>)> =
+            (0..self.angles.len())
+                .into_par_iter()
+                .map(|d| {
+                    (
+                        self.cir(d, heading, &layout),
+                        self.cir(d, heading, &clusters),
+                        self.noise_spectra(seed, p, d),
+                    )
+                })
+                .collect();
+        if self.mean_removal {
+            subtract_mean(parts.iter_mut().map(|(g, _, _)| g));
+            subtract_mean(parts.iter_mut().map(|(_, c, _)| c));
+            subtract_mean(parts.iter_mut().map(|(_, _, n)| n));
+        }
+        let scale = 1.0 / self.pulses as f64;
+        let k = self.proc.band().points;
+        out.par_chunks_mut(nb).zip(parts.par_iter()).for_each_init(
+            || (self.proc.scratch(), self.proc.scratch().0),
+            |(scratch, v), (prof, (g, c, spectra))| {
+                prof.fill([0.0; 3]);
+                v.fill(Complex64::new(0.0, 0.0));
+                self.proc.add_baseband(v, -self.half, c);
+                self.proc.gate(v);
+                for spectrum in spectra.chunks(k) {
+                    self.proc.cir_into(spectrum, scratch);
+                    self.proc.add_baseband(&mut scratch.0, -self.half, g);
+                    self.proc.gate(&mut scratch.0);
+                    self.proc.bin_quadratics_into(&scratch.0, v, scale, prof);
+                }
+            },
+        );
+    }
+
     /// The receiver noise of (position `p`, direction `d`): one spectrum of white noise per
     /// pulse (pulses × points), from the stream keyed by (seed, p, d), pulse after pulse.
     fn noise_spectra(&self, seed: u64, p: usize, d: usize) -> Vec<Complex64> {
@@ -605,15 +700,22 @@ impl Response {
     /// The samples n·dt (index from bin 0, sample −half; and t) within `reach` of `tau`,
     /// outside the coupling gate.
     fn samples(&self, tau: f64, reach: f64) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let (l, half, dt) = (self.l, self.half, self.dt);
-        let nb = self.proc.nbins();
-        let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
-        let hi = ((tau + reach) / dt).floor() as i64;
-        let hi = hi.min((nb * l) as i64 - half - 1);
+        let (half, dt) = (self.half, self.dt);
+        let (lo, hi) = self.sample_range(tau, reach);
         (lo..=hi).filter_map(move |n| {
             let t = n as f64 * dt;
             (t.abs() >= self.gate).then_some(((n + half) as usize, t))
         })
+    }
+
+    /// The sample indices n (from sample −half of bin 0) of [`Response::samples`], gate
+    /// not applied: n·dt within `reach` of `tau` and on the grid (empty when lo > hi).
+    fn sample_range(&self, tau: f64, reach: f64) -> (i64, i64) {
+        let (l, half, dt) = (self.l, self.half, self.dt);
+        let nb = self.proc.nbins();
+        let lo = ((tau - reach) / dt).ceil().max(-(half as f64)) as i64;
+        let hi = ((tau + reach) / dt).floor() as i64;
+        (lo, hi.min((nb * l) as i64 - half - 1))
     }
 
     /// The baseband CIR g(t_n) = Σ a·e^{−j2πf_cτ}·r(t_n − τ) of direction `d` on the
@@ -646,9 +748,9 @@ impl Response {
         let (lo, hi) = self.span();
         for (tm, sign) in self.kernel.images(tau, lo, hi, reach) {
             let am = a * sign;
-            for (i, t) in self.samples(tm, reach) {
-                h[i] += am * self.kernel.at(t - tm);
-            }
+            let (n_lo, n_hi) = self.sample_range(tm, reach);
+            self.kernel
+                .accumulate(h, am, tm, n_lo, n_hi, self.dt, self.half, self.gate);
         }
     }
 
@@ -842,5 +944,66 @@ mod tests {
             out
         };
         assert_eq!(run(1), run(3));
+    }
+
+    /// The energies as quadratics in the clusters' amplitude
+    /// ([`Response::position_quadratic`]) are the energies: at any cluster scale without
+    /// noise (nothing culled), and with the receiver's noise (two pulses, both coupling
+    /// removals) at the scale they were made for, to rounding.
+    #[test]
+    fn quadratics_in_the_clusters_amplitude_are_the_energies() {
+        let ray = |source, tau_ns: f64, deg: f64, amp2: f64, phase| SeenRay {
+            source,
+            tau_s: tau_ns * 1e-9,
+            theta: deg.to_radians(),
+            amp2,
+            pos: Coord { x: 0.0, y: 0.0 },
+            phase,
+        };
+        let clusters = [
+            ray(RaySource::Cluster(0), 14.2, 3.0, 3e-9, 0.0),
+            ray(RaySource::Cluster(0), 15.1, -8.0, 1e-9, 0.0),
+            ray(RaySource::Cluster(1), 33.7, 40.0, 4e-10, 0.0),
+            ray(RaySource::Cluster(2), 170.0, -20.0, 2e-9, 0.0),
+        ];
+        let layout = [
+            ray(RaySource::Specular(0), 14.6, 0.0, 5e-9, 0.4),
+            ray(RaySource::Wall(1), 20.3, 12.0, 8e-10, 2.1),
+            ray(RaySource::Vertex(2), 41.0, -33.0, 2e-10, -1.0),
+        ];
+        let scaled = |f: f64| -> Vec<SeenRay> {
+            (clusters.iter().map(|r| SeenRay {
+                amp2: r.amp2 * f,
+                ..*r
+            }))
+            .chain(layout.iter().copied())
+            .collect()
+        };
+        let worst = |resp: &Response, f: f64| -> f64 {
+            let n = resp.angles.len() * resp.proc.nbins();
+            let (mut e, mut q) = (vec![0.0; n], vec![[0.0; 3]; n]);
+            resp.position(2, 0.2, &scaled(f), 5, &mut e);
+            resp.position_quadratic(2, 0.2, &clusters, &layout, 5, &mut q);
+            let peak = e.iter().copied().fold(0.0, f64::max);
+            assert!(peak > 0.0);
+            let s = f.sqrt();
+            (e.iter().zip(&q))
+                .map(|(e, [a, b, c])| (e - (a + 2.0 * b * s + c * s * s)).abs() / peak)
+                .fold(0.0, f64::max)
+        };
+        for coupling in [CouplingRemoval::Gate, CouplingRemoval::Mean] {
+            let mut c = campaign(401, coupling);
+            c.manifest.pulses = 2;
+            // no noise to speak of: nothing is culled at any scale
+            let quiet = Response::new(&c, 1e-3, Some(1e-40)).unwrap();
+            for f in [1.0, 0.2, 1e-3] {
+                let w = worst(&quiet, f);
+                assert!(w < 1e-12, "{coupling:?}, scale {f}: {w:e}");
+            }
+            // with the receiver's noise at the scale the quadratics were made for
+            let noisy = Response::new(&c, 1e-3, Some(2.5e-16)).unwrap();
+            let w = worst(&noisy, 1.0);
+            assert!(w < 1e-12, "{coupling:?}, noise: {w:e}");
+        }
     }
 }

@@ -301,6 +301,37 @@ impl EnergyProcessor {
         }
     }
 
+    /// The bin sums of two CIRs for energies quadratic in a real scale s of the second: bin
+    /// b of `u + s·v` has energy A + 2s·B + s²·C, A = Σ|u_n|², B = Σ Re(ū_n v_n) and
+    /// C = Σ|v_n|² over the bin's L samples (as [`Self::bins_into`] takes them), each × 1/L
+    /// and added with weight `scale` to `out[b] = [A, B, C]`.
+    pub fn bin_quadratics_into(
+        &self,
+        u: &[Complex64],
+        v: &[Complex64],
+        scale: f64,
+        out: &mut [[f64; 3]],
+    ) {
+        let l = self.proc.oversample;
+        let half = (l - 1) / 2;
+        let norm = scale / l as f64;
+        let n = self.nfft;
+        for (bin, o) in out.iter_mut().enumerate().take(self.nbins_full) {
+            let start = (bin * l + n - half) % n;
+            let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+            for j in 0..l {
+                let i = (start + j) % n;
+                let (x, y) = (u[i], v[i]);
+                a += x.norm_sqr();
+                b += x.re * y.re + x.im * y.im;
+                c += y.norm_sqr();
+            }
+            o[0] += a * norm;
+            o[1] += b * norm;
+            o[2] += c * norm;
+        }
+    }
+
     /// Expected bin energies (noise-free) of a point echo of complex amplitude spectrum
     /// `a(f)` = `amp`·e^{−j2πfτ} (flat magnitude) at delay `tau_s`: the window kernel
     /// averaged over each bin. Returns `nbins` values.
