@@ -633,3 +633,169 @@ fn closed_loop_recovers_the_drawn_environment() {
     }
     assert!(failures.is_empty(), "outside 15 %: {failures:?}");
 }
+
+/// The quantities of [`PICKS`] with their intervals.
+const QUANTITIES: [fn(&ModelConfig) -> &Quantity; 7] = [
+    |m| &m.inter_cluster_rate,
+    |m| &m.intra_cluster_rate,
+    |m| &m.intra_cluster_aoa,
+    |m| &m.perimeter_spacing,
+    |m| &m.perimeter_offset,
+    |m| &m.cluster_decay,
+    |m| &m.ray_decay,
+];
+
+/// Per quantity of [`PICKS`], over environments: (the chain's 95 % interval covers the
+/// generating value, covers the drawn environment's truth, the chain within 15 % of that
+/// truth, intervals written) and the median of the chain's error from that truth.
+type Coverage = [([usize; 4], f64); 7];
+
+/// The chain's closed loop over `envs` environments (issue 54's coverage must-show):
+/// `synth` of `model` on the campaign `cpath` with seeds 1000, 1001, … (each a new draw of
+/// the clusters), the chain (`extract`, `cluster`, `fit`, 100 resamples: the chain's own
+/// position-bootstrap intervals) and the same estimators on synth's truth (the drawn
+/// environment, the reference the lessons ask for); prints a row per quantity.
+fn chain_coverage(name: &str, cpath: &Path, model: &ModelConfig, envs: usize) -> Coverage {
+    let t0 = Instant::now();
+    let tmp = tempfile::tempdir().unwrap();
+    let c = Campaign::load(cpath).unwrap();
+    let fit_params = FitParams {
+        bootstrap: 100,
+        seed: 1,
+    }
+    .check()
+    .unwrap();
+    let mpath = tmp.path().join("model.toml");
+    model.save(&mpath).unwrap();
+    let inside = |iv: Option<[f64; 2]>, v: f64| {
+        iv.is_some_and(|[lo, hi]| (v.is_infinite() && hi.is_infinite()) || (lo <= v && v <= hi))
+    };
+    let mut out = [[0usize; 4]; 7];
+    let mut errors: Vec<Vec<f64>> = vec![Vec::new(); 7];
+    for r in 0..envs {
+        let dir = tmp.path().join(format!("r{r}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (e, t) = synth(&dir, cpath, &mpath, Some(1000 + r as u64));
+        let (_, f, _) = chain(&dir, cpath, &e);
+        let got = ModelConfig::load(&f).unwrap();
+        let truth = fit_truth(&t, &c, &fit_params).unwrap().model;
+        for (i, q) in QUANTITIES.iter().enumerate() {
+            let (g, w, tr) = (q(&got), q(model).value, q(&truth).value);
+            let rel = if g.value == tr {
+                0.0
+            } else {
+                (g.value - tr) / tr
+            };
+            if rel.is_finite() {
+                errors[i].push(rel);
+            }
+            let row = [
+                inside(g.interval, w),
+                inside(g.interval, tr),
+                rel.abs() <= 0.15,
+                g.interval.is_some(),
+            ];
+            for (o, hit) in out[i].iter_mut().zip(row) {
+                *o += usize::from(hit);
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    eprintln!(
+        "== {name}: {envs} environments, {:.0} s",
+        t0.elapsed().as_secs_f64()
+    );
+    eprintln!("quantity | interval covers the model | covers the environment's truth | within 15 % of that truth | median error from that truth | intervals written");
+    let mut res = [([0usize; 4], f64::NAN); 7];
+    for (i, ((q, _), [m, t, w, n])) in PICKS.iter().zip(out).enumerate() {
+        let e = &mut errors[i];
+        e.sort_by(f64::total_cmp);
+        let med = if e.is_empty() {
+            f64::NAN
+        } else {
+            e[e.len() / 2]
+        };
+        eprintln!(
+            "COVERAGE {name} | {q} | {m}/{envs} | {t}/{envs} | {w}/{envs} | {:+.0} % | {n}/{envs}",
+            100.0 * med
+        );
+        res[i] = ([m, t, w, n], med);
+    }
+    res
+}
+
+/// Issue 54's must-show: each quantity's 95 % interval covers the generating value in
+/// ≥ 85 % of the environments (a quantity with no interval in most environments, Γ = ∞
+/// say, counts as uncovered); panics naming the ones below.
+fn assert_coverage(name: &str, cov: &Coverage, envs: usize) {
+    let short: Vec<String> = (PICKS.iter().zip(cov))
+        .filter(|(_, (c, _))| (c[0] as f64) < 0.85 * envs as f64)
+        .map(|((q, _), (c, med))| {
+            format!("{q} {}/{envs} (median error {:+.0} %)", c[0], 100.0 * med)
+        })
+        .collect();
+    assert!(short.is_empty(), "{name}: covered in < 85 %: {short:?}");
+}
+
+/// `PRADAR_COVERAGE_ENVS` (default 20) environments.
+fn coverage_envs() -> usize {
+    let n = std::env::var("PRADAR_COVERAGE_ENVS")
+        .ok()
+        .map(|v| v.parse::<usize>().expect("PRADAR_COVERAGE_ENVS: a count"))
+        .unwrap_or(20);
+    assert!(n > 0, "PRADAR_COVERAGE_ENVS=0: no environment to cover");
+    n
+}
+
+/// The chain's coverage on the built-in corridor (its 12 poses, 801 points) with the
+/// Table 1 model (`ModelConfig::table1_defaults`), 20 environments: issue 54 asks the 95 %
+/// intervals to cover the generating value in ≥ 85 % per quantity. Unmet: measured 20/20
+/// Λ, 18/20 d_p, Γ and γ, but λ 5/20 (+68 % from the environment's truth), AoA 15/20
+/// (+32 %), d_c 2/20 (+236 %): the clustering merges true clusters (this file's module
+/// docs). Figures in docs/fit.md, "The chain's closed-loop coverage".
+#[test]
+#[ignore = "unmet (λ, AoA, d_c); about 30 s on 2 cores"]
+fn chain_coverage_corridor() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = common::write_campaign(&tmp.path().join("in"), &common::corridor());
+    let name = "corridor, Table 1 model";
+    let envs = coverage_envs();
+    let cov = chain_coverage(name, &cpath, &ModelConfig::table1_defaults(), envs);
+    assert_coverage(name, &cov, envs);
+}
+
+/// [`chain_coverage_corridor`] on the L-shaped corridor of
+/// [`closed_loop_recovers_the_drawn_environment`] (200 poses, 3201 points) with set 1's
+/// model (λ 1.0/ns, AoA 8°, d_c 6 m). Figures in docs/fit.md.
+#[test]
+#[ignore = "unmet; about 10 min on 2 cores"]
+fn chain_coverage_l_shape() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cpath = Scene::l_shape().write(&tmp.path().join("in"));
+    let name = "L-shape, set 1's model";
+    let envs = coverage_envs();
+    let cov = chain_coverage(name, &cpath, &common::hall_model(1.0, 8.0, 6.0), envs);
+    assert_coverage(name, &cov, envs);
+}
+
+/// [`chain_coverage_corridor`] on any campaign with a `[clutter]` model (a zoo scene's):
+/// `PRADAR_COVERAGE_CAMPAIGN=path/campaign.toml` (its layout beside it), the model its
+/// `[clutter]` table. Without the variable it stops with a message. Figures for five zoo
+/// scenes of seed 1 in docs/fit.md (unmet on each).
+#[test]
+#[ignore = "unmet on the zoo; about 1 min per scene on 2 cores"]
+fn chain_coverage_campaign() {
+    let path = std::env::var("PRADAR_COVERAGE_CAMPAIGN")
+        .expect("PRADAR_COVERAGE_CAMPAIGN=path/campaign.toml names the campaign to measure");
+    let cpath = PathBuf::from(path);
+    let t: toml::Table = toml::from_str(&std::fs::read_to_string(&cpath).unwrap()).unwrap();
+    let law = t.get("clutter").expect("the campaign has no [clutter]");
+    let tmp = tempfile::tempdir().unwrap();
+    let mpath = tmp.path().join("law.toml");
+    std::fs::write(&mpath, toml::to_string(law).unwrap()).unwrap();
+    let law = ModelConfig::load(&mpath).unwrap();
+    let name = t["name"].as_str().unwrap_or("campaign").to_string();
+    let envs = coverage_envs();
+    let cov = chain_coverage(&name, &cpath, &law, envs);
+    assert_coverage(&name, &cov, envs);
+}

@@ -48,6 +48,7 @@ pub mod output;
 pub mod pose_noise;
 pub mod reference;
 pub mod score;
+pub mod slam;
 
 pub use ekf::{EkfParams, EkfUpdate, EkfValid, EkfVariant};
 pub use grid::{Beam, GridParams, GridValid, ObservationModel};
