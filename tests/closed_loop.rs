@@ -60,6 +60,11 @@
 //! steps against 2° (91 directions, 614 s): every truth figure is identical (the truth is
 //! the drawn rays, independent of the scan), and the chain's asserted figures moved by at
 //! most 8 points (set 1 Γ +4.6 → −3.5 %), none across 15 %.
+//!
+//! Coverage (issue 54, ignored, unmet): `chain_coverage_corridor`, `chain_coverage_l_shape`
+//! and `chain_coverage_campaign` (a zoo scene's `[clutter]` law) draw 20 environments each
+//! and count how often the chain's 95 % intervals cover the generating value (figures in
+//! docs/fit.md).
 
 use crate::common;
 
@@ -780,13 +785,17 @@ fn chain_coverage_l_shape() {
 
 /// [`chain_coverage_corridor`] on any campaign with a `[clutter]` model (a zoo scene's):
 /// `PRADAR_COVERAGE_CAMPAIGN=path/campaign.toml` (its layout beside it), the model its
-/// `[clutter]` table. Without the variable it stops with a message. Figures for five zoo
-/// scenes of seed 1 in docs/fit.md (unmet on each).
+/// `[clutter]` table. Without the variable it says so and measures nothing. Figures for
+/// five zoo scenes of seed 1 in docs/fit.md (unmet on each).
 #[test]
 #[ignore = "unmet on the zoo; about 1 min per scene on 2 cores"]
 fn chain_coverage_campaign() {
-    let path = std::env::var("PRADAR_COVERAGE_CAMPAIGN")
-        .expect("PRADAR_COVERAGE_CAMPAIGN=path/campaign.toml names the campaign to measure");
+    let Ok(path) = std::env::var("PRADAR_COVERAGE_CAMPAIGN") else {
+        eprintln!(
+            "PRADAR_COVERAGE_CAMPAIGN=path/campaign.toml names the campaign to measure: none"
+        );
+        return;
+    };
     let cpath = PathBuf::from(path);
     let t: toml::Table = toml::from_str(&std::fs::read_to_string(&cpath).unwrap()).unwrap();
     let law = t.get("clutter").expect("the campaign has no [clutter]");
@@ -794,7 +803,9 @@ fn chain_coverage_campaign() {
     let mpath = tmp.path().join("law.toml");
     std::fs::write(&mpath, toml::to_string(law).unwrap()).unwrap();
     let law = ModelConfig::load(&mpath).unwrap();
-    let name = t["name"].as_str().unwrap_or("campaign").to_string();
+    let name = (t.get("name").and_then(|v| v.as_str()))
+        .unwrap_or("campaign")
+        .to_string();
     let envs = coverage_envs();
     let cov = chain_coverage(&name, &cpath, &law, envs);
     assert_coverage(&name, &cov, envs);

@@ -33,6 +33,7 @@ mod occlusion;
 mod physics;
 mod report;
 mod responsiveness;
+mod slam;
 mod smm;
 mod streaming;
 mod synth;

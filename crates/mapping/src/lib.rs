@@ -16,7 +16,9 @@
 //! * [`score`]: a map's figures against the reference map on the observable region, the
 //!   building and the whole map, and the report's metrics table; [`objects`]: the truth's
 //!   objects for the three-class figures; [`detectable`]: the cells some beam could detect;
-//! * [`output`]: PNG, PGM + YAML (ROS map_server).
+//! * [`output`]: PNG, PGM + YAML (ROS map_server);
+//! * [`slam`]: poses from the sweeps (issue 56, started): the odometry, scan-to-map
+//!   matching and the pose graph; no command uses it yet.
 //!
 //! * [`job`]: the map job (runs, fusion, the map files, `metrics.json`) that the `pradar map`
 //!   command, the experiments, the explorer and the report run.

@@ -564,7 +564,7 @@ fn cluster_sigma(
     };
     // enough draws for LEVEL_POSES pose-draws (at least 4, at most the seeds)
     let draws = LEVEL_POSES.div_ceil(np.max(1)).clamp(4, LEVEL_SEEDS.len());
-    let (lo, hi) = (1e-6f64, 10f64);
+    let (lo, hi) = (1e-6f64, SIGMA_REF);
     if !usable || !measured.is_finite() || !out.cluster_rrcs.value.is_finite() {
         return Ok((out.cluster_rrcs.value, true, f64::NAN));
     }
@@ -572,19 +572,37 @@ fn cluster_sigma(
     // bracket's top (their cull at its largest), so one pass reads the signal bins at
     // every σ of the bracket; draws in parallel, each its own crossings (the bytes do not
     // depend on the thread count)
-    let mut m = base.clone();
-    m.cluster_rrcs.value = hi;
     let threshold = 10.0 * mu;
+    let missing = |i: usize| em.meta.is_missing(i / nd, i % nd);
     let per_draw = (LEVEL_SEEDS[..draws].par_iter())
-        .map(|&s| -> Result<Crossings> {
-            let fixed = sim.layout_rays(&m, s)?;
-            let q = sim.energy_quadratics(&m, s, &fixed)?;
-            Ok(Crossings::of(&q, nb, first_bin, threshold, hi, |i| {
-                em.meta.is_missing(i / nd, i % nd)
-            }))
-        })
+        .map(|&s| draw_crossings(sim, &base, s, nb, first_bin, threshold, &missing))
         .collect::<Result<Vec<_>>>()?;
     Ok(Crossings::merge(per_draw).solve(measured, lo, hi))
+}
+
+/// σ_ref of the quadratics, m²: the top of the search's bracket (where synth's cull keeps
+/// the most of the clusters' rays).
+const SIGMA_REF: f64 = 10.0;
+
+/// The crossings of one draw (`seed`) of `base` with its clusters at [`SIGMA_REF`]
+/// (profiles of `nb` bins, counted from `first_bin` against `threshold`, `missing(i)` for
+/// profile i without a sweep).
+fn draw_crossings(
+    sim: &EnergySimulator,
+    base: &ModelConfig,
+    seed: u64,
+    nb: usize,
+    first_bin: usize,
+    threshold: f64,
+    missing: &(impl Fn(usize) -> bool + Sync),
+) -> Result<Crossings> {
+    let mut m = base.clone();
+    m.cluster_rrcs.value = SIGMA_REF;
+    let fixed = sim.layout_rays(&m, seed)?;
+    let q = sim.energy_quadratics(&m, seed, &fixed)?;
+    Ok(Crossings::of(
+        &q, nb, first_bin, threshold, SIGMA_REF, missing,
+    ))
 }
 
 /// The signal bins of a set of draws at every σ: each bin's energy is a quadratic in
@@ -679,11 +697,18 @@ impl Crossings {
         if n as f64 * per >= measured {
             return (lo, true, n as f64 * per);
         }
-        for &(sigma, dn) in &self.changes[k..] {
-            if sigma > hi {
+        // every change at one σ applied before the mean there is read
+        let rest = &self.changes[k..];
+        let mut i = 0;
+        while i < rest.len() {
+            let sigma = rest[i].0;
+            if sigma.is_nan() || sigma > hi {
                 break;
             }
-            n += dn as i64;
+            while i < rest.len() && rest[i].0 == sigma {
+                n += rest[i].1 as i64;
+                i += 1;
+            }
             if n as f64 * per >= measured {
                 return (sigma, false, n as f64 * per);
             }
@@ -697,6 +722,46 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The wiring of step 3: one draw's crossings on the corridor (its layout, the Table 1
+    /// model with `[diffuse]` and `[walls]` off, its recorded noise), a profile without a
+    /// sweep and the first bins left out, give at σ_ref the count of `signal_bins` on
+    /// `synth`'s own energies there with that profile masked.
+    #[test]
+    fn one_draw_s_crossings_count_synth_s_signal_bins_at_sigma_ref() {
+        use crate::campaign::manifest::Campaign;
+        let p = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../data/corridor/campaign.toml"
+        );
+        let c = Campaign::load(std::path::Path::new(p)).unwrap();
+        let sim = EnergySimulator::new(&c, &SynthParams::default().check().unwrap()).unwrap();
+        let (_, nd, nb) = sim.shape();
+        let (mu, _) = sim.noise();
+        let mut base = ModelConfig::table1_defaults();
+        base.diffuse = None;
+        base.walls = None;
+        let (first_bin, threshold) = (25, 10.0 * mu);
+        let gone = 3 * nd + 7;
+        let missing = |i: usize| i == gone;
+        let x = draw_crossings(&sim, &base, 11, nb, first_bin, threshold, &missing).unwrap();
+        let x = Crossings::merge(vec![x]);
+        let mut m = base.clone();
+        m.cluster_rrcs.value = SIGMA_REF;
+        let mut e = sim.energies(&m, 11).unwrap();
+        e[gone * nb..(gone + 1) * nb].fill(f64::NAN);
+        let (want, profiles) = signal_bins(&e, nb, first_bin, mu);
+        assert_eq!(x.profiles, profiles);
+        let (sigma, at_end, mean) = x.solve(f64::INFINITY, 1e-6, SIGMA_REF);
+        assert!(sigma == SIGMA_REF && at_end);
+        let got = mean * profiles as f64;
+        eprintln!("signal bins at σ_ref: crossings {got}, synth {want}");
+        assert!(want > 100, "{want}");
+        assert!(
+            (got - want as f64).abs() <= 1e-6 * want as f64 + 1.0,
+            "{got} vs {want}"
+        );
+    }
 
     /// Crossings read the signal bins of quadratic energies at every σ as counting them
     /// there does, and `solve` gives the smallest σ at which the mean reaches the target.

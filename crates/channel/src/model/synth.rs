@@ -249,8 +249,9 @@ impl EnergySimulator {
     /// (`[walls]`), in the order [`EnergySimulator::energies`] adds them after the
     /// clusters' rays, those below the cull even at the pattern's peak left out (they are
     /// in no profile; a ray at any delay reaches the span through its images). They do not
-    /// depend on the model's clusters, so a search over the cluster level (`model::levels`)
-    /// makes them once per seed and hands them to [`EnergySimulator::energies_with`].
+    /// depend on the model's clusters: a caller drawing one seed at several cluster levels
+    /// makes them once and hands them to [`EnergySimulator::energies_with`] or
+    /// [`EnergySimulator::energy_quadratics`] (`model::levels`).
     pub fn layout_rays(&self, model: &ModelConfig, seed: u64) -> Result<LayoutRays> {
         model.check()?;
         let walls = match &model.diffuse {

@@ -9,7 +9,11 @@
 //! commands uses this module yet. Measurements: `docs/slam.md`.
 
 pub mod graph;
+pub mod matching;
 pub mod odometry;
+pub mod run;
 
 pub use graph::{Edge, Pose2, PoseGraph, Solution, SolveParams, SolveValid};
+pub use matching::{match_scan, Field, Match, Scan};
 pub use odometry::{Odometry, OdometryNoise, OdometryNoiseValid};
+pub use run::{estimate, Estimate};

@@ -104,14 +104,20 @@ impl Odometry {
         out
     }
 
-    /// The pose graph of the steps: the dead reckoning as its poses, one edge per step.
-    pub fn graph(&self) -> PoseGraph {
+    /// The pose graph of the steps: the dead reckoning as its poses, one edge per step
+    /// (refused by name when a step or a σ is not usable).
+    pub fn graph(&self) -> Result<PoseGraph> {
+        if !(self.sigma_m.is_finite() && self.sigma_m > 0.0) {
+            return Err(Error::param("odometry.sigma_m", "must be > 0"));
+        }
+        if !(self.sigma_rad.is_finite() && self.sigma_rad > 0.0) {
+            return Err(Error::param("odometry.sigma_rad", "must be > 0"));
+        }
         let mut g = PoseGraph::new(self.dead_reckoning());
         for (k, s) in self.steps.iter().enumerate() {
-            g.add_edge(Edge::diagonal(k, k + 1, *s, self.sigma_m, self.sigma_rad))
-                .expect("σ > 0 by OdometryNoise::check, steps finite");
+            g.add_edge(Edge::diagonal(k, k + 1, *s, self.sigma_m, self.sigma_rad))?;
         }
-        g
+        Ok(g)
     }
 }
 
@@ -182,7 +188,7 @@ mod tests {
             Odometry::simulate(&truth, &noise),
             Odometry::simulate(&truth, &noise)
         );
-        let mut g = Odometry::simulate(&truth, &noise).graph();
+        let mut g = Odometry::simulate(&truth, &noise).graph().unwrap();
         let sol = g
             .optimise(&SolveParams::default().check().unwrap())
             .unwrap();
@@ -211,5 +217,16 @@ mod tests {
             let msg = n.check().unwrap_err().to_string();
             assert!(msg.contains("odometry."), "{msg}");
         }
+        let o = Odometry {
+            start: Pose2::default(),
+            steps: vec![Pose2::new(1.0, 0.0, 0.0)],
+            sigma_m: 0.0,
+            sigma_rad: 0.1,
+        };
+        assert!(o
+            .graph()
+            .unwrap_err()
+            .to_string()
+            .contains("odometry.sigma_m"));
     }
 }
