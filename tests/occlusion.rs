@@ -640,6 +640,8 @@ fn loaded_og_run(
         og: OgParams::default(),
         ekf: EkfParams::default(),
         pose_noise: Default::default(),
+        poses_from: Default::default(),
+        odometry: Default::default(),
     }
     .check()
     .unwrap();

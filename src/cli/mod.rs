@@ -22,7 +22,7 @@ use pradar::cluster::{ClusterParams, Criterion};
 use pradar::explore::ExploreParams;
 use pradar::fit::channel::FitParams;
 use pradar::mapping::grid::SilentBound;
-use pradar::mapping::job::PoseNoise;
+use pradar::mapping::job::{OdometryNoise, PoseNoise, PosesFrom};
 use pradar::mapping::og::OgCredit;
 use pradar::mapping::{
     EkfParams, EkfUpdate, EkfVariant, GridParams, Method as MapMethod, OgParams,
@@ -361,6 +361,16 @@ pub struct MapArgs {
     /// Seed of the pose-noise draws.
     #[arg(long, allow_negative_numbers = true, default_value_t = PoseNoise::DEFAULT_SEED, help_heading = "Pose noise")]
     pub pose_seed: u64,
+    /// The mapper's poses: manifest, odometry (the dead reckoning of steps drawn from the
+    /// manifest's with --odometry-*) or sweeps (those steps and the scans; poses.csv).
+    #[arg(long, default_value_t = PosesFrom::default(), value_parser = choice(&PosesFrom::ALL, PosesFrom::name), hide_possible_values = true, help_heading = "Pose noise")]
+    pub poses_from: PosesFrom,
+    /// Odometry σ of x and y per step, m (seed --pose-seed).
+    #[arg(long, default_value_t = OdometryNoise::default().step_m, value_parser = ranges::positive, allow_negative_numbers = true, help_heading = "Pose noise")]
+    pub odometry_m: f64,
+    /// Odometry σ of the heading per step, degrees.
+    #[arg(long, default_value_t = OdometryNoise::default().step_deg, value_parser = ranges::positive, allow_negative_numbers = true, help_heading = "Pose noise")]
+    pub odometry_deg: f64,
 }
 
 /// `--og-credit-depth`'s default: the library's depth (`guard`, infinity, when it has none).

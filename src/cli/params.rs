@@ -8,7 +8,7 @@ use super::{
     ExtractArgs, FitArgs, ImportArgs, MapArgs, ReportArgs, ReproduceArgs, SimulateArgs, SynthArgs,
 };
 use anyhow::Result;
-use pradar::mapping::job::{MapOptions, MapRun, PoseNoise};
+use pradar::mapping::job::{MapOptions, MapRun, OdometryNoise, PoseNoise};
 use pradar::mapping::{EkfParams, GridParams, OgParams};
 use pradar::params::ParamGuard;
 use pradar::pipeline::commands;
@@ -180,6 +180,12 @@ impl MapArgs {
                 pose_noise: PoseNoise {
                     position_m: self.pose_noise_m,
                     heading_deg: self.pose_noise_deg,
+                    seed: self.pose_seed,
+                },
+                poses_from: self.poses_from,
+                odometry: OdometryNoise {
+                    step_m: self.odometry_m,
+                    step_deg: self.odometry_deg,
                     seed: self.pose_seed,
                 },
             },
@@ -399,6 +405,31 @@ mod tests {
         let echo = options(&["--og-credit", "echo"]);
         assert_eq!(echo.og.credit, pradar::mapping::og::OgCredit::Echo);
         assert_eq!(o.og.credit, pradar::mapping::og::OgCredit::Ring);
+        use pradar::mapping::job::{OdometryNoise, PosesFrom};
+        use pradar::params::ParamGuard;
+        assert_eq!(o.poses_from, PosesFrom::Manifest);
+        assert_eq!(o.odometry, OdometryNoise::default());
+        let s = options(&[
+            "--poses-from",
+            "sweeps",
+            "--odometry-m",
+            "0.2",
+            "--pose-seed",
+            "4",
+        ]);
+        assert_eq!(s.poses_from, PosesFrom::Sweeps);
+        assert_eq!(
+            s.odometry,
+            OdometryNoise {
+                step_m: 0.2,
+                seed: 4,
+                ..Default::default()
+            }
+        );
+        // sweeps and --pose-noise-* together: one named error at the check
+        let both = options(&["--poses-from", "odometry", "--pose-noise-m", "0.1"]);
+        let msg = both.check().unwrap_err().to_string();
+        assert!(msg.contains("--poses-from"), "{msg}");
     }
 
     /// Every other subcommand's defaults are the library's: each parsed with only its

@@ -94,6 +94,8 @@
 //!         og: Default::default(),
 //!         ekf: Default::default(),
 //!         pose_noise: Default::default(),
+//!         poses_from: Default::default(),
+//!         odometry: Default::default(),
 //!     },
 //!     run_specs: vec!["sim/campaign.toml=energy.parquet".into()],
 //! };

@@ -287,6 +287,8 @@ impl<'a> Lab<'a> {
                 ..self.params.ekf
             },
             pose_noise: case.pose_noise,
+            poses_from: Default::default(),
+            odometry: Default::default(),
         };
         opts.check()
     }

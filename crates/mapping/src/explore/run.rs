@@ -493,6 +493,8 @@ fn run_job(
             og: params.og,
             ekf: params.ekf,
             pose_noise: PoseNoise::default(),
+            poses_from: Default::default(),
+            odometry: Default::default(),
         }
         .check()?;
         let t = Instant::now();

@@ -100,6 +100,7 @@ pub fn run_map_ekf(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) ->
             covariance_bytes: covariance_bytes(&params, &spec),
         }),
         pose_noise: opts.pose_noise,
+        slam: super::slam_summaries(&opts.out, &inputs.loaded)?,
         binary: bin,
     };
     write_metrics_json(&opts.out, &report)?;

@@ -17,9 +17,14 @@ use crate::grid::{GridValid, ObservationModel, Occlusion};
 use crate::memo::Memo;
 use crate::objects::{find_truth, load_objects};
 use crate::og::{detection_threshold, Detector, OgValid};
+use crate::params::ParamGuard;
 use crate::reference::{GridSpec, LayoutRaster, ReferenceMap};
 use crate::score::{building_region, observable_region, Regions};
-use std::path::PathBuf;
+use crate::slam::matching::steering_step_rad;
+use crate::slam::odometry::{pose2, position_rmse};
+use crate::slam::{estimate, Estimate, Odometry, OdometryNoise, PosesFrom, Scan, SolveParams};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
 
 /// A loaded, checked run ready to map.
 #[derive(Debug)]
@@ -37,8 +42,11 @@ pub struct LoadedRun {
     /// The run's detector.
     pub detector: Detector,
     /// The poses the data were recorded at (the manifest's; `model.poses` holds the poses
-    /// the mapper believes, which differ under [`super::PoseNoise`]).
+    /// the mapper believes, which differ under [`super::PoseNoise`] and `--poses-from
+    /// sweeps`).
     pub true_poses: Vec<Pose>,
+    /// The poses estimated from the sweeps (`--poses-from sweeps`) and the odometry's noise.
+    pub slam: Option<(Estimate, OdometryNoise)>,
 }
 
 impl LoadedRun {
@@ -141,6 +149,7 @@ pub fn load_run(
         energy_path: run.energy.clone(),
         model,
         detector,
+        slam: None,
     })
 }
 
@@ -153,6 +162,21 @@ pub fn load_runs(opts: &MapValid) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
         let spec = loaded.first().map(|l| l.model.spec);
         let mut l = load_run(r, opts.elements, &grid, &og, spec)?;
         l.model.poses = opts.pose_noise.apply(&l.true_poses, i);
+        if opts.poses_from != PosesFrom::Manifest {
+            let noise = OdometryNoise {
+                seed: (opts.odometry.seed) ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                ..opts.odometry
+            };
+            let est = estimate_poses(&l, &noise, grid.cell_m, opts.poses_from)?;
+            l.model.poses = (est.poses.iter())
+                .map(|p| Pose {
+                    x_m: p.x,
+                    y_m: p.y,
+                    heading_deg: p.theta.to_degrees(),
+                })
+                .collect();
+            l.slam = Some((est, noise));
+        }
         loaded.push(l);
     }
     let reference = loaded[0].layout.rasterize(grid.cell_m, grid.margin_m);
@@ -210,4 +234,111 @@ pub fn runs_regions(loaded: &[LoadedRun], reference: &ReferenceMap) -> Result<Re
         objects,
         detectable,
     })
+}
+
+/// The poses of run `l` from an odometry drawn from the manifest's poses with `noise`:
+/// its dead reckoning (`from` odometry), or estimated from the sweeps as well
+/// ([`crate::slam::run`]: each pose's detections by the run's detector, matched on a field
+/// of `cell_m`).
+fn estimate_poses(
+    l: &LoadedRun,
+    noise: &OdometryNoise,
+    cell_m: f64,
+    from: PosesFrom,
+) -> Result<Estimate> {
+    let truth: Vec<_> = l.true_poses.iter().map(pose2).collect();
+    let odo = Odometry::simulate(&truth, &noise.check()?);
+    if from == PosesFrom::Odometry {
+        // the dead reckoning alone, its covariances the odometry graph's
+        let mut g = odo.graph()?;
+        let sol = g.optimise(&SolveParams::default().check()?)?;
+        return Ok(Estimate {
+            poses: g.poses,
+            covariances: sol.covariances,
+            dead_reckoning: odo.dead_reckoning(),
+            matched: vec![false; truth.len()],
+        });
+    }
+    let em = EnergyMatrix::read(&l.energy_path)?;
+    let scans: Vec<Scan> = (0..em.positions)
+        .map(|p| Scan::from_detections(&em, &l.detector.detect_pose(&em, p)))
+        .collect();
+    estimate(
+        &odo,
+        &scans,
+        cell_m,
+        steering_step_rad(&em.angles_rel_deg),
+        &SolveParams::default().check()?,
+    )
+}
+
+/// One run's poses from the sweeps, in `metrics.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SlamSummary {
+    /// σ of x and y per odometry step, m.
+    pub odometry_step_m: f64,
+    /// σ of the heading per step, degrees.
+    pub odometry_step_deg: f64,
+    /// Seed of the odometry draws.
+    pub odometry_seed: u64,
+    /// Position RMSE against the manifest's poses of the dead reckoning, m.
+    pub rmse_dead_reckoning_m: f64,
+    /// … of the estimated poses, m.
+    pub rmse_estimated_m: f64,
+    /// Poses whose scan was matched to the map (the first never is).
+    pub matched: usize,
+    /// Poses.
+    pub poses: usize,
+}
+
+/// The runs' [`SlamSummary`] (none without `--poses-from sweeps`); writes `poses.csv` in
+/// `out` when there is one: per run and pose the estimated pose with its standard
+/// deviations and x–y covariance, the dead reckoning and the manifest's pose.
+pub fn slam_summaries(out: &Path, loaded: &[LoadedRun]) -> Result<Vec<SlamSummary>> {
+    let mut rows = String::from(
+        "run,pose,x_m,y_m,heading_deg,sd_x_m,sd_y_m,sd_heading_deg,cov_xy_m2,dead_x_m,dead_y_m,dead_heading_deg,true_x_m,true_y_m,true_heading_deg,matched\n",
+    );
+    let mut out_rows = Vec::new();
+    for (i, l) in loaded.iter().enumerate() {
+        let Some((est, noise)) = &l.slam else {
+            continue;
+        };
+        let truth: Vec<_> = l.true_poses.iter().map(pose2).collect();
+        for (k, ((p, c), (d, t))) in (est.poses.iter().zip(&est.covariances))
+            .zip(est.dead_reckoning.iter().zip(&l.true_poses))
+            .enumerate()
+        {
+            rows.push_str(&format!(
+                "{i},{k},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                p.x,
+                p.y,
+                p.theta.to_degrees(),
+                c[(0, 0)].max(0.0).sqrt(),
+                c[(1, 1)].max(0.0).sqrt(),
+                c[(2, 2)].max(0.0).sqrt().to_degrees(),
+                c[(0, 1)],
+                d.x,
+                d.y,
+                d.theta.to_degrees(),
+                t.x_m,
+                t.y_m,
+                t.heading_deg,
+                est.matched[k]
+            ));
+        }
+        out_rows.push(SlamSummary {
+            odometry_step_m: noise.step_m,
+            odometry_step_deg: noise.step_deg,
+            odometry_seed: noise.seed,
+            rmse_dead_reckoning_m: position_rmse(&est.dead_reckoning, &truth),
+            rmse_estimated_m: position_rmse(&est.poses, &truth),
+            matched: est.matched.iter().filter(|m| **m).count(),
+            poses: est.poses.len(),
+        });
+    }
+    if !out_rows.is_empty() {
+        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        crate::io::write_bytes(&out.join("poses.csv"), rows.as_bytes())?;
+    }
+    Ok(out_rows)
 }

@@ -49,6 +49,8 @@
 //!     og: Default::default(),
 //!     ekf: Default::default(),
 //!     pose_noise: Default::default(),
+//!     poses_from: Default::default(),
+//!     odometry: Default::default(),
 //! };
 //! let report = run_map(&opts.check()?, &|_, _| {})?;
 //! println!("psi {:.3}", report.metrics.observable.psi);
@@ -63,6 +65,8 @@ pub use load::{load_run, load_runs, min_bin, runs_regions, window_kernel, Loaded
 
 pub use crate::pose_noise::{PoseNoise, PoseNoiseValid};
 use crate::score::{score, MetricsPair};
+pub use crate::slam::{OdometryNoise, PosesFrom};
+pub use load::{slam_summaries, SlamSummary};
 
 use crate::ekf::{EkfParams, EkfReport, EkfValid};
 use crate::error::{Error, Result};
@@ -124,6 +128,12 @@ pub struct MapOptions {
     pub ekf: EkfParams,
     /// Pose noise given to the mapper (none by default).
     pub pose_noise: PoseNoise,
+    /// Where the mapper's poses come from: the manifest's (with `pose_noise`), the
+    /// dead reckoning of an odometry drawn from them, or that odometry and the sweeps
+    /// ([`crate::slam`]).
+    pub poses_from: PosesFrom,
+    /// The odometry's noise per step (`poses_from` odometry or sweeps).
+    pub odometry: OdometryNoise,
 }
 
 /// Map options that passed [`ParamGuard::check`] (every run given, every parameter set in
@@ -146,6 +156,15 @@ impl ParamGuard for MapOptions {
             ));
         }
         self.pose_noise.check()?;
+        if self.poses_from != PosesFrom::Manifest {
+            self.odometry.check()?;
+            if !self.pose_noise.is_none() {
+                return Err(Error::param(
+                    "--poses-from",
+                    "odometry and sweeps draw the poses' errors from --odometry-*, not --pose-noise-*",
+                ));
+            }
+        }
         Ok(Valid::new(self.clone()))
     }
 }
@@ -191,6 +210,8 @@ pub fn report_maps(
             og: OgParams::default(),
             ekf: EkfParams::default(),
             pose_noise: PoseNoise::default(),
+            poses_from: Default::default(),
+            odometry: Default::default(),
         };
         let r = run_map(&opts.check()?, &|_, _| {})?;
         maps.push((name, r.metrics));
@@ -233,6 +254,9 @@ pub struct MapReport {
     pub ekf: Option<EkfReport>,
     /// Pose noise given to the mapper.
     pub pose_noise: PoseNoise,
+    /// The poses estimated from the sweeps (`--poses-from sweeps`), per run.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub slam: Vec<SlamSummary>,
     /// The (fused) binary map, row-major from the lowest y (not in metrics.json).
     #[serde(skip)]
     pub binary: Vec<bool>,
@@ -304,6 +328,7 @@ fn run_map_og(opts: &MapValid, progress: &(dyn Fn(usize, usize) + Sync)) -> Resu
         fusion,
         ekf: None,
         pose_noise: opts.pose_noise,
+        slam: slam_summaries(&opts.out, &loaded)?,
         binary: fused.binary(),
     };
     write_metrics_json(&opts.out, &report)?;
@@ -400,6 +425,8 @@ mod tests {
             og: Default::default(),
             ekf: Default::default(),
             pose_noise: Default::default(),
+            poses_from: Default::default(),
+            odometry: Default::default(),
         };
         let v = ok.check().unwrap();
         assert_eq!(v.grid().cell_m, 0.1);

@@ -15,5 +15,5 @@ pub mod run;
 
 pub use graph::{Edge, Pose2, PoseGraph, Solution, SolveParams, SolveValid};
 pub use matching::{match_scan, Field, Match, Scan};
-pub use odometry::{Odometry, OdometryNoise, OdometryNoiseValid};
+pub use odometry::{Odometry, OdometryNoise, OdometryNoiseValid, PosesFrom};
 pub use run::{estimate, Estimate};

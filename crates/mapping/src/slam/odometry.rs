@@ -32,6 +32,57 @@ pub struct OdometryNoise {
     pub seed: u64,
 }
 
+impl Default for OdometryNoise {
+    /// 0.1 m and 3° per step (issue 56's middle level), seed 1.
+    fn default() -> Self {
+        OdometryNoise {
+            step_m: 0.1,
+            step_deg: 3.0,
+            seed: 1,
+        }
+    }
+}
+
+/// Where the mapper's poses come from (`pradar map --poses-from`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PosesFrom {
+    /// The manifest's poses (with `--pose-noise-*` if given).
+    #[default]
+    Manifest,
+    /// The dead reckoning of an odometry drawn from the manifest's poses.
+    Odometry,
+    /// Estimated from the sweeps and that odometry.
+    Sweeps,
+}
+
+impl PosesFrom {
+    /// Every value, in the order the command line lists them.
+    pub const ALL: [PosesFrom; 3] = [PosesFrom::Manifest, PosesFrom::Odometry, PosesFrom::Sweeps];
+
+    /// Name (`manifest`, `odometry`, `sweeps`): the command-line value and the `Display`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PosesFrom::Manifest => "manifest",
+            PosesFrom::Odometry => "odometry",
+            PosesFrom::Sweeps => "sweeps",
+        }
+    }
+}
+
+impl std::fmt::Display for PosesFrom {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for PosesFrom {
+    type Err = Error;
+    /// Parse a [`PosesFrom::name`].
+    fn from_str(s: &str) -> Result<PosesFrom> {
+        crate::params::parse_name(s, &Self::ALL, Self::name, "poses_from", "poses source")
+    }
+}
+
 /// [`OdometryNoise`] that passed [`ParamGuard::check`].
 pub type OdometryNoiseValid = Valid<OdometryNoise>;
 
