@@ -294,16 +294,7 @@ impl EnergySimulator {
         seed: u64,
         fixed: &LayoutRays,
     ) -> Result<Vec<f64>> {
-        let channel = ChannelModel::draw(&self.layout, model, seed)?;
-        if fixed.seed != seed
-            || fixed.parts != layout_parts(&channel.config)
-            || fixed.per_pose.len() != self.poses.len()
-        {
-            return Err(Error::param(
-                "layout_rays",
-                "made for another seed, [diffuse] or [walls]",
-            ));
-        }
+        let channel = self.draw_for(model, seed, fixed)?;
         let resp = &self.resp;
         let (np, nd, nb) = self.shape();
         let mut energies = vec![0.0; np * nd * nb];
@@ -319,6 +310,22 @@ impl EnergySimulator {
 }
 
 impl EnergySimulator {
+    /// The clusters of `model` drawn with `seed`, once `fixed` is checked to be the
+    /// layout's rays of the same seed, `[diffuse]` and `[walls]` (refused otherwise).
+    fn draw_for(&self, model: &ModelConfig, seed: u64, fixed: &LayoutRays) -> Result<ChannelModel> {
+        let channel = ChannelModel::draw(&self.layout, model, seed)?;
+        if fixed.seed != seed
+            || fixed.parts != layout_parts(&channel.config)
+            || fixed.per_pose.len() != self.poses.len()
+        {
+            return Err(Error::param(
+                "layout_rays",
+                "made for another seed, [diffuse] or [walls]",
+            ));
+        }
+        Ok(channel)
+    }
+
     /// The energies of draws of `model` with `seed` as quadratics in the clusters'
     /// amplitude: with σ_ref the model's `cluster_rrcs` and σ = s²·σ_ref, the energy of
     /// (position, direction, bin) is A + 2B·s + C·s² for `[A, B, C]` (position-major, as
@@ -335,16 +342,7 @@ impl EnergySimulator {
         seed: u64,
         fixed: &LayoutRays,
     ) -> Result<Vec<[f64; 3]>> {
-        let channel = ChannelModel::draw(&self.layout, model, seed)?;
-        if fixed.seed != seed
-            || fixed.parts != layout_parts(&channel.config)
-            || fixed.per_pose.len() != self.poses.len()
-        {
-            return Err(Error::param(
-                "layout_rays",
-                "made for another seed, [diffuse] or [walls]",
-            ));
-        }
+        let channel = self.draw_for(model, seed, fixed)?;
         let (np, nd, nb) = self.shape();
         let mut out = vec![[0.0; 3]; np * nd * nb];
         for (p, profiles) in out.chunks_mut(nd * nb).enumerate() {
