@@ -358,7 +358,7 @@ pub struct MapArgs {
     /// Heading standard deviation given to the mapper, degrees.
     #[arg(long, default_value_t = PoseNoise::default().heading_deg, value_parser = ranges::non_negative, allow_negative_numbers = true, help_heading = "Pose noise")]
     pub pose_noise_deg: f64,
-    /// Seed of the pose-noise draws.
+    /// Seed of the pose-noise and odometry draws.
     #[arg(long, allow_negative_numbers = true, default_value_t = PoseNoise::DEFAULT_SEED, help_heading = "Pose noise")]
     pub pose_seed: u64,
     /// The mapper's poses: manifest, odometry (the dead reckoning of steps drawn from the

@@ -18,7 +18,7 @@
 //!   objects for the three-class figures; [`detectable`]: the cells some beam could detect;
 //! * [`output`]: PNG, PGM + YAML (ROS map_server);
 //! * [`slam`]: poses from the sweeps (issue 56, started): the odometry, scan-to-map
-//!   matching and the pose graph; no command uses it yet.
+//!   matching and the pose graph (`map --poses-from odometry|sweeps`).
 //!
 //! * [`job`]: the map job (runs, fusion, the map files, `metrics.json`) that the `pradar map`
 //!   command, the experiments, the explorer and the report run.

@@ -43,10 +43,10 @@ pub struct LoadedRun {
     pub detector: Detector,
     /// The poses the data were recorded at (the manifest's; `model.poses` holds the poses
     /// the mapper believes, which differ under [`super::PoseNoise`] and `--poses-from
-    /// sweeps`).
+    /// odometry|sweeps`).
     pub true_poses: Vec<Pose>,
-    /// The poses estimated from the sweeps (`--poses-from sweeps`) and the odometry's noise.
-    pub slam: Option<(Estimate, OdometryNoise)>,
+    /// The poses from an odometry (`--poses-from odometry|sweeps`), its noise and source.
+    pub slam: Option<(Estimate, OdometryNoise, PosesFrom)>,
 }
 
 impl LoadedRun {
@@ -175,7 +175,7 @@ pub fn load_runs(opts: &MapValid) -> Result<(Vec<LoadedRun>, ReferenceMap)> {
                     heading_deg: p.theta.to_degrees(),
                 })
                 .collect();
-            l.slam = Some((est, noise));
+            l.slam = Some((est, noise, opts.poses_from));
         }
         loaded.push(l);
     }
@@ -272,14 +272,16 @@ fn estimate_poses(
     )
 }
 
-/// One run's poses from the sweeps, in `metrics.json`.
+/// One run's poses from an odometry (`--poses-from odometry|sweeps`), in `metrics.json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SlamSummary {
+    /// `odometry` (dead reckoning) or `sweeps` (estimated).
+    pub poses_from: String,
     /// σ of x and y per odometry step, m.
     pub odometry_step_m: f64,
     /// σ of the heading per step, degrees.
     pub odometry_step_deg: f64,
-    /// Seed of the odometry draws.
+    /// Seed of this run's odometry draws (`--pose-seed` mixed with the run's index).
     pub odometry_seed: u64,
     /// Position RMSE against the manifest's poses of the dead reckoning, m.
     pub rmse_dead_reckoning_m: f64,
@@ -291,7 +293,7 @@ pub struct SlamSummary {
     pub poses: usize,
 }
 
-/// The runs' [`SlamSummary`] (none without `--poses-from sweeps`); writes `poses.csv` in
+/// The runs' [`SlamSummary`] (none with `--poses-from manifest`); writes `poses.csv` in
 /// `out` when there is one: per run and pose the estimated pose with its standard
 /// deviations and x–y covariance, the dead reckoning and the manifest's pose.
 pub fn slam_summaries(out: &Path, loaded: &[LoadedRun]) -> Result<Vec<SlamSummary>> {
@@ -300,7 +302,7 @@ pub fn slam_summaries(out: &Path, loaded: &[LoadedRun]) -> Result<Vec<SlamSummar
     );
     let mut out_rows = Vec::new();
     for (i, l) in loaded.iter().enumerate() {
-        let Some((est, noise)) = &l.slam else {
+        let Some((est, noise, from)) = &l.slam else {
             continue;
         };
         let truth: Vec<_> = l.true_poses.iter().map(pose2).collect();
@@ -327,6 +329,7 @@ pub fn slam_summaries(out: &Path, loaded: &[LoadedRun]) -> Result<Vec<SlamSummar
             ));
         }
         out_rows.push(SlamSummary {
+            poses_from: from.name().to_string(),
             odometry_step_m: noise.step_m,
             odometry_step_deg: noise.step_deg,
             odometry_seed: noise.seed,

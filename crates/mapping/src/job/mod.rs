@@ -254,7 +254,7 @@ pub struct MapReport {
     pub ekf: Option<EkfReport>,
     /// Pose noise given to the mapper.
     pub pose_noise: PoseNoise,
-    /// The poses estimated from the sweeps (`--poses-from sweeps`), per run.
+    /// The poses from an odometry (`--poses-from odometry|sweeps`), per run.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub slam: Vec<SlamSummary>,
     /// The (fused) binary map, row-major from the lowest y (not in metrics.json).

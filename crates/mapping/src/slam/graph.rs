@@ -88,8 +88,9 @@ impl Pose2 {
     }
 }
 
-/// A measured relative pose of `to` seen from `from`, with its information matrix (the
-/// inverse covariance of (x, y, θ) in `from`'s frame).
+/// A measured relative pose of `to` seen from `from`, with its information matrix: the
+/// inverse covariance of the error (x, y, θ), whose position part lies in the frame of the
+/// measured pose `from` ⊕ `measured` (module docs: e = R_zᵀ(R_iᵀ(t_j − t_i) − t_z)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Edge {
     /// Index of the pose the measurement is taken from.
@@ -311,10 +312,21 @@ impl PoseGraph {
         seen.iter().all(|s| *s)
     }
 
+    /// [`PoseGraph::optimise`] without the covariances (H⁻¹), for a caller that solves
+    /// again after each new pose and needs them only at the end.
+    pub fn optimise_poses(&mut self, params: &SolveValid) -> Result<()> {
+        self.solve(params, false).map(|_| ())
+    }
+
     /// Solve for the poses (module docs), in place; the covariances from H at the solution.
-    /// Refused (the poses untouched): a graph with a pose tied to pose 0 by no chain of
-    /// edges (H singular), a non-finite pose, an edge to a pose the graph no longer has.
+    /// Refused before any step (the poses untouched): a graph with a pose tied to pose 0
+    /// by no chain of edges (H singular), a non-finite pose, an edge to a pose the graph
+    /// no longer has.
     pub fn optimise(&mut self, params: &SolveValid) -> Result<Solution> {
+        self.solve(params, true)
+    }
+
+    fn solve(&mut self, params: &SolveValid, covariances: bool) -> Result<Solution> {
         let n = self.poses.len();
         if self.edges.iter().any(|e| e.from >= n || e.to >= n) {
             return Err(Error::param(
@@ -382,6 +394,14 @@ impl PoseGraph {
                     break;
                 }
             }
+        }
+        if !covariances {
+            return Ok(Solution {
+                iterations,
+                cost_before,
+                cost,
+                covariances: Vec::new(),
+            });
         }
         let (h, _) = self.system();
         let inv = h.cholesky().ok_or_else(singular)?.inverse();
@@ -529,6 +549,28 @@ mod tests {
         for (a, b) in exact.poses.iter().zip(&truth) {
             assert!(close(a, b, 1e-6), "{a:?} vs {b:?}");
         }
+    }
+
+    /// An edge's information is in the frame of the measured pose (what `slam::run` turns
+    /// a match's world covariance into): a measured quarter turn with a covariance loose
+    /// along that frame's x (world +y) and tight along its y (world x).
+    #[test]
+    fn an_edge_s_information_lies_in_the_measured_pose_s_frame() {
+        let z = Pose2::new(1.0, 0.0, PI / 2.0);
+        let info = Matrix3::from_diagonal(&Vector3::new(1.0, 1e6, 1.0));
+        let at = |p: Pose2| {
+            let mut g = PoseGraph::new(vec![Pose2::default(), p]);
+            g.add_edge(Edge {
+                from: 0,
+                to: 1,
+                measured: z,
+                information: info,
+            })
+            .unwrap();
+            g.cost()
+        };
+        assert!((at(Pose2::new(1.0, 0.1, PI / 2.0)) - 0.01).abs() < 1e-9);
+        assert!((at(Pose2::new(1.1, 0.0, PI / 2.0)) - 1e4).abs() < 1e-3);
     }
 
     /// A straight chain of n odometry steps along x with no closure: the covariance of

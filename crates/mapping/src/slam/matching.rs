@@ -7,7 +7,8 @@
 //!
 //! * A detection in bin b of direction d is the point (r cos φ, r sin φ), r = c·τ_b/2,
 //!   φ the direction's angle relative to the heading. Its spread is
-//!   σ = max(Δr, r·Δφ/2), Δr = c·T_b/2 the range bin and Δφ the steering step: the
+//!   σ = max(Δr, r·Δφ/2), Δr = c·T_b/2 the range bin and Δφ the steering grid's median
+//!   spacing: the
 //!   matcher cannot place an echo finer than the bin and the grid of directions.
 //! * The reference is a likelihood field on a square grid: f(c) = max over reference
 //!   points of exp(−d²/(2σ²)), d the distance from cell c's centre to the point
@@ -16,18 +17,23 @@
 //!   candidate of a grid around the prediction (±3σ of the prediction in x, y and θ;
 //!   steps of one cell and of Δφ/4) is scored; the match is the best.
 //! * Covariance: the candidates' weighted covariance with weights e^{S − S_max} (each
-//!   point's log-likelihood taken as its field value), at least the search grid's
+//!   point's log-likelihood taken as its field value), plus the search grid's own
 //!   (step²/12) per axis. A direction along which no structure constrains the scan (a
-//!   straight corridor's axis) keeps a flat score, so a wide covariance: the graph then
-//!   trusts the odometry there.
+//!   straight corridor's axis) keeps a flat score, so a wide covariance (at most the
+//!   window's own, 3σ² of the prediction: known limit, docs/slam.md). Among equal best
+//!   scores the one nearest the prediction is the match; a best score of 0 (no point near
+//!   the map) is no match. The window is at most ±60° and 4·10⁶ candidates (refused
+//!   beyond, by name).
 //!
 //! Choices: no constant of the scene: the spread comes from the bin and the steering
 //! grid, the search from the prediction's σ, the cell is the map grid's.
 
 use super::graph::Pose2;
 use crate::energy::EnergyMatrix;
+use crate::error::{Error, Result};
 use crate::units::C0;
 use nalgebra::Matrix3;
+use std::f64::consts::PI;
 
 /// A pose's detections in its own frame.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -57,18 +63,18 @@ impl Scan {
     }
 }
 
-/// The smallest spacing of the steering grid, rad (the grid's only angle for one direction).
+/// The median spacing of the steering grid, rad (π for a single direction).
 pub fn steering_step_rad(angles_deg: &[f64]) -> f64 {
     let mut a: Vec<f64> = angles_deg.to_vec();
     a.sort_by(f64::total_cmp);
-    let step = (a.windows(2))
+    let mut gaps: Vec<f64> = (a.windows(2))
         .map(|w| w[1] - w[0])
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    if step.is_finite() {
-        step.to_radians()
-    } else {
-        std::f64::consts::PI
+        .filter(|d| *d > 1e-6)
+        .collect();
+    gaps.sort_by(f64::total_cmp);
+    match gaps.get(gaps.len() / 2) {
+        Some(g) => g.to_radians(),
+        None => PI,
     }
 }
 
@@ -175,10 +181,19 @@ pub fn match_scan(
     sigma_m: f64,
     sigma_rad: f64,
     step_rad: f64,
-) -> Match {
+) -> Result<Option<Match>> {
     let dxy = field.cell_m;
-    let nxy = ((3.0 * sigma_m / dxy).ceil() as i64).max(1);
-    let nth = ((3.0 * sigma_rad / step_rad).ceil() as i64).max(1);
+    // ±3σ, the window never wider than ±60° (a hair under whole steps: 3σ/step landing on
+    // an integer is that integer)
+    let nxy = (((3.0 * sigma_m / dxy) - 1e-9).ceil() as i64).max(1);
+    let nth = (((3.0 * sigma_rad.min(PI / 3.0) / step_rad) - 1e-9).ceil() as i64).max(1);
+    let count = (2 * nxy + 1).pow(2) as u128 * (2 * nth + 1) as u128;
+    if count > MAX_CANDIDATES {
+        return Err(Error::param(
+            "slam.search",
+            format!("{count} candidate poses (the odometry's σ against the cell and the steering step); at most {MAX_CANDIDATES}"),
+        ));
+    }
     let mut cands: Vec<(Pose2, f64)> = Vec::new();
     for it in -nth..=nth {
         let th = pred.theta + it as f64 * step_rad;
@@ -194,11 +209,24 @@ pub fn match_scan(
             }
         }
     }
-    let (best, smax) =
-        cands.iter().copied().fold(
-            (*pred, f64::NEG_INFINITY),
-            |a, b| if b.1 > a.1 { b } else { a },
-        );
+    // the best score; among equal ones the nearest the prediction
+    let near = |p: &Pose2| {
+        (p.x - pred.x).powi(2) + (p.y - pred.y).powi(2) + (p.theta - pred.theta).powi(2)
+    };
+    let (best, smax) = cands
+        .iter()
+        .copied()
+        .fold((*pred, f64::NEG_INFINITY), |a, b| {
+            if b.1 > a.1 || (b.1 == a.1 && near(&b.0) < near(&a.0)) {
+                b
+            } else {
+                a
+            }
+        });
+    if smax <= 0.0 {
+        // no point of the scan near the map: nothing measured
+        return Ok(None);
+    }
     // weighted mean and covariance, angles relative to the best
     let (mut w, mut m) = (0.0, [0.0; 3]);
     for (p, sc) in &cands {
@@ -231,13 +259,16 @@ pub fn match_scan(
     for k in 0..3 {
         cov[(k, k)] += floor[k];
     }
-    Match {
+    Ok(Some(Match {
         pose: best,
         covariance: cov,
         score: smax,
         candidates: cands.len(),
-    }
+    }))
 }
+
+/// The most candidate poses one match scores (a search this wide is refused by name).
+pub const MAX_CANDIDATES: u128 = 4_000_000;
 
 #[cfg(test)]
 mod tests {
@@ -274,7 +305,9 @@ mod tests {
             0.1,
             2f64.to_radians(),
             0.25f64.to_radians(),
-        );
+        )
+        .unwrap()
+        .unwrap();
         eprintln!(
             "corner: {:?}, σ {:.3} {:.3} m {:.2}°",
             m.pose,
@@ -294,18 +327,29 @@ mod tests {
             0.1,
             1f64.to_radians(),
             0.25f64.to_radians(),
-        );
+        )
+        .unwrap()
+        .unwrap();
         let (sx, sy) = (m.covariance[(0, 0)].sqrt(), m.covariance[(1, 1)].sqrt());
         eprintln!("wall: σ x {sx:.3} m, σ y {sy:.3} m");
         assert!(sy > 5.0 * sx, "{sx} {sy}");
-        // ±⌈3σ/cell⌉ cells (3·0.1/0.02 rounds up to 16) and ±12 angle steps
-        assert_eq!(m.candidates, 33 * 33 * 25);
+        // ±3σ/cell = ±15 cells and ±12 angle steps
+        assert_eq!(m.candidates, 31 * 31 * 25);
+        // far from the map: nothing measured; a window too wide: refused by name
+        let (step, far) = (0.25f64.to_radians(), Pose2::new(40.0, 40.0, 0.0));
+        let none = match_scan(&field, &scan(&wall), &far, 0.1, 0.02, step).unwrap();
+        assert!(none.is_none());
+        let wide = match_scan(&field, &scan(&wall), &far, 10.0, 1.0, step);
+        assert!(wide.unwrap_err().to_string().contains("slam.search"));
     }
 
     #[test]
-    fn the_steering_step_is_the_grid_s_smallest_spacing() {
+    fn the_steering_step_is_the_grid_s_median_spacing() {
         assert!((steering_step_rad(&[-90.0, -85.0, -80.0]) - 5f64.to_radians()).abs() < 1e-12);
         assert!((steering_step_rad(&[10.0]) - std::f64::consts::PI).abs() < 1e-12);
+        // a jittered grid: its median spacing, not the smallest
+        let step = steering_step_rad(&[0.0, 5.0, 5.001, 10.0, 15.0, 20.0]);
+        assert!((step - 5f64.to_radians()).abs() < 1e-3);
         assert!(Field::new(&[], &[], 0.1).is_none());
     }
 }

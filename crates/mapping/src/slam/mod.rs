@@ -1,12 +1,12 @@
 //! Poses from the sweeps (issue 56): radar SLAM for a personal radar walked by hand.
 //!
 //! Built so far: [`odometry`], the steps a walk's dead reckoning reports (simulated from
-//! the campaign's poses with a stated σ per step) and their pose graph; [`graph`], the
-//! pose graph over SE(2) and its Levenberg–Marquardt solution with the poses' marginal
-//! covariances (the back end the odometry, the scan-to-map matches and the loop closures
-//! feed). Not yet built: the scan-to-map matching of a pose's energy matrix, loop
-//! closures, `pradar map --poses-from sweeps` and `experiment slam`; nothing in the
-//! commands uses this module yet. Measurements: `docs/slam.md`.
+//! the campaign's poses with a stated σ per step) and their pose graph; [`matching`], the
+//! correlative scan-to-map matching of a pose's detections; [`run`], the incremental
+//! estimate (odometry and matches into the graph); [`graph`], the pose graph over SE(2)
+//! and its Levenberg–Marquardt solution with the poses' marginal covariances. `pradar map
+//! --poses-from odometry|sweeps` maps with them (`job::load`). Not yet built: loop
+//! closures, the page, `experiment slam`. Measurements: `docs/slam.md`.
 
 pub mod graph;
 pub mod matching;

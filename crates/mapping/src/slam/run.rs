@@ -13,7 +13,13 @@
 //!    one step uncertain against it);
 //! 3. add the match as an edge from k − 1 (Z = X̂_{k−1}⁻¹ ⊕ X*, its covariance turned
 //!    into k − 1's frame) when the scan and the map both have points;
-//! 4. solve the graph ([`PoseGraph::optimise`]) and go on from its poses.
+//! 4. solve the graph ([`PoseGraph::optimise_poses`]) and go on from its poses; the
+//!    covariances once, at the end.
+//!
+//! A match that scores nothing (no point of the scan near the map) adds no edge.
+//! Known limit: a direction of the match the scan does not constrain keeps the search
+//! window's own spread (3σ² of the step), which the graph takes as a measurement beside the
+//! odometry's (docs/slam.md).
 //!
 //! Not yet: loop closures (a match is tied to the pose before it, so a revisit corrects
 //! the current pose but not the drift behind it); a scan without points leaves its pose
@@ -86,18 +92,26 @@ pub fn estimate(
             );
             sig.extend_from_slice(&s.sigma_m);
         }
-        if let (Some(field), false) = (Field::new(&pts, &sig, cell_m), scans[k].points.is_empty()) {
-            let m = match_scan(
-                &field,
+        let field = match scans[k].points.is_empty() {
+            true => None,
+            false => Field::new(&pts, &sig, cell_m),
+        };
+        let m = match &field {
+            Some(f) => match_scan(
+                f,
                 &scans[k],
                 &g.poses[k],
                 odo.sigma_m,
                 odo.sigma_rad,
                 step_rad,
-            );
+            )?,
+            None => None,
+        };
+        if let Some(m) = m {
             let z = prev.between(&m.pose);
-            // the covariance in k − 1's frame: R(θ_{k−1})ᵀ Σ R(θ_{k−1}) on x, y
-            let (s, c) = prev.theta.sin_cos();
+            // the edge's error lives in the frame of the measured pose (X̂_{k−1} ⊕ Z = X*,
+            // `graph`): R(θ*)ᵀ Σ R(θ*) on x, y
+            let (s, c) = m.pose.theta.sin_cos();
             let r = Matrix3::new(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);
             let cov = r * m.covariance * r.transpose();
             let info = cov
@@ -112,6 +126,9 @@ pub fn estimate(
             })?;
             matched[k] = true;
         }
+        g.optimise_poses(solve)?;
+    }
+    if n > 1 {
         covariances = g.optimise(solve)?.covariances;
     }
     Ok(Estimate {
