@@ -259,15 +259,26 @@ fn estimate_poses(
             matched: vec![false; truth.len()],
         });
     }
-    let em = EnergyMatrix::read(&l.energy_path)?;
-    let scans: Vec<Scan> = (0..em.positions)
-        .map(|p| Scan::from_detections(&em, &l.detector.detect_pose(&em, p)))
-        .collect();
+    // the scans a few positions at a time (the table streamed, as the mappers read it)
+    let np = l.energy.header().positions;
+    let batch = (2 * rayon::current_num_threads()).max(2);
+    let mut scans: Vec<Scan> = Vec::with_capacity(np);
+    let mut p0 = 0;
+    let mut angles_deg = Vec::new();
+    while p0 < np {
+        let p1 = (p0 + batch).min(np);
+        let part = l.energy.load(p0, p1)?;
+        angles_deg.clone_from(&part.angles_rel_deg);
+        scans.extend(
+            (p0..p1).map(|p| Scan::from_detections(&part, &l.detector.detect_pose(&part, p))),
+        );
+        p0 = p1;
+    }
     estimate(
         &odo,
         &scans,
         cell_m,
-        steering_step_rad(&em.angles_rel_deg),
+        steering_step_rad(&angles_deg),
         &SolveParams::default().check()?,
     )
 }
