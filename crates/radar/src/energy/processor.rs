@@ -281,13 +281,12 @@ impl EnergyProcessor {
     /// n = bL − (L−1)/2 … bL + (L−1)/2 (circular).
     pub fn bins_into(&self, cir: &[Complex64], scale: f64, out: &mut [f64]) {
         let l = self.proc.oversample;
-        let half = (l - 1) / 2;
         let norm = scale / l as f64;
         let n = self.nfft;
         for (bin, o) in out.iter_mut().enumerate().take(self.nbins_full) {
-            // the bin's L samples start at bin·L − half (circularly): contiguous but for the
-            // bins that wrap past either end, summed in the same order either way
-            let start = (bin * l + n - half) % n;
+            // contiguous but for the bins that wrap past either end, summed in the same
+            // order either way
+            let start = self.bin_start(bin);
             let e = if start + l <= n {
                 cir[start..start + l]
                     .iter()
@@ -299,6 +298,12 @@ impl EnergyProcessor {
             };
             *o += e * norm;
         }
+    }
+
+    /// The first of bin `bin`'s L samples in the circular CIR: bin·L − (L − 1)/2.
+    fn bin_start(&self, bin: usize) -> usize {
+        let l = self.proc.oversample;
+        (bin * l + self.nfft - (l - 1) / 2) % self.nfft
     }
 
     /// The bin sums of two CIRs for energies quadratic in a real scale s of the second: bin
@@ -313,11 +318,10 @@ impl EnergyProcessor {
         out: &mut [[f64; 3]],
     ) {
         let l = self.proc.oversample;
-        let half = (l - 1) / 2;
         let norm = scale / l as f64;
         let n = self.nfft;
         for (bin, o) in out.iter_mut().enumerate().take(self.nbins_full) {
-            let start = (bin * l + n - half) % n;
+            let start = self.bin_start(bin);
             let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
             for j in 0..l {
                 let i = (start + j) % n;
