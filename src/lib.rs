@@ -10,7 +10,7 @@
 //! paths above, so `pradar::campaign::…` names the same item as `pradar_formats::campaign::…`.
 #![deny(missing_docs)]
 
-pub use pradar_channel::{calibrate, chain, check, cluster, fit, model, mpc, smm};
+pub use pradar_channel::{calibrate, chain, check, closed_loop, cluster, fit, model, mpc, smm};
 pub use pradar_formats::{
     campaign, error, export, io, model_file, params, progress, stats, table, units,
 };

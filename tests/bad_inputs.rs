@@ -83,6 +83,7 @@ fn base() -> &'static Path {
                 bootstrap: 40,
                 seed: 1,
             },
+            closed_loop: 0,
         })
         .unwrap();
         import_inputs(d);

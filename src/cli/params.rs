@@ -244,6 +244,7 @@ impl FitArgs {
                 bootstrap: self.bootstrap,
                 seed: self.seed,
             },
+            closed_loop: self.closed_loop,
         }
     }
 }

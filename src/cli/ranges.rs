@@ -33,6 +33,16 @@ fn whole_in(s: &str, lo: usize, hi: usize, why: &str) -> Result<usize, String> {
     }
 }
 
+/// `fit --closed-loop`: in [0, `MAX_DRAWS`] (0: not run; [`pradar::closed_loop`]).
+pub fn closed_loop_draws(s: &str) -> Result<usize, String> {
+    whole_in(
+        s,
+        0,
+        pradar::closed_loop::MAX_DRAWS,
+        "draws of the written model; 0 runs none",
+    )
+}
+
 /// `--k-max`: in [1, 64] (`ClusterParams` k_max, [`pradar::cluster::params::MAX_K`]).
 pub fn k_max(s: &str) -> Result<usize, String> {
     whole_in(

@@ -57,8 +57,8 @@ use crate::simulate::has_scene;
 use experiments::run_experiments;
 use gather::obtain;
 use render::{
-    campaign_summary, check_section, explore_section, holdout_html, mpc_summary, table1_section,
-    write_plots,
+    campaign_summary, check_section, closed_loop_note, explore_section, holdout_html, mpc_summary,
+    table1_section, write_plots,
 };
 use std::collections::HashSet;
 use std::ffi::OsString;
@@ -393,8 +393,12 @@ pub(crate) fn run_inner(job: &Job, source: Source) -> Result<ReportOutput> {
             drop(to_side);
             let mut a = analyse(&s.campaign, &s.em, &s.energy_path, work, true)?;
             timings.0.append(&mut a.timings);
+            let closed_loop = timings.time(
+                "closed loop (the chain on draws of the written model)",
+                || Ok(closed_loop_note(&s, &mut a, progress)),
+            )?;
             let table1 = timings.time("fit report (truth, plots)", || {
-                table1_section(&s, &a, work, out)
+                table1_section(&s, &a, &closed_loop, work, out)
             })?;
             let check = timings.time("check (20 synth draws)", || {
                 Ok(check_section(job, &s, &a, progress))

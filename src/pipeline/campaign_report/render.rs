@@ -112,10 +112,55 @@ pub(super) fn holdout_html(job: &Job, s: &Data, progress: Progress) -> String {
     run().unwrap_or_else(|e| page::failed("the held-out check", &e) + "\n")
 }
 
+/// Table 1's closed-loop column ([`crate::closed_loop`]: the chain on
+/// [`DEFAULT_DRAWS`](crate::closed_loop::DEFAULT_DRAWS) draws of the written model over
+/// the campaign's poses) written into the fit; gives the note under Table 1: the rule, or
+/// why the column is absent (no fit, a failed run).
+pub(super) fn closed_loop_note(s: &Data, a: &mut Analysis, progress: Progress) -> String {
+    let Ok(f) = a.fit.as_mut() else {
+        return String::new();
+    };
+    let run = || -> Result<_> {
+        let params = crate::closed_loop::ClosedLoopParams::default().check()?;
+        let cb = progress("closed loop", params.draws);
+        let written = f.model.require_estimable(&Default::default())?;
+        crate::closed_loop::closed_loop(
+            &s.campaign,
+            &s.em,
+            &s.energy_path,
+            &written,
+            &Default::default(),
+            &params,
+            &*cb,
+        )
+    };
+    match run() {
+        Ok(identified) => {
+            f.identified = identified;
+            let d = crate::closed_loop::DEFAULT_DRAWS;
+            format!(
+                "<p>Identifiable? The chain read {d} tables drawn from the written model over \
+                 this campaign's poses: a quantity is \"not identifiable from this campaign\" \
+                 when the median of its {d} readings lies outside the campaign's 95 % \
+                 interval (or the chain read it in fewer than half of them, or it has no \
+                 interval): the chain's own bias there exceeds what the campaign \
+                 resolves.</p>\n"
+            )
+        }
+        Err(e) => page::failed("the closed loop (Table 1's identifiability)", &e),
+    }
+}
+
 /// Table 1 (`fitted_model.toml`, `table1.md`, the fit plots) beside the simulator's truth
 /// through the same estimators when there is one (else the page says why there is no truth
 /// column), the K note and the K_max table: the section's HTML.
-pub(super) fn table1_section(s: &Data, a: &Analysis, work: &Path, out: &Path) -> Result<String> {
+pub(super) fn table1_section(
+    s: &Data,
+    a: &Analysis,
+    closed_loop: &str,
+    work: &Path,
+    out: &Path,
+) -> Result<String> {
     let name = &s.campaign.manifest.name;
     let (truth, truth_note) = match &s.truth {
         None => (
@@ -152,7 +197,7 @@ pub(super) fn table1_section(s: &Data, a: &Analysis, work: &Path, out: &Path) ->
     let note = page::k_cap_note(&a.clustering, a.cluster_params.k_max);
     Ok(page::table1_html(
         &note,
-        &format!("{table1}{truth_note}"),
+        &format!("{table1}{closed_loop}{truth_note}"),
         &kmax,
     ))
 }

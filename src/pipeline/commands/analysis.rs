@@ -211,6 +211,9 @@ pub struct Fit {
     pub energy: Option<PathBuf>,
     /// Bootstrap resamples and seed.
     pub params: FitParams,
+    /// Draws of the closed loop (Table 1's identifiability column,
+    /// [`crate::closed_loop`]); 0: not run.
+    pub closed_loop: usize,
 }
 
 /// The fits `fit` wrote.
@@ -241,7 +244,8 @@ impl FitSummary {
 }
 
 impl fmt::Display for FitSummary {
-    /// One line per Table 1 row: parameter, value, interval, truth.
+    /// One line per Table 1 row: parameter, value, interval, truth, and the closed loop's
+    /// verdict when it ran (`--closed-loop`).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let rows = crate::fit::table1::rows(&self.fit, self.truth.as_ref());
         for (i, r) in rows.iter().enumerate() {
@@ -256,6 +260,9 @@ impl fmt::Display for FitSummary {
                 r.interval_shown(),
                 r.truth_shown()
             )?;
+            if let Some(id) = &r.identified {
+                write!(f, "  {}", id.shown(&r.unit))?;
+            }
         }
         Ok(())
     }
@@ -298,6 +305,23 @@ pub fn fit(cmd: &Fit) -> Result<FitSummary> {
             let em = crate::energy::EnergyMatrix::read(&energy)?;
             crate::energy::matrix::check_campaign(&c, &em, &energy)?;
             fit.model = crate::model::levels::fit_levels(&c, &em, &fit.model)?.0;
+            if cmd.closed_loop > 0 {
+                let cl = crate::closed_loop::ClosedLoopParams {
+                    draws: cmd.closed_loop,
+                    ..Default::default()
+                }
+                .check()?;
+                let written = fit.model.require_estimable(&Default::default())?;
+                fit.identified = crate::closed_loop::closed_loop(
+                    &c,
+                    &em,
+                    &energy,
+                    &written,
+                    &params,
+                    &cl,
+                    &|_, _| {},
+                )?;
+            }
         }
         None => {
             return Err(crate::error::Error::param(

@@ -10,12 +10,15 @@
 //! * [`quantities`] — each quantity from its samples: value, interval, KS, AIC ranking;
 //! * [`diffuse`] — the dense component's quantities (`[diffuse]`) from the diffuse MPCs;
 //! * [`channel`] — the campaign fit ([`channel::fit_channel`], [`channel::fit_truth`]);
+//! * [`identify`] — the rule of Table 1's closed-loop column ("not identifiable from this
+//!   campaign"), on the readings the layer above draws;
 //! * [`table1`] — Table 1 as one [`Table`](crate::export::Table) (Markdown, CSV, HTML).
 
 pub mod channel;
 pub mod diffuse;
 pub mod estimators;
 pub mod geometry;
+pub mod identify;
 pub mod params;
 pub mod quantities;
 pub mod table1;

@@ -25,12 +25,21 @@
 //!   interval and KS p); its CSV value, lo, hi and ks_p are empty (a stated value is not
 //!   an estimate).
 //!   The same holds for the truth column.
+//! * When the closed loop ran ([`ChannelFit::identified`] not empty: `report`, `fit
+//!   --closed-loop R`) a column says per cluster quantity whether this campaign identifies
+//!   it, by [`crate::fit::identify`]'s rule, with the chain's median reading on R draws of
+//!   the written model and how many of their intervals cover the written value; the CSV
+//!   splits it into `identifiable` (true/false), `closed_loop_median`,
+//!   `closed_loop_covered` and `closed_loop_draws`, before `truth`. This is issue 54's
+//!   second column: the estimator the held-out check chose is the chain itself, so its
+//!   value and interval are the first column's, and the column adds the verdict.
 //!
 //! [`ModelConfig::table1_defaults`]: crate::model::file::ModelConfig::table1_defaults
 
 use crate::error::Result;
 use crate::export::{Cell, Column, Table};
 use crate::fit::channel::ChannelFit;
+use crate::fit::identify::Identification;
 use crate::model::file::{ModelConfig, Quantity};
 use crate::units::C0;
 use std::path::Path;
@@ -60,6 +69,9 @@ pub struct Table1Row {
     /// The same estimators on the simulator's truth: its value (NaN when not estimable)
     /// and its shown text.
     pub truth: Option<(f64, String)>,
+    /// The closed loop's verdict ([`crate::fit::identify`]; `None` where it did not run or
+    /// the row is not one of the seven cluster quantities).
+    pub identified: Option<Identification>,
 }
 
 impl Table1Row {
@@ -75,7 +87,9 @@ impl Table1Row {
         self.truth.as_ref().map_or("—", |t| t.1.as_str())
     }
 
-    fn cells(&self) -> Vec<Cell> {
+    /// The row's cells: the closed loop's columns when `closed_loop`, the truth's last
+    /// when `truth` (as [`columns`]).
+    fn cells(&self, closed_loop: bool, truth: bool) -> Vec<Cell> {
         let opt = |v: Option<f64>| v.map_or(Cell::missing(""), |v| Cell::num(v, ""));
         // a value that is not a number (not estimable): its text, an empty CSV field
         let value = |v: f64, shown: &str| {
@@ -85,7 +99,7 @@ impl Table1Row {
                 Cell::num(v, shown)
             }
         };
-        vec![
+        let mut cells = vec![
             Cell::text(self.parameter),
             value(self.value, &self.value_shown),
             Cell::text(self.unit.clone()),
@@ -101,16 +115,33 @@ impl Table1Row {
             Cell::text(self.best_aic.clone()),
             self.paper
                 .map_or(Cell::missing("—"), |(v, shown)| Cell::num(v, shown)),
-            self.truth
-                .as_ref()
-                .map_or(Cell::missing("—"), |(v, shown)| value(*v, shown)),
-        ]
+        ];
+        if closed_loop {
+            let id = self.identified.as_ref();
+            cells.extend([
+                id.map_or(Cell::missing("—"), |i| Cell::text(i.shown(&self.unit))),
+                id.map_or(Cell::missing(""), |i| {
+                    Cell::text(i.identifiable.to_string())
+                }),
+                id.map_or(Cell::missing(""), |i| value(i.median, "")),
+                id.map_or(Cell::missing(""), |i| Cell::count(i.covered)),
+                id.map_or(Cell::missing(""), |i| Cell::count(i.draws)),
+            ]);
+        }
+        if truth {
+            cells.push(
+                self.truth
+                    .as_ref()
+                    .map_or(Cell::missing("—"), |(v, shown)| value(*v, shown)),
+            );
+        }
+        cells
     }
 }
 
 /// The columns of Table 1 (Markdown headers, the report's shorter HTML headers, CSV names);
-/// the truth's last, only when there is a truth.
-fn columns(truth: bool) -> Vec<Column> {
+/// the closed loop's only when it ran, the truth's last, only when there is a truth.
+fn columns(closed_loop: bool, truth: bool) -> Vec<Column> {
     let mut c = vec![
         Column::new("parameter", "parameter"),
         Column::new("pradar", "value"),
@@ -124,10 +155,20 @@ fn columns(truth: bool) -> Vec<Column> {
         Column::new("KS p (param. bootstrap)", "ks_p").html("KS p"),
         Column::new("best family by AIC", "best_aic").html("best by AIC"),
         Column::new("paper Table 1", "paper").html("paper"),
-        Column::new("simulator truth (same estimators)", "truth"),
     ];
-    if !truth {
-        c.pop();
+    if closed_loop {
+        c.extend([
+            Column::new("this campaign identifies it? (closed loop)", "closed_loop")
+                .html("identifiable? (closed loop)")
+                .display_only(),
+            Column::new("identifiable", "identifiable").csv_only(),
+            Column::new("closed-loop median", "closed_loop_median").csv_only(),
+            Column::new("intervals covering", "closed_loop_covered").csv_only(),
+            Column::new("closed-loop draws", "closed_loop_draws").csv_only(),
+        ]);
+    }
+    if truth {
+        c.push(Column::new("simulator truth (same estimators)", "truth"));
     }
     c
 }
@@ -136,13 +177,10 @@ fn columns(truth: bool) -> Vec<Column> {
 /// is `table1.csv`, `report::html_table(&t)` the report's. Without a truth there is no
 /// truth column (a measured campaign has none to show).
 pub fn table(f: &ChannelFit, truth: Option<&ChannelFit>) -> Table {
-    let mut t = Table::new(columns(truth.is_some()));
+    let closed_loop = !f.identified.is_empty();
+    let mut t = Table::new(columns(closed_loop, truth.is_some()));
     for r in rows(f, truth) {
-        let mut cells = r.cells();
-        if truth.is_none() {
-            cells.pop();
-        }
-        t.push(cells);
+        t.push(r.cells(closed_loop, truth.is_some()));
     }
     t
 }
@@ -224,6 +262,10 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
         ),
         row("ray power decay γ", &m.ray_decay, String::new(), None),
     ];
+    // the closed loop's verdicts, by the seven rows' keys in their order
+    for (r, key) in rows.iter_mut().zip(KEYS) {
+        r.identified = f.identified.get(key).cloned();
+    }
     // the dense component beside the discrete clusters (its truth column stays "—": the
     // simulator's walls are not clusters)
     rows.extend(diffuse_rows(m));
@@ -232,6 +274,18 @@ fn ours(f: &ChannelFit) -> Vec<Table1Row> {
     rows.extend(level_rows(m));
     rows
 }
+
+/// The model file's keys of the seven cluster quantities, in the rows' order (Λ, d_c, λ,
+/// the AoA std, d_p, Γ, γ): the keys of [`ChannelFit::identified`].
+pub const KEYS: [&str; 7] = [
+    "inter_cluster_rate",
+    "perimeter_spacing",
+    "intra_cluster_rate",
+    "intra_cluster_aoa",
+    "perimeter_offset",
+    "cluster_decay",
+    "ray_decay",
+];
 
 /// Takes the fit and a quantity's key; gives the name of its best family by AIC (empty
 /// when none was ranked).
@@ -267,6 +321,7 @@ fn quantity_row(
         best_aic,
         paper,
         truth: None,
+        identified: None,
     }
 }
 

@@ -85,6 +85,7 @@ use crate::campaign::layout::Layout;
 use crate::campaign::manifest::Campaign;
 use crate::error::{Error, Result};
 use crate::fit::geometry::{bootstrap_block, Interior};
+use crate::fit::identify::Identification;
 use crate::fit::quantities::{
     excess_decay_quantity, fit_arrivals, fit_offset, fit_spacing, mean_quantity,
     ray_decay_quantity, Resampling,
@@ -128,6 +129,10 @@ pub struct ChannelFit {
     pub details: BTreeMap<String, FittedQuantity>,
     /// d_c samples (m), for the Table 1 ns conversions.
     pub dc_m: Vec<f64>,
+    /// The closed loop's verdict per quantity key (`inter_cluster_rate`, …; Table 1's
+    /// closed-loop column, [`crate::fit::identify`]): empty until the layer above runs it
+    /// (`crate::closed_loop`), as `report` does.
+    pub identified: BTreeMap<String, Identification>,
 }
 
 /// Fit the channel model from a clustered MPC table.
@@ -296,6 +301,7 @@ fn fit_rays(clusters: &Path, rays: Vec<Ray>, c: &Campaign, p: &FitValid) -> Resu
             .map(|d| d.samples.clone())
             .unwrap_or_default(),
         details,
+        identified: BTreeMap::new(),
     })
 }
 
