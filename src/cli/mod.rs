@@ -467,9 +467,9 @@ pub struct FitArgs {
     /// `fit` refuses.
     #[arg(long)]
     pub energy: Option<PathBuf>,
-    /// Table 1's "identifiable from this campaign" column: the chain on R tables drawn
-    /// from the written model over these poses (about a chain's time each; `report` runs
-    /// 6). 0: not run.
+    /// Table 1's "identifiable from this campaign" column: the default chain on R tables
+    /// drawn from the written model over these poses, seeded by the manifest's seed
+    /// (about a chain's time each; `report` runs 6). 0: not run.
     #[arg(long, value_name = "R", default_value_t = 0, value_parser = ranges::closed_loop_draws)]
     pub closed_loop: usize,
 }

@@ -10,13 +10,16 @@
 //!    the fold and the coloured noise of the measurement), seed_r keyed from the seed
 //!    (default the campaign's) on a stream of their own, so they never replay the check's
 //!    draws;
-//! 2. each read by the chain as the campaign was ([`extract_and_cluster`] with
-//!    [`ChainParams::for_campaign`], [`fit_clustering`] with the fit's parameters: the
-//!    same resamples and seed, so each draw has its own 95 % interval);
+//! 2. each read by the documented chain ([`extract_and_cluster`] with
+//!    [`ChainParams::for_campaign`]: the commands' defaults, as `report` reads the campaign;
+//!    a campaign clustered with other options is still read back with the defaults),
+//!    [`fit_clustering`] with the fit's parameters (the same resamples and seed, so each
+//!    draw has its own 95 % interval);
 //! 3. per quantity, the readings against the written value and the campaign's interval.
 //!
 //! A draw whose fit fails (too few clusters, say) reads nothing; the rule then counts it
-//! among the draws the chain did not read. The draws run in parallel (rayon); each draw's
+//! among the draws the chain did not read. When no draw can be read the run is an error
+//! naming the first draw's. The draws run in parallel (rayon); each draw's
 //! seed is fixed by its index, so the result does not depend on the thread count.
 //!
 //! Cost: R chains on the whole table (the corridor: about a second each on 2 cores), so
@@ -100,7 +103,8 @@ fn quantity<'a>(m: &'a ModelConfig, key: &str) -> &'a Quantity {
         "intra_cluster_aoa" => &m.intra_cluster_aoa,
         "perimeter_offset" => &m.perimeter_offset,
         "cluster_decay" => &m.cluster_decay,
-        _ => &m.ray_decay,
+        "ray_decay" => &m.ray_decay,
+        _ => unreachable!("not a key of Table 1's cluster quantities: {key}"),
     }
 }
 
@@ -126,11 +130,11 @@ pub fn closed_loop(
     progress(0, r);
     // a thread's worth of draws at a time, so progress is called from this thread only
     let chunk = rayon::current_num_threads().max(1);
-    let mut readings: Vec<Option<ModelConfig>> = Vec::with_capacity(r);
+    let mut readings: Vec<Result<ModelConfig>> = Vec::with_capacity(r);
     for start in (0..r).step_by(chunk) {
-        let part: Vec<Option<ModelConfig>> = (start..(start + chunk).min(r))
+        let part: Vec<Result<ModelConfig>> = (start..(start + chunk).min(r))
             .into_par_iter()
-            .map(|i| -> Result<Option<ModelConfig>> {
+            .map(|i| -> Result<Result<ModelConfig>> {
                 let data = table_draw(&sim, em, written, keyed_seed(seed, STREAM, i))?;
                 // the table's shape and metadata (its N0, gate, missing sweeps), the draw's
                 // energies
@@ -146,18 +150,25 @@ pub fn closed_loop(
                 // a draw the chain cannot fit reads nothing (the rule counts it)
                 Ok(extract_and_cluster(&drawn, c, &chain)
                     .and_then(|(_, clustering)| fit_clustering(energy_path, &clustering, c, fit))
-                    .ok()
                     .map(|f| f.model))
             })
             .collect::<Result<_>>()?;
         readings.extend(part);
         progress(readings.len(), r);
     }
+    // no draw read at all: the chain's error, not a verdict of "read in 0 of R"
+    if readings.iter().all(|m| m.is_err()) {
+        let first = readings.swap_remove(0).expect_err("every draw failed");
+        return Err(Error::input(
+            energy_path,
+            format!("the closed loop: the chain read none of the {r} draws of the written model: {first}"),
+        ));
+    }
     let mut out = BTreeMap::new();
     for key in KEYS {
         let read: Vec<Reading> = (readings.iter())
             .map(|m| {
-                m.as_ref().and_then(|m| {
+                m.as_ref().ok().and_then(|m| {
                     let q = quantity(m, key);
                     q.is_estimable().then_some((q.value, q.interval))
                 })

@@ -121,7 +121,7 @@ impl Table1Row {
             cells.extend([
                 id.map_or(Cell::missing("—"), |i| Cell::text(i.shown(&self.unit))),
                 id.map_or(Cell::missing(""), |i| {
-                    Cell::text(i.identifiable.to_string())
+                    Cell::text(i.identifiable().to_string())
                 }),
                 id.map_or(Cell::missing(""), |i| value(i.median, "")),
                 id.map_or(Cell::missing(""), |i| Cell::count(i.covered)),
@@ -158,9 +158,12 @@ fn columns(closed_loop: bool, truth: bool) -> Vec<Column> {
     ];
     if closed_loop {
         c.extend([
-            Column::new("this campaign identifies it? (closed loop)", "closed_loop")
-                .html("identifiable? (closed loop)")
-                .display_only(),
+            Column::new(
+                "read back from draws of this model? (closed loop)",
+                "closed_loop",
+            )
+            .html("read back? (closed loop)")
+            .display_only(),
             Column::new("identifiable", "identifiable").csv_only(),
             Column::new("closed-loop median", "closed_loop_median").csv_only(),
             Column::new("intervals covering", "closed_loop_covered").csv_only(),
