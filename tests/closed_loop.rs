@@ -811,26 +811,18 @@ fn chain_coverage_campaign() {
     assert_coverage(&name, &cov, envs);
 }
 
-/// Planning's question (c) for issue 54, measured (ignored; not a default): a one-step
-/// parametric-bootstrap bias correction from Table 1's closed loop. For each scene folder of
-/// `PRADAR_DEBIAS_DIRS` (colon-separated; each with `scene.parquet` and `sim/campaign.toml`,
-/// as `simulate` and `energy` write them): the chain's written model θ̂ (with its levels),
-/// its closed loop at R = 6 (medians θ̃), and the model with every quantity flagged "not
-/// identifiable from this campaign" moved to ln θ = 2 ln θ̂ − ln θ̃ (then its levels read
-/// again); prints both models' own check (plug-in, max-T p). Figures in docs/fit.md.
-#[test]
-#[ignore = "a measurement over PRADAR_DEBIAS_DIRS; about 30 s per zoo scene"]
-fn closed_loop_debias_measured() {
+/// The chain's written model of (`c`, `em`) and that model with every quantity its closed
+/// loop (R = 6) flags "not identifiable from this campaign" moved to ln θ = 2 ln θ̂ − ln θ̃
+/// (θ̃ the draws' median reading), its levels read again; and what moved.
+fn chain_and_debiased(
+    c: &Campaign,
+    em: &pradar::energy::EnergyMatrix,
+    path: &Path,
+) -> (ModelConfig, ModelConfig, String) {
     use pradar::chain::{extract_and_cluster, ChainParams};
-    use pradar::check::{check, CheckParams};
     use pradar::closed_loop::{closed_loop, ClosedLoopParams};
-    use pradar::energy::EnergyMatrix;
     use pradar::fit::channel::fit_clustering;
     use pradar::model::levels::fit_levels;
-    let Ok(dirs) = std::env::var("PRADAR_DEBIAS_DIRS") else {
-        eprintln!("PRADAR_DEBIAS_DIRS=dir:dir… names the scenes to measure: none");
-        return;
-    };
     fn q<'a>(m: &'a mut ModelConfig, key: &str) -> &'a mut Quantity {
         match key {
             "inter_cluster_rate" => &mut m.inter_cluster_rate,
@@ -842,61 +834,141 @@ fn closed_loop_debias_measured() {
             _ => &mut m.ray_decay,
         }
     }
-    let (mut pass, mut pass_bc) = (0, 0);
+    let fp = FitParams::default().check().unwrap();
+    let (_, clustering) =
+        extract_and_cluster(em, c, &ChainParams::for_campaign(c).unwrap()).unwrap();
+    let fit = fit_clustering(path, &clustering, c, &fp).unwrap();
+    let written = fit_levels(c, em, &fit.model).unwrap().0;
+    let written = written.require_estimable(&Default::default()).unwrap();
+    let cl = ClosedLoopParams {
+        draws: 6,
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
+    let ids = closed_loop(c, em, path, &written, &fp, &cl, &|_, _| {}).unwrap();
+    let mut moved = fit.model.clone();
+    let mut what = Vec::new();
+    for (key, id) in &ids {
+        let v = q(&mut moved, key).value;
+        if !id.identifiable()
+            && v.is_finite()
+            && v > 0.0
+            && id.median.is_finite()
+            && id.median > 0.0
+        {
+            let bc = (2.0 * v.ln() - id.median.ln()).exp();
+            q(&mut moved, key).value = bc;
+            what.push(format!("{key} {v:.3}→{bc:.3}"));
+        }
+    }
+    let moved = fit_levels(c, em, &moved).unwrap().0;
+    let moved = moved.require_estimable(&Default::default()).unwrap();
+    let what = if what.is_empty() {
+        "nothing flagged".to_string()
+    } else {
+        what.join(", ")
+    };
+    (written, moved, what)
+}
+
+/// Planning's question (c) for issue 54, measured (ignored; not a default): a one-step
+/// parametric-bootstrap bias correction from Table 1's closed loop
+/// ([`chain_and_debiased`]). For each scene folder of `PRADAR_DEBIAS_DIRS` (colon-separated;
+/// each with `scene.parquet` and `sim/campaign.toml` or `scene/campaign.toml`, as
+/// `simulate` and `energy` write them, and `scripts/zoo`'s `r2.parquet` with
+/// `r2/campaign.toml` when there): both models' own check, their check on the second
+/// realisation, and the held-out check (each half's own chain and debiased models, checked
+/// on the other half); plug-in, max-T p. Figures in docs/fit.md.
+#[test]
+#[ignore = "a measurement over PRADAR_DEBIAS_DIRS; 0.5-3 min per zoo scene"]
+fn closed_loop_debias_measured() {
+    use pradar::check::{check, CheckParams};
+    use pradar::energy::EnergyMatrix;
+    let Ok(dirs) = std::env::var("PRADAR_DEBIAS_DIRS") else {
+        eprintln!("PRADAR_DEBIAS_DIRS=dir:dir… names the scenes to measure: none");
+        return;
+    };
+    let params = CheckParams::default().check().unwrap();
+    let verdict = |r: &pradar::check::CheckResult| {
+        format!(
+            "{} {:.3}",
+            if r.passes() { "PASS" } else { "FAIL" },
+            r.joint_p
+        )
+    };
+    let mut counts = [[0usize; 2]; 3];
     for d in dirs.split(':').map(PathBuf::from) {
         let t0 = Instant::now();
         let path = d.join("scene.parquet");
-        let c = Campaign::load(&d.join("sim/campaign.toml")).unwrap();
+        let man = match d.join("sim/campaign.toml").is_file() {
+            true => d.join("sim/campaign.toml"),
+            false => d.join("scene/campaign.toml"),
+        };
+        let c = Campaign::load(&man).unwrap();
         let em = EnergyMatrix::read(&path).unwrap();
-        let fp = FitParams::default().check().unwrap();
-        let (_, clustering) =
-            extract_and_cluster(&em, &c, &ChainParams::for_campaign(&c).unwrap()).unwrap();
-        let fit = fit_clustering(&path, &clustering, &c, &fp).unwrap();
-        let written = fit_levels(&c, &em, &fit.model).unwrap().0;
-        let written = written.require_estimable(&Default::default()).unwrap();
-        let cl = ClosedLoopParams {
-            draws: 6,
-            ..Default::default()
-        }
-        .check()
-        .unwrap();
-        let ids = closed_loop(&c, &em, &path, &written, &fp, &cl, &|_, _| {}).unwrap();
-        let mut moved = fit.model.clone();
-        let mut what = Vec::new();
-        for (key, id) in &ids {
-            let v = q(&mut moved, key).value;
-            if !id.identifiable()
-                && v.is_finite()
-                && v > 0.0
-                && id.median.is_finite()
-                && id.median > 0.0
-            {
-                let bc = (2.0 * v.ln() - id.median.ln()).exp();
-                q(&mut moved, key).value = bc;
-                what.push(format!("{key} {v:.3}→{bc:.3}"));
+        let (written, moved, what) = chain_and_debiased(&c, &em, &path);
+        let models = [&written, &moved];
+        let own: Vec<_> = (models.iter())
+            .map(|m| check(&c, &em, &path, m, &params, &|_, _| {}).unwrap())
+            .collect();
+        let r2 = d.join("r2.parquet");
+        let r2: Vec<Option<_>> = match r2.is_file() {
+            true => {
+                let c2 = Campaign::load(&d.join("r2/campaign.toml")).unwrap();
+                let e2 = EnergyMatrix::read(&r2).unwrap();
+                (models.iter())
+                    .map(|m| Some(check(&c2, &e2, &r2, m, &params, &|_, _| {}).unwrap()))
+                    .collect()
+            }
+            false => vec![None, None],
+        };
+        // held out: each half's own two models, each checked on the other half
+        let halves = pradar::check::holdout::halves(&c).unwrap();
+        let part = |k: usize| {
+            let keep = &halves[k].positions;
+            (c.restrict(keep).unwrap(), em.restrict(keep).unwrap())
+        };
+        let parts = [part(0), part(1)];
+        let mut held = [[0.0f64; 2]; 2];
+        let mut held_pass = [true; 2];
+        for k in 0..2 {
+            let ((fc, fe), (oc, oe)) = (&parts[k], &parts[1 - k]);
+            let (w, m, _) = chain_and_debiased(fc, fe, &path);
+            for (i, model) in [w, m].iter().enumerate() {
+                let r = check(oc, oe, &path, model, &params, &|_, _| {}).unwrap();
+                held[i][k] = r.joint_p;
+                held_pass[i] &= r.passes();
             }
         }
-        let moved = fit_levels(&c, &em, &moved).unwrap().0;
-        let moved = moved.require_estimable(&Default::default()).unwrap();
-        let params = CheckParams::default().check().unwrap();
-        let a = check(&c, &em, &path, &written, &params, &|_, _| {}).unwrap();
-        let b = check(&c, &em, &path, &moved, &params, &|_, _| {}).unwrap();
-        pass += usize::from(a.passes());
-        pass_bc += usize::from(b.passes());
+        for i in 0..2 {
+            counts[0][i] += usize::from(own[i].passes());
+            counts[1][i] += usize::from(held_pass[i]);
+            counts[2][i] += usize::from(r2[i].as_ref().is_some_and(|r| r.passes()));
+        }
+        let r2s = |i: usize| r2[i].as_ref().map_or("—".to_string(), &verdict);
+        let hs = |i: usize| {
+            format!(
+                "{} {:.3}/{:.3}",
+                if held_pass[i] { "PASS" } else { "FAIL" },
+                held[i][0],
+                held[i][1]
+            )
+        };
         eprintln!(
-            "DEBIAS {} | chain {} p {:.3} | debiased {} p {:.3} | {} | {:.0} s",
+            "DEBIAS {} | own {} → {} | held out {} → {} | r2 {} → {} | {what} | {:.0} s",
             d.file_name().unwrap().to_string_lossy(),
-            if a.passes() { "PASS" } else { "FAIL" },
-            a.joint_p,
-            if b.passes() { "PASS" } else { "FAIL" },
-            b.joint_p,
-            if what.is_empty() {
-                "nothing flagged".to_string()
-            } else {
-                what.join(", ")
-            },
+            verdict(&own[0]),
+            verdict(&own[1]),
+            hs(0),
+            hs(1),
+            r2s(0),
+            r2s(1),
             t0.elapsed().as_secs_f64()
         );
     }
-    eprintln!("DEBIAS own check passes: chain {pass}, debiased {pass_bc}");
+    eprintln!(
+        "DEBIAS passes, chain → debiased: own {} → {}, held out {} → {}, r2 {} → {}",
+        counts[0][0], counts[0][1], counts[1][0], counts[1][1], counts[2][0], counts[2][1]
+    );
 }
