@@ -823,17 +823,6 @@ fn chain_and_debiased(
     use pradar::closed_loop::{closed_loop, ClosedLoopParams};
     use pradar::fit::channel::fit_clustering;
     use pradar::model::levels::fit_levels;
-    fn q<'a>(m: &'a mut ModelConfig, key: &str) -> &'a mut Quantity {
-        match key {
-            "inter_cluster_rate" => &mut m.inter_cluster_rate,
-            "perimeter_spacing" => &mut m.perimeter_spacing,
-            "intra_cluster_rate" => &mut m.intra_cluster_rate,
-            "intra_cluster_aoa" => &mut m.intra_cluster_aoa,
-            "perimeter_offset" => &mut m.perimeter_offset,
-            "cluster_decay" => &mut m.cluster_decay,
-            _ => &mut m.ray_decay,
-        }
-    }
     let fp = FitParams::default().check().unwrap();
     let (_, clustering) =
         extract_and_cluster(em, c, &ChainParams::for_campaign(c).unwrap()).unwrap();
@@ -850,7 +839,7 @@ fn chain_and_debiased(
     let mut moved = fit.model.clone();
     let mut what = Vec::new();
     for (key, id) in &ids {
-        let v = q(&mut moved, key).value;
+        let v = moved.quantity_mut(key).expect("a cluster quantity").value;
         if !id.identifiable()
             && v.is_finite()
             && v > 0.0
@@ -858,7 +847,7 @@ fn chain_and_debiased(
             && id.median > 0.0
         {
             let bc = (2.0 * v.ln() - id.median.ln()).exp();
-            q(&mut moved, key).value = bc;
+            moved.quantity_mut(key).expect("a cluster quantity").value = bc;
             what.push(format!("{key} {v:.3}→{bc:.3}"));
         }
     }

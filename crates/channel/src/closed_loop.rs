@@ -94,18 +94,10 @@ impl ParamGuard for ClosedLoopParams {
     }
 }
 
-/// The seven cluster quantities of a model, by [`KEYS`].
+/// Quantity `key` of [`KEYS`] of a model.
 fn quantity<'a>(m: &'a ModelConfig, key: &str) -> &'a Quantity {
-    match key {
-        "inter_cluster_rate" => &m.inter_cluster_rate,
-        "perimeter_spacing" => &m.perimeter_spacing,
-        "intra_cluster_rate" => &m.intra_cluster_rate,
-        "intra_cluster_aoa" => &m.intra_cluster_aoa,
-        "perimeter_offset" => &m.perimeter_offset,
-        "cluster_decay" => &m.cluster_decay,
-        "ray_decay" => &m.ray_decay,
-        _ => unreachable!("not a key of Table 1's cluster quantities: {key}"),
-    }
+    m.quantity(key)
+        .unwrap_or_else(|| unreachable!("{key} is a key of Table 1's cluster quantities"))
 }
 
 /// The closed loop of `written` (fitted on campaign `c`'s table `em`, read from
