@@ -360,3 +360,73 @@ fn bad_experiment_input_gives_one_clear_error() {
     ]);
     assert_one_line_error(&o, "bad_model.toml");
 }
+
+/// `experiment slam` (issue 56 item 3) on the built-in corridor's sweeps, seeds 1–3: per
+/// mapper the true-pose map and, per seed and odometry level (0.05 m / 1°, 0.1 m / 3°,
+/// 0.2 m / 5° per step), the dead-reckoned and the estimated maps. Asserted: the cases and
+/// their keys; the estimate's mean RMSE below the dead reckoning's at every level and at
+/// most a third of it at the largest (measured 0.070/0.117, 0.099/0.250, 0.103/0.492 m);
+/// the true-pose case has no `slam`; and a case's map is `pradar map --poses-from sweeps`
+/// of the same sweeps, odometry and seed, byte for byte.
+#[test]
+fn slam_maps_with_true_dead_reckoned_and_estimated_poses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let v = run_with_inputs("slam", tmp.path(), &[]);
+    // 2 mappers × (1 true + 3 seeds × 3 levels × 2 sources)
+    assert_eq!(cases(&v).len(), 38);
+    assert_eq!(findings(&v).len(), 6);
+    let n = 400;
+    for m in ["og", "ekf"] {
+        let truth = find(&v, &format!("sweeps_n{n}_{m}"));
+        assert!(truth.get("slam").is_none(), "{truth}");
+        for (mm, deg, third) in [(50, "1.0", false), (100, "3.0", false), (200, "5.0", true)] {
+            let rmse = |from: &str, k: &str| {
+                let r: Vec<f64> = (1..=3)
+                    .map(|s| {
+                        let c = find(
+                            &v,
+                            &format!("sweeps_n{n}_{m}_{from}_odo{mm}mm{deg}deg_s{s}"),
+                        );
+                        assert_eq!(c["slam"]["poses_from"], from, "{c}");
+                        f(&c["slam"], k)
+                    })
+                    .collect();
+                r.iter().sum::<f64>() / 3.0
+            };
+            let dead = rmse("odometry", "rmse_dead_reckoning_m");
+            let est = rmse("sweeps", "rmse_estimated_m");
+            println!("{m} {mm} mm / {deg}°: RMSE dead {dead:.3} m, estimated {est:.3} m");
+            assert!(est < dead, "{m} {mm} mm: {est} against {dead}");
+            if third {
+                assert!(est <= dead / 3.0, "{m} {mm} mm: {est} against {dead}");
+            }
+        }
+    }
+    // a case's map is `pradar map` of the same sweeps, odometry and seed
+    let inp = inputs();
+    let plain = tmp.path().join("plain");
+    let o = pradar(&[
+        "map",
+        "--method",
+        "og",
+        "--campaign",
+        &inp[1],
+        "--energy",
+        &inp[3],
+        "--out",
+        s(&plain),
+        "--poses-from",
+        "sweeps",
+        "--odometry-m",
+        "0.1",
+        "--odometry-deg",
+        "3",
+        "--pose-seed",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let a = std::fs::read(plain.join("og_binary.pgm")).unwrap();
+    let key = format!("maps/sweeps_n{n}_og_sweeps_odo100mm3.0deg_s2/og_binary.pgm");
+    let b = std::fs::read(tmp.path().join(key)).unwrap();
+    assert_eq!(a, b, "the experiment's map differs from pradar map's");
+}

@@ -71,7 +71,7 @@ pub enum Cmd {
     Report(ReportArgs),
     /// The main job: simulate the built-in corridor, compute energy matrices, write the report.
     Reproduce(ReproduceArgs),
-    /// The paper's mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all).
+    /// The mapping experiments: fig5, fig6, prior-sensitivity, pose-noise (or all), slam.
     Experiment(ExperimentArgs),
     /// Design space: map quality, energy per scan and scan time over N, pulses, step,
     /// bandwidth and transmit power.
@@ -525,7 +525,7 @@ pub struct ReproduceArgs {
 // `pradar experiment`
 #[derive(Args)]
 pub struct ExperimentArgs {
-    /// fig5 | fig6 | prior-sensitivity | pose-noise | all.
+    /// fig5 | fig6 | prior-sensitivity | pose-noise | all (those four) | slam.
     pub name: String,
     /// Output folder (DIR/NAME/ per experiment, DIR/maps/, DIR/index.html).
     #[arg(long)]

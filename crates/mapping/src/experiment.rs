@@ -10,8 +10,10 @@
 //! rounded.
 
 use crate::export::{Cell, Column, LineChart};
+use crate::job::SlamSummary;
 use crate::pose_noise::PoseNoise;
 use crate::reference::ReferenceMap;
+use crate::slam::{OdometryNoise, PosesFrom};
 use serde::Serialize;
 
 /// Where a map's data come from.
@@ -41,6 +43,13 @@ pub struct Case {
     pub mu0: f64,
     /// Pose noise given to the mapper.
     pub pose_noise: PoseNoise,
+    /// Where the mapper's poses come from (the manifest's, or an odometry's: `experiment
+    /// slam`); the figures' `slam` says which.
+    #[serde(skip)]
+    pub poses_from: PosesFrom,
+    /// The odometry's noise when the poses come from one.
+    #[serde(skip)]
+    pub odometry: OdometryNoise,
 }
 
 /// Figures of one map (see the module docs for the three regions).
@@ -87,6 +96,10 @@ pub struct CaseFigures {
     /// The map against the three-class reference (structure, the data's truth objects,
     /// free), when the data have a truth (simulated sweeps, model data).
     pub three_class: Option<crate::score::ThreeClassFigures>,
+    /// The poses from an odometry (`experiment slam`): its source, σ, seed and the
+    /// position RMSEs; absent with the manifest's poses.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slam: Option<SlamSummary>,
 }
 
 /// What one experiment measured and wrote.

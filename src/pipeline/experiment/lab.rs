@@ -23,7 +23,9 @@ pub use crate::mapping::experiment::score_columns;
 pub use crate::mapping::experiment::{
     Case, CaseFigures, DataSource, ExperimentResult, Figure, Panel, PanelTile,
 };
-use crate::mapping::job::{run_map, MapOptions, MapReport, MapRun, MapValid, PoseNoise};
+use crate::mapping::job::{
+    run_map, MapOptions, MapReport, MapRun, MapValid, OdometryNoise, PoseNoise, PosesFrom,
+};
 use crate::mapping::reference::{CellClass, LayoutRaster, ReferenceMap};
 use crate::mapping::{EkfParams, Method, OgParams};
 use crate::model::file::ModelConfig;
@@ -52,6 +54,16 @@ pub fn case_key(case: &Case, base: &ExperimentValid) -> String {
     }
     if case.pose_noise.heading_deg > 0.0 {
         k.push_str(&format!("_hdg{:.1}deg", case.pose_noise.heading_deg));
+    }
+    if case.poses_from != PosesFrom::Manifest {
+        let o = &case.odometry;
+        k.push_str(&format!(
+            "_{}_odo{:.0}mm{:.1}deg_s{}",
+            case.poses_from.name(),
+            o.step_m * 1000.0,
+            o.step_deg,
+            o.seed
+        ));
     }
     k
 }
@@ -85,6 +97,7 @@ fn case_figures(key: String, case: Case, r: &MapReport) -> CaseFigures {
         all_free_wrong_interior: count(m.building_all_free.wrong_cell_rate, i.cells),
         classes: m.classes,
         three_class: m.three_class,
+        slam: r.slam.first().cloned(),
     }
 }
 
@@ -163,6 +176,8 @@ impl<'a> Lab<'a> {
             og_prior: self.params.og.prior,
             mu0: self.params.ekf.mu0,
             pose_noise: PoseNoise::default(),
+            poses_from: PosesFrom::Manifest,
+            odometry: OdometryNoise::default(),
         }
     }
 
@@ -287,8 +302,8 @@ impl<'a> Lab<'a> {
                 ..self.params.ekf
             },
             pose_noise: case.pose_noise,
-            poses_from: Default::default(),
-            odometry: Default::default(),
+            poses_from: case.poses_from,
+            odometry: case.odometry,
         };
         opts.check()
     }
@@ -389,6 +404,7 @@ impl<'a> Lab<'a> {
             }
             Experiment::PriorSensitivity => self.prior_cases(),
             Experiment::PoseNoise => self.pose_cases(self.params.pose_elements),
+            Experiment::Slam => self.slam_cases(),
         }
     }
 
@@ -413,6 +429,7 @@ impl<'a> Lab<'a> {
             Experiment::Fig6 => self.fig6()?,
             Experiment::PriorSensitivity => self.prior_sensitivity()?,
             Experiment::PoseNoise => self.pose_noise()?,
+            Experiment::Slam => self.slam()?,
         };
         let name = e.name();
         let table = case_table(&r.cases);

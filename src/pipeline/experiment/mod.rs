@@ -64,6 +64,7 @@ pub mod lab;
 pub mod params;
 pub mod pose_noise;
 pub mod prior_sensitivity;
+pub mod slam;
 
 pub use inputs::{prepare_inputs, ExperimentInputs, InputOptions};
 pub use lab::{
@@ -82,6 +83,9 @@ pub enum Experiment {
     PriorSensitivity,
     /// ψ as pose noise grows.
     PoseNoise,
+    /// Pose RMSE and maps with the true, dead-reckoned and estimated poses (issue 56; not
+    /// in `all`).
+    Slam,
 }
 
 impl Experiment {
@@ -99,18 +103,19 @@ impl Experiment {
             Experiment::Fig6 => "fig6",
             Experiment::PriorSensitivity => "prior-sensitivity",
             Experiment::PoseNoise => "pose-noise",
+            Experiment::Slam => "slam",
         }
     }
-    /// Parse a command-line name (`all` is handled by the caller).
+    /// Parse a command-line name (`all` is handled by the caller; `slam` is asked by name).
     pub fn parse(s: &str) -> Result<Experiment> {
-        Experiment::ALL
-            .into_iter()
+        (Experiment::ALL.into_iter())
+            .chain([Experiment::Slam])
             .find(|e| e.name() == s)
             .ok_or_else(|| {
                 Error::param(
                     "experiment",
                     format!(
-                        "unknown experiment `{s}` (fig5|fig6|prior-sensitivity|pose-noise|all)"
+                        "unknown experiment `{s}` (fig5|fig6|prior-sensitivity|pose-noise|slam|all)"
                     ),
                 )
             })
