@@ -623,7 +623,7 @@ pub enum ExploreData {
 /// `--seeds`, shared by `report`, `reproduce` and `experiment`.
 #[derive(Args)]
 pub struct SeedsArg {
-    /// Seeds of the experiments' model data and of fig6's physics sweeps (comma-separated).
+    /// Seeds of the experiments' model data, of fig6's physics sweeps and of slam's odometry (comma-separated).
     #[arg(
         long = "seeds",
         allow_negative_numbers = true,

@@ -111,6 +111,7 @@ pub fn section(r: &ExperimentResult, prefix: &str) -> Section {
         "fig5" => "Experiment fig5: EKF maps from the campaign's sweeps and from model data",
         "fig6" => "Experiment fig6: OG vs EKF, N = 16 vs N = 100 (model data)",
         "prior-sensitivity" => "Experiment prior-sensitivity: OG prior and EKF μ0 ±40 %",
+        "slam" => "Experiment slam: maps with true, dead-reckoned and estimated poses",
         _ => "Experiment pose-noise: ψ as pose noise grows",
     };
     Section {

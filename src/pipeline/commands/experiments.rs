@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// `pradar experiment`: the paper's mapping experiments.
 #[derive(Debug, Clone)]
 pub struct Experiments {
-    /// `fig5`, `fig6`, `prior-sensitivity`, `pose-noise` or `all`.
+    /// `fig5`, `fig6`, `prior-sensitivity`, `pose-noise`, `all` (those four) or `slam`.
     pub name: String,
     /// Campaign, energy table and model (each resolved when absent).
     pub inputs: InputOptions,

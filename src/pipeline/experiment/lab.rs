@@ -525,7 +525,8 @@ pub(super) fn join_u(v: &[u64]) -> String {
 
 /// The case table of an experiment (`NAME.md` after the findings, and `NAME.csv`): one row
 /// per map; ψ and F1 shown with 3 decimals (full precision in the CSV); the all-free map's
-/// wrong cells in the CSV only.
+/// wrong cells in the CSV only. The seed is the model data's or the physics sweeps', or the
+/// odometry's where the poses come from one (`slam`).
 pub fn case_table(cases: &[CaseFigures]) -> Table {
     let col = Column::new;
     let mut columns = vec![
@@ -547,6 +548,10 @@ pub fn case_table(cases: &[CaseFigures]) -> Table {
     for c in cases {
         let k = &c.case;
         let (data, seed) = match k.source {
+            // the odometry's seed where the poses come from one (`experiment slam`)
+            DataSource::Sweeps if k.poses_from != PosesFrom::Manifest => {
+                ("sweeps", Cell::text(k.odometry.seed.to_string()))
+            }
             DataSource::Sweeps => ("sweeps", Cell::missing("")),
             DataSource::Model(s) => ("model", Cell::text(s.to_string())),
             DataSource::Physics(s) => ("physics", Cell::text(s.to_string())),

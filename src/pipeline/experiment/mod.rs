@@ -13,7 +13,7 @@
 //!
 //! Layout: [`params`] (the parameters and their check), [`inputs`] (resolving the inputs),
 //! [`lab`] (cases, scoring, the shared maps, the case table), one file per experiment
-//! ([`fig5`], [`fig6`], [`prior_sensitivity`], [`pose_noise`]). The experiments produce
+//! ([`fig5`], [`fig6`], [`prior_sensitivity`], [`pose_noise`], [`slam`]). The experiments produce
 //! results ([`ExperimentResult`]: figures, findings and what the page shows, as data) and
 //! never call the report: the panels, plots and HTML are drawn from the results by
 //! [`crate::report::experiments`] (`pradar experiment` and the campaign report call it).
@@ -89,7 +89,8 @@ pub enum Experiment {
 }
 
 impl Experiment {
-    /// Every experiment, in report order.
+    /// The experiments of `all` and of the report, in report order (`slam` is asked by
+    /// name).
     pub const ALL: [Experiment; 4] = [
         Experiment::Fig5,
         Experiment::Fig6,
