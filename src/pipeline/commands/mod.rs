@@ -70,6 +70,7 @@
 //!     truth: Some("sim/truth".into()),
 //!     energy: Some("energy.parquet".into()),
 //!     params: pradar::fit::channel::FitParams::default(),
+//!     closed_loop: 0,
 //! })?;
 //! println!("{fit}");
 //! let synth = commands::synth(
