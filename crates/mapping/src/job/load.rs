@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::grid::{GridValid, ObservationModel, Occlusion};
 use crate::memo::Memo;
 use crate::objects::{find_truth, load_objects};
+use crate::og::scan::position_batches;
 use crate::og::{detection_threshold, Detector, OgValid};
 use crate::params::ParamGuard;
 use crate::reference::{GridSpec, LayoutRaster, ReferenceMap};
@@ -260,25 +261,18 @@ fn estimate_poses(
         });
     }
     // the scans a few positions at a time (the table streamed, as the mappers read it)
-    let np = l.energy.header().positions;
-    let batch = (2 * rayon::current_num_threads()).max(2);
-    let mut scans: Vec<Scan> = Vec::with_capacity(np);
-    let mut p0 = 0;
-    let mut angles_deg = Vec::new();
-    while p0 < np {
-        let p1 = (p0 + batch).min(np);
-        let part = l.energy.load(p0, p1)?;
-        angles_deg.clone_from(&part.angles_rel_deg);
-        scans.extend(
-            (p0..p1).map(|p| Scan::from_detections(&part, &l.detector.detect_pose(&part, p))),
-        );
-        p0 = p1;
+    let header = l.energy.header();
+    let mut scans: Vec<Scan> = Vec::with_capacity(header.positions);
+    for batch in position_batches(header.positions) {
+        let part = l.energy.load(batch.start, batch.end)?;
+        scans
+            .extend(batch.map(|p| Scan::from_detections(&part, &l.detector.detect_pose(&part, p))));
     }
     estimate(
         &odo,
         &scans,
         cell_m,
-        steering_step_rad(&angles_deg),
+        steering_step_rad(&header.angles_rel_deg),
         &SolveParams::default().check()?,
     )
 }

@@ -197,10 +197,7 @@ pub fn og_map_stats(
     let mut map = LogOddsMap::prior(spec.rows, spec.cols, params.l0());
     let mut belief: Vec<f32> = Vec::new();
     // pose geometries are independent of the map: build them a batch at a time in parallel
-    let batch = (2 * rayon::current_num_threads()).max(2);
-    let mut p0 = 0;
-    while p0 < np {
-        let p1 = (p0 + batch).min(np);
+    for std::ops::Range { start: p0, end: p1 } in position_batches(np) {
         let part = src.load(p0, p1)?;
         let geoms: Vec<_> = if method == Method::Og {
             (p0..p1)
@@ -221,10 +218,19 @@ pub fn og_map_stats(
             apply_scans(&mut map, &mut stats, scans, ctx.clamp);
             progress(p + 1, np);
         }
-        p0 = p1;
     }
     stats.seconds = t0.elapsed().as_secs_f64();
     Ok((map, stats))
+}
+
+/// The runs of positions `0..np` a streamed energy table is read in: two per thread at a
+/// time (at least 2), so a batch's per-pose work fills the pool while only the batch's
+/// energies are held.
+pub(crate) fn position_batches(np: usize) -> impl Iterator<Item = std::ops::Range<usize>> {
+    let batch = (2 * rayon::current_num_threads()).max(2);
+    (0..np)
+        .step_by(batch)
+        .map(move |p0| p0..(p0 + batch).min(np))
 }
 
 /// What the scans of a run share: the model, the detector, the occlusion model and the
